@@ -1,0 +1,47 @@
+"""fohw: identification of fractional-order Hammerstein–Wiener systems.
+
+Implements Zhang, Wang & Liu (2022), "Hybrid identification method for fractional-order
+nonlinear systems based on the multi-innovation principle": the Grünwald–Letnikov difference,
+the discrete fractional-order Hammerstein–Wiener model and its simulator, the information
+matrix, and the paper's estimators.
+"""
+
+from . import datasets
+from .basis import Basis, as_basis, polynomial_basis
+from .exceptions import (
+    ConvergenceWarning,
+    DataFileError,
+    DimensionError,
+    FohwError,
+    NotFittedError,
+    ParameterError,
+    SimulationDivergedError,
+)
+from .gl import gl_difference, gl_weights, gl_weights_derivative
+from .params import ThetaLayout
+from .regressors import RegressorBuilder, information_matrix
+from .system import HammersteinWiener, simulate
+
+__version__ = "0.1.0.dev0"
+
+__all__ = [
+    "Basis",
+    "ConvergenceWarning",
+    "DataFileError",
+    "DimensionError",
+    "FohwError",
+    "HammersteinWiener",
+    "NotFittedError",
+    "ParameterError",
+    "RegressorBuilder",
+    "SimulationDivergedError",
+    "ThetaLayout",
+    "as_basis",
+    "datasets",
+    "gl_difference",
+    "gl_weights",
+    "gl_weights_derivative",
+    "information_matrix",
+    "polynomial_basis",
+    "simulate",
+]

@@ -1,0 +1,101 @@
+"""Private input validation shared by every public entry point.
+
+Errors name the argument and echo what arrived; nothing is silently fixed.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from .exceptions import DimensionError, ParameterError
+
+__all__: list[str] = []
+
+
+def _shape_text(x) -> str:
+    return "x".join(str(s) for s in np.shape(x)) or "scalar"
+
+
+def check_scalar(value, name: str, *, lower=None, upper=None, lower_inclusive=True,
+                 upper_inclusive=True) -> float:
+    """Return ``value`` as a finite float inside the given interval, or raise."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.number)):
+        if not (isinstance(value, np.ndarray) and value.ndim == 0):
+            raise ParameterError(f"`{name}` must be a real number; got {value!r}.")
+    value = float(value)
+    if not np.isfinite(value):
+        raise ParameterError(f"`{name}` must be finite; got {value!r}.")
+    lo_bad = lower is not None and (value < lower or (value == lower and not lower_inclusive))
+    hi_bad = upper is not None and (value > upper or (value == upper and not upper_inclusive))
+    if lo_bad or hi_bad:
+        left = "[" if lower_inclusive else "("
+        right = "]" if upper_inclusive else ")"
+        lo = "-inf" if lower is None else f"{lower:g}"
+        hi = "inf" if upper is None else f"{upper:g}"
+        raise ParameterError(f"`{name}` must be in {left}{lo}, {hi}{right}; got {value!r}.")
+    return value
+
+
+def check_int(value, name: str, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """Return ``value`` as an int (no bools, no floats), inside ``[minimum, maximum]``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, np.integer)):
+        raise ParameterError(f"`{name}` must be an integer; got {value!r}.")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise ParameterError(f"`{name}` must be at least {minimum}; got {value}.")
+    if maximum is not None and value > maximum:
+        raise ParameterError(f"`{name}` must be at most {maximum}; got {value}.")
+    return value
+
+
+def check_array(x, name: str, *, ndim: int | None = 1, min_length: int = 1) -> np.ndarray:
+    """Return ``x`` as a float64 array of the given dimension with only finite values."""
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"`{name}` must be an array of real numbers; got {type(x).__name__}"
+                             f" that cannot be converted ({exc}).") from None
+    if np.iscomplexobj(x):
+        raise ParameterError(f"`{name}` must be real; got a complex array.")
+    if ndim is not None and arr.ndim != ndim:
+        raise DimensionError(f"`{name}` must be {ndim}-D; got an array of shape ({_shape_text(arr)}).")
+    if arr.ndim >= 1 and arr.shape[-1] < min_length:
+        raise DimensionError(f"`{name}` must have at least {min_length} sample(s) along its last "
+                             f"axis; got {arr.shape[-1]}.")
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.isfinite(arr.ravel()))[0]
+        idx = np.unravel_index(bad, arr.shape)
+        where = idx[0] if arr.ndim == 1 else tuple(int(i) for i in idx)
+        raise ParameterError(f"`{name}` must contain only finite values; got "
+                             f"{arr.ravel()[bad]!r} at index {where}.")
+    return arr
+
+
+def check_same_length(x: np.ndarray, y: np.ndarray, xname: str, yname: str) -> None:
+    """Raise if two 1-D signals differ in length."""
+    if x.shape[-1] != y.shape[-1]:
+        raise DimensionError(f"`{xname}` and `{yname}` must have the same length; got "
+                             f"{x.shape[-1]} and {y.shape[-1]}.")
+
+
+def check_alpha(alpha, name: str = "alpha", *, lower: float = 0.0, upper: float = 2.0,
+                inclusive: bool = False) -> float:
+    """Validate a fractional order."""
+    return check_scalar(alpha, name, lower=lower, upper=upper, lower_inclusive=inclusive,
+                        upper_inclusive=inclusive)
+
+
+def check_random_state(random_state) -> np.random.Generator:
+    """Turn ``None | int | Generator`` into a Generator; never touch the global generator."""
+    if random_state is None:
+        return np.random.default_rng()
+    if isinstance(random_state, np.random.Generator):
+        return random_state
+    if isinstance(random_state, (numbers.Integral, np.integer)) and not isinstance(random_state, bool):
+        if random_state < 0:
+            raise ParameterError(f"`random_state` must be non-negative; got {random_state}.")
+        return np.random.default_rng(int(random_state))
+    raise ParameterError("`random_state` must be None, a non-negative int or a "
+                         f"numpy.random.Generator; got {random_state!r}.")

@@ -1,0 +1,225 @@
+"""Basis functions of the static nonlinearities (paper Section 2.3, Eqs. 12–13).
+
+The input nonlinearity is ``f(u) = sum_j p_j f_j(u)`` and the output nonlinearity
+``g(y) = sum_j q_j g_j(y)``, each a combination of known basis functions. A :class:`Basis`
+holds those functions with their names. Wherever fohw expects a basis, it also accepts an
+``int`` (a polynomial basis of that degree), a sequence of callables, or a mapping from
+names to callables.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validation import check_array, check_int
+from .exceptions import DimensionError, ParameterError
+
+__all__ = ["Basis", "polynomial_basis", "as_basis"]
+
+
+class _Power:
+    """``x -> x**n`` as a picklable, printable callable."""
+
+    def __init__(self, n: int):
+        self.n = n
+
+    def __call__(self, x):
+        x = np.asarray(x, dtype=np.float64)
+        return x.copy() if self.n == 1 else x**self.n
+
+    def __repr__(self):
+        return f"_Power({self.n})"
+
+    def __eq__(self, other):
+        return isinstance(other, _Power) and other.n == self.n
+
+    def __hash__(self):
+        return hash(("_Power", self.n))
+
+
+@dataclass(frozen=True, eq=False)
+class Basis:
+    """An ordered set of named scalar basis functions.
+
+    Parameters
+    ----------
+    functions : sequence of callable
+        Each maps a 1-D float array to an array of the same shape, elementwise.
+    names : sequence of str
+        One distinct name per function (used in tables and saved results).
+
+    Examples
+    --------
+    >>> import numpy as np, fohw
+    >>> basis = fohw.Basis((np.tanh, np.sin), names=("tanh", "sin"))
+    >>> len(basis), basis.names
+    (2, ('tanh', 'sin'))
+    >>> basis.evaluate(np.array([0.0, 1.0])).shape
+    (2, 2)
+    """
+
+    functions: tuple
+    names: tuple
+
+    def __post_init__(self):
+        functions = tuple(self.functions)
+        names = tuple(str(n) for n in self.names)
+        if len(functions) == 0:
+            raise ParameterError("a basis needs at least one function; got none.")
+        for i, f in enumerate(functions):
+            if not callable(f):
+                raise ParameterError(f"basis function {i} must be callable; got {f!r}.")
+        if len(names) != len(functions):
+            raise DimensionError(f"`names` must have one entry per function; got {len(names)} "
+                                 f"names for {len(functions)} functions.")
+        if len(set(names)) != len(names):
+            raise ParameterError(f"basis function names must be distinct; got {names}.")
+        object.__setattr__(self, "functions", functions)
+        object.__setattr__(self, "names", names)
+
+    def __len__(self):
+        return len(self.functions)
+
+    def __eq__(self, other):
+        return (isinstance(other, Basis) and self.names == other.names
+                and all(f is g or f == g for f, g in zip(self.functions, other.functions)))
+
+    def __hash__(self):
+        return hash(self.names)
+
+    def __repr__(self):
+        return f"Basis({', '.join(self.names)})"
+
+    @property
+    def is_polynomial(self) -> bool:
+        """True if this is ``polynomial_basis(len(self))``."""
+        return self == polynomial_basis(len(self))
+
+    def evaluate(self, x, name: str = "x") -> np.ndarray:
+        """Evaluate every function on ``x``.
+
+        Parameters
+        ----------
+        x : array_like, 1-D
+            Signal.
+        name : str, optional
+            Name of the signal, used in error messages.
+
+        Returns
+        -------
+        values : ndarray, shape (len(self), len(x))
+            Row ``j`` is ``functions[j](x)``.
+
+        Raises
+        ------
+        DimensionError
+            A function returned an array of another shape.
+        ParameterError
+            A function returned non-finite values.
+        """
+        x = np.asarray(x, dtype=np.float64)
+        out = np.empty((len(self.functions),) + x.shape)
+        for j, (f, fname) in enumerate(zip(self.functions, self.names)):
+            with np.errstate(all="ignore"):
+                val = np.asarray(f(x), dtype=np.float64)
+            if val.shape != x.shape:
+                raise DimensionError(f"basis function {fname!r} returned shape {val.shape} for "
+                                     f"`{name}` of shape {x.shape}; it must act elementwise.")
+            if not np.all(np.isfinite(val)):
+                k = int(np.flatnonzero(~np.isfinite(val.ravel()))[0])
+                raise ParameterError(f"basis function {fname!r} returned a non-finite value at "
+                                     f"index {k} of `{name}` (value {x.ravel()[k]!r}).")
+            out[j] = val
+        return out
+
+    def combine(self, coefficients, x, name: str = "x") -> np.ndarray:
+        """Return ``sum_j coefficients[j] * functions[j](x)`` (``fbar`` or ``gbar``)."""
+        coefficients = check_array(coefficients, "coefficients")
+        if coefficients.shape[0] != len(self):
+            raise DimensionError(f"`coefficients` must have {len(self)} entries; "
+                                 f"got {coefficients.shape[0]}.")
+        return coefficients @ self.evaluate(x, name)
+
+
+def polynomial_basis(degree):
+    """Monomials ``x, x**2, ..., x**degree``.
+
+    Parameters
+    ----------
+    degree : int
+        Highest power, ``degree >= 1``.
+
+    Returns
+    -------
+    Basis
+        Named ``"x"``, ``"x^2"``, ….
+
+    Examples
+    --------
+    >>> import fohw
+    >>> fohw.polynomial_basis(3)
+    Basis(x, x^2, x^3)
+    >>> fohw.polynomial_basis(2).evaluate([2.0, -1.0])
+    array([[ 2., -1.],
+           [ 4.,  1.]])
+    """
+    degree = check_int(degree, "degree", minimum=1)
+    return Basis(tuple(_Power(n) for n in range(1, degree + 1)),
+                 names=tuple("x" if n == 1 else f"x^{n}" for n in range(1, degree + 1)))
+
+
+def as_basis(spec, name: str = "basis") -> Basis:
+    """Turn what a user passed as a basis into a :class:`Basis`.
+
+    Parameters
+    ----------
+    spec : Basis, int, sequence of callable, or mapping of str to callable
+        An ``int`` is a polynomial degree; callables are named by their ``__name__``.
+    name : str
+        Argument name for error messages (``"f_basis"``, ``"g_basis"``).
+
+    Returns
+    -------
+    Basis
+
+    Examples
+    --------
+    >>> import numpy as np, fohw
+    >>> fohw.as_basis(2)
+    Basis(x, x^2)
+    >>> fohw.as_basis({"u": lambda x: x, "tanh": np.tanh})
+    Basis(u, tanh)
+    """
+    if isinstance(spec, Basis):
+        return spec
+    if isinstance(spec, (bool, np.bool_)):
+        raise ParameterError(f"`{name}` must be a Basis, an int degree, or callables; got {spec!r}.")
+    if isinstance(spec, (int, np.integer)):
+        if spec < 1:
+            raise ParameterError(f"`{name}` as a polynomial degree must be at least 1; got {spec}.")
+        return polynomial_basis(int(spec))
+    if isinstance(spec, Mapping):
+        items = list(spec.items())
+        _check_callables([f for _, f in items], name)
+        return Basis(tuple(f for _, f in items), names=tuple(str(k) for k, _ in items))
+    if callable(spec):
+        spec = [spec]
+    if isinstance(spec, Sequence) and not isinstance(spec, str):
+        funcs = list(spec)
+        _check_callables(funcs, name)
+        names = [getattr(f, "__name__", f"{name}_{i + 1}") for i, f in enumerate(funcs)]
+        if len(set(names)) != len(names) or "<lambda>" in names:
+            names = [f"{name}_{i + 1}" for i in range(len(funcs))]
+        return Basis(tuple(funcs), names=tuple(names))
+    raise ParameterError(f"`{name}` must be a Basis, an int degree, or callables; got {spec!r}.")
+
+
+def _check_callables(funcs: Sequence[Callable], name: str) -> None:
+    if len(funcs) == 0:
+        raise ParameterError(f"`{name}` needs at least one basis function; got none.")
+    for i, f in enumerate(funcs):
+        if not callable(f):
+            raise ParameterError(f"`{name}` entry {i} must be callable; got {f!r}.")

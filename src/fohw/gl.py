@@ -1,0 +1,206 @@
+"""Grünwald–Letnikov fractional difference (paper Section 2.1, Eqs. 1–5).
+
+The GL difference of order ``alpha`` of a zero-initial-condition signal ``x`` is
+
+.. math:: (\\Delta^{\\alpha} x)[k] = h^{-\\alpha} \\sum_{j=0}^{k} \\beta_j\\, x[k-j],
+   \\qquad \\beta_j = (-1)^j \\binom{\\alpha}{j},
+
+a *linear* convolution of ``x`` with the weights ``beta`` cut to the length of ``x``.
+The full-memory sum is evaluated by a zero-padded real FFT (never a circular one);
+short signals and short memories use the direct sum.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.fft
+
+from ._validation import check_array, check_int, check_scalar
+from .exceptions import DimensionError
+
+__all__ = ["gl_weights", "gl_weights_derivative", "gl_difference"]
+
+# Below these sizes the direct O(N * L) sum beats the FFT (see benchmarks/bench_gl.py).
+_DIRECT_MAX_MEMORY = 48
+_DIRECT_MAX_LENGTH = 160
+
+
+def gl_weights(alpha, n):
+    """Grünwald–Letnikov weights ``beta[j] = (-1)**j * binom(alpha, j)``, ``j = 0..n-1``.
+
+    Parameters
+    ----------
+    alpha : float
+        Order of the difference; any finite real (negative orders give fractional sums).
+    n : int
+        Number of weights, ``n >= 1``.
+
+    Returns
+    -------
+    beta : ndarray, shape (n,)
+        ``beta[0] = 1`` and ``beta[j] = beta[j-1] * (1 - (alpha + 1) / j)``.
+
+    Notes
+    -----
+    Eq. (3) of the paper, evaluated as the cumulative product of the factors
+    ``1 - (alpha + 1) / j``. For a non-negative integer ``alpha`` the factor at
+    ``j = alpha + 1`` is exactly zero, so all later weights are exactly zero.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> fohw.gl_weights(0.5, 4)
+    array([ 1.    , -0.5   , -0.125 , -0.0625])
+    >>> fohw.gl_weights(1.0, 4)
+    array([ 1., -1.,  0.,  0.])
+    """
+    alpha = check_scalar(alpha, "alpha")
+    n = check_int(n, "n", minimum=1)
+    j = np.arange(1, n, dtype=np.float64)
+    beta = np.empty(n)
+    beta[0] = 1.0
+    np.cumprod(1.0 - (alpha + 1.0) / j, out=beta[1:])
+    return beta
+
+
+def gl_weights_derivative(alpha, n):
+    """Exact derivative of the GL weights with respect to the order, ``d beta[j] / d alpha``.
+
+    Parameters
+    ----------
+    alpha : float
+        Order of the difference; any finite real.
+    n : int
+        Number of weights, ``n >= 1``.
+
+    Returns
+    -------
+    dbeta : ndarray, shape (n,)
+        ``dbeta[j] = beta[j] * sum_{i=1}^{j} 1 / (alpha + 1 - i)`` wherever that is defined.
+
+    Notes
+    -----
+    The product ``beta[j] = prod_{i<=j} c_i`` with ``c_i = 1 - (alpha + 1)/i`` has one factor
+    that can vanish, ``c_{m+1}`` at the integer ``m`` nearest to ``alpha``. That factor is kept
+    apart: with ``R_j`` the product of the other factors and ``S_j`` the sum of their logarithmic
+    derivatives, ``dbeta[j] = R_j S_j`` before it and ``R_j (c_{m+1} S_j - 1/(m+1))`` from it on.
+    The formula is exact for integer ``alpha`` (where ``beta[j] = 0`` but ``dbeta[j] != 0``)
+    and has no cancellation near integers. These are the weights of ``h = 1``; for another
+    sampling time ``d/d alpha (h**-alpha beta) = h**-alpha (dbeta - log(h) beta)``.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> fohw.gl_weights_derivative(1.0, 4)   # beta = [1, -alpha, alpha(alpha-1)/2, ...]
+    array([ 0.        , -1.        ,  0.5       ,  0.16666667])
+    """
+    alpha = check_scalar(alpha, "alpha")
+    n = check_int(n, "n", minimum=1)
+    i = np.arange(1, n, dtype=np.float64)
+    c = 1.0 - (alpha + 1.0) / i
+    with np.errstate(divide="ignore"):
+        dlog = 1.0 / (alpha + 1.0 - i)
+    l0 = int(np.rint(alpha)) + 1          # index of the factor that may vanish
+    dbeta = np.zeros(n)
+    if l0 < 1 or l0 > n - 1:              # no such factor among the first n - 1
+        dbeta[1:] = np.cumprod(c) * np.cumsum(dlog)
+        return dbeta
+    c_l0 = c[l0 - 1]
+    c[l0 - 1] = 1.0
+    dlog[l0 - 1] = 0.0
+    r = np.cumprod(c)
+    s = np.cumsum(dlog)
+    dbeta[1:l0] = r[: l0 - 1] * s[: l0 - 1]
+    dbeta[l0:] = r[l0 - 1:] * (c_l0 * s[l0 - 1:] - 1.0 / l0)
+    return dbeta
+
+
+def _convolve_weights(x, weights):
+    """Causal convolution of ``x`` (last axis) with ``weights``, cut to ``x.shape[-1]``."""
+    n = x.shape[-1]
+    m = weights.shape[0]
+    if m <= _DIRECT_MAX_MEMORY or n <= _DIRECT_MAX_LENGTH:
+        out = weights[0] * x
+        for j in range(1, m):
+            out[..., j:] += weights[j] * x[..., :-j]
+        return out
+    nfft = scipy.fft.next_fast_len(n + m - 1, real=True)
+    xf = scipy.fft.rfft(x, n=nfft, axis=-1)
+    wf = scipy.fft.rfft(weights, n=nfft)
+    return scipy.fft.irfft(xf * wf, n=nfft, axis=-1)[..., :n]
+
+
+def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
+    """Grünwald–Letnikov fractional difference of a signal (or a batch of signals).
+
+    Parameters
+    ----------
+    x : array_like
+        Signal(s), zero before the first sample. Any number of dimensions; the difference
+        runs along ``axis``, so a 2-D batch of signals is one call.
+    alpha : float
+        Order of the difference; any finite real. ``0`` is the identity, ``1`` the first
+        difference ``x[k] - x[k-1]``, negative orders give fractional sums.
+    axis : int, optional
+        Time axis. Default: the last one.
+    memory : int or None, optional
+        ``None`` (default) for the full memory ``sum_{j=0}^{k}``; an integer ``L >= 1``
+        for the short-memory principle, where the sum stops at ``j = L - 1``.
+    h : float, optional
+        Sampling time ``h > 0``; the sum is divided by ``h**alpha`` (Eq. 4). Default 1.
+
+    Returns
+    -------
+    d : ndarray
+        Same shape as ``x``, float64.
+
+    Raises
+    ------
+    ParameterError
+        Non-finite ``x`` or ``alpha``, ``memory < 1`` or ``h <= 0``.
+    DimensionError
+        ``axis`` out of range or an empty time axis.
+
+    Notes
+    -----
+    Eq. (4) of the paper (Eq. (5) for ``h = 1``). The sum is a linear convolution computed by
+    a real FFT zero-padded to at least ``N + L - 1`` points, so no sample wraps around; short
+    signals (``N <= 160``) and short memories (``L <= 48``) use the direct sum instead.
+    The result agrees with the direct sum to about ``1e-12 * max|x|`` at ``N = 10**6``.
+
+    Examples
+    --------
+    >>> import numpy as np, fohw
+    >>> fohw.gl_difference(np.ones(4), 0.5)   # partial sums of the weights
+    array([1.    , 0.5   , 0.375 , 0.3125])
+    >>> fohw.gl_difference([1.0, 3.0, 6.0], 1.0)
+    array([1., 2., 3.])
+    """
+    x = check_array(x, "x", ndim=None, min_length=0)
+    alpha = check_scalar(alpha, "alpha")
+    h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
+    if x.ndim == 0:
+        raise DimensionError("`x` must have at least one dimension; got a scalar.")
+    axis = _normalize_axis(axis, x.ndim)
+    n = x.shape[axis]
+    if n == 0:
+        raise DimensionError(f"`x` must have at least one sample along axis {axis}; got 0.")
+    if memory is None:
+        m = n
+    else:
+        m = min(check_int(memory, "memory", minimum=1), n)
+    weights = gl_weights(alpha, m)
+    xt = np.moveaxis(x, axis, -1)
+    out = _convolve_weights(np.array(xt, dtype=np.float64, copy=True), weights)
+    if h != 1.0:
+        out *= h ** (-alpha)
+    return np.moveaxis(out, -1, axis)
+
+
+def _normalize_axis(axis, ndim):
+    if isinstance(axis, (bool, np.bool_)) or not isinstance(axis, (int, np.integer)):
+        raise DimensionError(f"`axis` must be an integer; got {axis!r}.")
+    axis = int(axis)
+    if not -ndim <= axis < ndim:
+        raise DimensionError(f"`axis` {axis} is out of range for `x` with {ndim} dimension(s).")
+    return axis % ndim

@@ -1,0 +1,135 @@
+"""The parameter vector theta and its named blocks (paper Eqs. 17–20, 39–40).
+
+``theta = [q ⊗ a, p ⊗ b] = [a, q_2 a, …, q_nq a, b, p_2 b, …, p_np b]`` with the
+normalisation ``p_1 = q_1 = 1``. :class:`ThetaLayout` is the one place that knows this
+layout; nothing else in fohw slices theta by hand.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validation import check_array, check_int
+from .exceptions import DimensionError, ParameterError
+
+__all__ = ["ThetaLayout"]
+
+
+@dataclass(frozen=True)
+class ThetaLayout:
+    """Layout of theta for given lag orders and basis sizes.
+
+    Parameters
+    ----------
+    na, nb : int
+        Number of output and input lags (``>= 1``).
+    n_g, n_f : int
+        Number of output (``g``) and input (``f``) basis functions (``>= 1``).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> layout = fohw.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    >>> layout.names
+    ('a1', 'a2', 'q2a1', 'q2a2', 'q3a1', 'q3a2', 'b1', 'b2', 'p2b1', 'p2b2')
+    >>> theta = layout.to_theta(a=[0.1, 0.2], b=[-0.4, -0.2], p=[1, 0.5], q=[1, 0.7, 0.35])
+    >>> theta.round(3)
+    array([ 0.1  ,  0.2  ,  0.07 ,  0.14 ,  0.035,  0.07 , -0.4  , -0.2  , -0.2  , -0.1  ])
+    >>> a, b, p, q = layout.recover(theta)
+    >>> q.round(12)
+    array([1.  , 0.7 , 0.35])
+    """
+
+    na: int
+    nb: int
+    n_g: int
+    n_f: int
+
+    def __post_init__(self):
+        for name in ("na", "nb", "n_g", "n_f"):
+            object.__setattr__(self, name, check_int(getattr(self, name), name, minimum=1))
+
+    @property
+    def n_params(self) -> int:
+        """Length of theta, ``n = n_g * na + n_f * nb`` (Eq. 20)."""
+        return self.n_g * self.na + self.n_f * self.nb
+
+    @property
+    def n_output_params(self) -> int:
+        """Number of entries of theta that multiply output terms (``n_g * na``)."""
+        return self.n_g * self.na
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the entries of theta, e.g. ``a1``, ``q2a1``, ``b1``, ``p2b1``."""
+        out = []
+        for j in range(1, self.n_g + 1):
+            out += [(f"q{j}" if j > 1 else "") + f"a{i}" for i in range(1, self.na + 1)]
+        for j in range(1, self.n_f + 1):
+            out += [(f"p{j}" if j > 1 else "") + f"b{i}" for i in range(1, self.nb + 1)]
+        return tuple(out)
+
+    @property
+    def model_parameter_names(self) -> tuple[str, ...]:
+        """Names of the free structural parameters ``a_i, b_i, q_j (j>1), p_j (j>1)``."""
+        return (tuple(f"a{i}" for i in range(1, self.na + 1))
+                + tuple(f"b{i}" for i in range(1, self.nb + 1))
+                + tuple(f"p{j}" for j in range(2, self.n_f + 1))
+                + tuple(f"q{j}" for j in range(2, self.n_g + 1)))
+
+    def check_theta(self, theta, name: str = "theta") -> np.ndarray:
+        """Validate a theta vector of this layout and return it as float64."""
+        theta = check_array(theta, name)
+        if theta.shape[0] != self.n_params:
+            raise DimensionError(f"`{name}` must have {self.n_params} entries for na={self.na}, "
+                                 f"nb={self.nb}, {self.n_g} g- and {self.n_f} f-basis functions; "
+                                 f"got {theta.shape[0]}.")
+        return theta
+
+    def to_theta(self, a, b, p, q) -> np.ndarray:
+        """Assemble ``theta = [q ⊗ a, p ⊗ b]``."""
+        a, b, p, q = self._check_blocks(a, b, p, q)
+        return np.concatenate([np.kron(q, a), np.kron(p, b)])
+
+    def blocks(self, theta):
+        """Return theta reshaped as ``(n_g, na)`` and ``(n_f, nb)`` matrices (rows ``q_j a``, ``p_j b``)."""
+        theta = self.check_theta(theta)
+        k = self.n_output_params
+        return theta[:k].reshape(self.n_g, self.na), theta[k:].reshape(self.n_f, self.nb)
+
+    def recover(self, theta):
+        """Recover ``a, b, p, q`` from theta by Eqs. (39)–(40).
+
+        ``a`` and ``b`` are the first blocks; ``q_j`` is the mean over ``i`` of
+        ``theta[q_j a_i] / a_i`` and ``p_j`` likewise with ``b``.
+
+        Raises
+        ------
+        ParameterError
+            An ``a_i`` (or ``b_i``) is exactly zero while ``q`` (``p``) has more than one entry,
+            so Eq. (39) (Eq. (40)) is undefined.
+        """
+        qa, pb = self.blocks(theta)
+        a, b = qa[0].copy(), pb[0].copy()
+        if self.n_g > 1 and np.any(a == 0):
+            raise ParameterError(f"cannot recover q by Eq. (39): an entry of `a` is zero ({a}).")
+        if self.n_f > 1 and np.any(b == 0):
+            raise ParameterError(f"cannot recover p by Eq. (40): an entry of `b` is zero ({b}).")
+        q = np.ones(self.n_g)
+        p = np.ones(self.n_f)
+        q[1:] = (qa[1:] / a).mean(axis=1)
+        p[1:] = (pb[1:] / b).mean(axis=1)
+        return a, b, p, q
+
+    def _check_blocks(self, a, b, p, q):
+        a = check_array(a, "a")
+        b = check_array(b, "b")
+        p = check_array(p, "p")
+        q = check_array(q, "q")
+        for name, vec, size in (("a", a, self.na), ("b", b, self.nb), ("p", p, self.n_f),
+                                ("q", q, self.n_g)):
+            if vec.shape[0] != size:
+                raise DimensionError(f"`{name}` must have {size} entries; got {vec.shape[0]}.")
+        return a, b, p, q

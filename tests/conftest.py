@@ -1,0 +1,25 @@
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def shared_data_dir() -> Path | None:
+    """The folder holding the DaISy robot-arm file: $FOHW_DATA_DIR, else ../shared/data."""
+    env = os.environ.get("FOHW_DATA_DIR")
+    candidates = [Path(env)] if env else []
+    candidates.append(ROOT.parent / "shared" / "data")
+    for c in candidates:
+        if (c / "daisy_robot_arm.dat").is_file():
+            return c
+    return None
+
+
+@pytest.fixture
+def robot_arm_path():
+    d = shared_data_dir()
+    if d is None:
+        pytest.skip("robot-arm data not found (set FOHW_DATA_DIR)")
+    return d / "daisy_robot_arm.dat"

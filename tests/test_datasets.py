@@ -1,0 +1,69 @@
+"""The paper's example and the DaISy loader."""
+
+import hashlib
+
+import numpy as np
+import pytest
+
+import fohw
+
+
+def test_paper_example_uniform_input_statistics():
+    d = fohw.datasets.paper_example(20_000, random_state=0)
+    assert np.all(np.abs(d.u) <= np.sqrt(3))
+    # Sample mean and variance of U(-sqrt3, sqrt3): sd of the mean 1/sqrt(N) = 0.007.
+    assert abs(d.u.mean()) < 5 / np.sqrt(20_000)
+    assert abs(d.u.var() - 1.0) < 5 * np.sqrt(0.8 / 20_000)
+    assert abs(d.noise.var() - 0.01) < 5 * 0.01 * np.sqrt(2 / 20_000)
+    assert d.n_samples == 20_000 and "uniform" in repr(d)
+
+
+def test_paper_example_is_seeded():
+    a = fohw.datasets.paper_example(500, random_state=7)
+    b = fohw.datasets.paper_example(500, random_state=np.random.default_rng(7))
+    np.testing.assert_array_equal(a.y, b.y)
+
+
+def test_paper_example_bad_input():
+    with pytest.raises(fohw.ParameterError, match="`input_kind`"):
+        fohw.datasets.paper_example(100, input_kind="binary")
+    with pytest.raises(fohw.ParameterError, match="`n_samples` must be at least 3"):
+        fohw.datasets.paper_example(1)
+    with pytest.raises(fohw.ParameterError, match="`noise_variance`"):
+        fohw.datasets.paper_example(100, noise_variance=-0.1)
+
+
+def test_load_daisy_robot_arm(robot_arm_path):
+    assert hashlib.sha256(robot_arm_path.read_bytes()).hexdigest() == (
+        "4ee167a8a28ce0da868d1b42f6a2fe0c456ea0e56b60c70915bf6d4a2a933635")
+    data = fohw.datasets.load_daisy(robot_arm_path)
+    assert data.shape == (1024, 2)
+    # First row as printed in the data README.
+    np.testing.assert_array_equal(data[0], [2.2183165e-01, -1.7703630e-01])
+    np.testing.assert_allclose(data.std(axis=0), [0.16443, 0.27510], atol=5e-6)
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("1.0 2.0\n3.0 x\n", r"line 2: 'x' is not a number"),
+        ("1.0 2.0\n3.0\n", r"line 2 has 1 column\(s\); expected 2"),
+        ("% header only\n\n", "no data lines"),
+        ("1.0 nan\n", "line 1 holds a non-finite value"),
+        (b"1.0 2.0\n\xff\xfe\n", "line 2 is not ASCII"),
+    ],
+)
+def test_load_daisy_rejects_malformed_files(tmp_path, text, match):
+    path = tmp_path / "bad.dat"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(fohw.DataFileError, match=match):
+        fohw.datasets.load_daisy(path)
+
+
+def test_load_daisy_missing_file_and_column_count(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nothere.dat"):
+        fohw.datasets.load_daisy(tmp_path / "nothere.dat")
+    path = tmp_path / "three.dat"
+    path.write_text("1 2 3\n4 5 6\n")
+    with pytest.raises(fohw.DataFileError, match="line 1 has 3 column"):
+        fohw.datasets.load_daisy(path, n_columns=2)
