@@ -17,9 +17,12 @@ from .exceptions import (
     ParameterError,
     SimulationDivergedError,
 )
+from .driver import HybridIdentifier, identify
 from .gl import gl_difference, gl_weights, gl_weights_derivative
+from .migd import MultiInnovationGradient
 from .params import ThetaLayout
 from .regressors import RegressorBuilder, information_matrix
+from .results import IdentificationResult
 from .system import HammersteinWiener, simulate
 
 __version__ = "0.1.0.dev0"
@@ -31,6 +34,9 @@ __all__ = [
     "DimensionError",
     "FohwError",
     "HammersteinWiener",
+    "HybridIdentifier",
+    "IdentificationResult",
+    "MultiInnovationGradient",
     "NotFittedError",
     "ParameterError",
     "RegressorBuilder",
@@ -41,6 +47,7 @@ __all__ = [
     "gl_difference",
     "gl_weights",
     "gl_weights_derivative",
+    "identify",
     "information_matrix",
     "polynomial_basis",
     "simulate",

@@ -87,6 +87,50 @@ class RegressorBuilder:
         wf = scipy.fft.rfft(w, n=self._nfft)
         return scipy.fft.irfft(self._spectra * wf, n=self._nfft, axis=-1)[:, :n]
 
+    def window(self, k, innovation_length, weights):
+        """Rows ``phi[k], phi[k-1], …, phi[k-P+1]`` (those with index >= 0), for given weights.
+
+        Each row is computed exactly from the full history (no FFT), so this is what a
+        recursion whose fractional order changes at every sample uses.
+
+        Parameters
+        ----------
+        k : int
+            Current sample, ``0 <= k < N``.
+        innovation_length : int
+            ``P``.
+        weights : sequence of ndarray
+            GL weight vectors (e.g. for ``alpha`` and ``alpha + delta``), each of length at
+            least ``k``.
+
+        Returns
+        -------
+        rows : list of ndarray, each of shape (min(P, k + 1), n)
+            One window per weight vector.
+        """
+        if not hasattr(self, "_padded"):
+            n_sig, n = self.signals.shape
+            self._max_lag = max(self._lags)
+            self._pad = n + self._max_lag        # zeros before k = 0, enough for any window
+            self._padded = np.concatenate([np.zeros((n_sig, self._pad)), self.signals], axis=1)
+            self._sig_idx = np.repeat(np.arange(n_sig), self._lags)
+            self._lag_idx = np.concatenate([np.arange(1, m + 1) for m in self._lags])
+        n_rows = min(innovation_length, k + 1)
+        rows = np.arange(k, k - n_rows, -1)
+        if k == 0:
+            return [np.zeros((1, self.layout.n_params)) for _ in weights]
+        t_lo = k - n_rows + 1 - self._max_lag          # earliest time a row needs
+        t_hi = k - 1                                   # latest time a row needs
+        length = k                                     # weights beta[0..t_hi]
+        start = self._pad + t_lo - length + 1
+        segment = self._padded[:, start:self._pad + t_hi + 1]
+        index = (self._sig_idx[None, :], rows[:, None] - self._lag_idx[None, :] - t_lo)
+        out = []
+        for w in weights:
+            d = np.array([np.convolve(seg, w[:length], mode="valid") for seg in segment])
+            out.append(d[index])
+        return out
+
     def lag(self, differences):
         """Arrange stacked differences into the ``(N, n)`` matrix of lagged columns."""
         n = self.n_samples
