@@ -48,8 +48,9 @@ def milm_step(sensitivities, innovations, *, n_samples, lm_lambda=1.0):
     --------
     >>> import numpy as np
     >>> from fohw.milm import milm_step
+    >>> # (2/N) = 1: increment = (Xi @ E) / (Xi @ Xi + lambda) = 1 / (2 + 1)
     >>> milm_step(np.array([1.0, 1.0]), np.array([0.5, 0.5]), n_samples=2, lm_lambda=1.0)
-    0.5
+    0.3333333333333333
     """
     c = 2.0 / n_samples
     xi = np.asarray(sensitivities, dtype=np.float64)
