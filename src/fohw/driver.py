@@ -47,7 +47,7 @@ from ._validation import check_array, check_int, check_same_length, check_scalar
 from .exceptions import ConvergenceWarning, ParameterError
 from .gl import gl_weights
 from .migd import check_migd_options, migd_pass, migd_update
-from .milm import check_sensitivity, milm_step, sensitivity_weights
+from .milm import alpha_update, check_sensitivity, milm_step, sensitivity_weights
 from .regressors import RegressorBuilder
 from .results import IdentificationResult
 from .system import ALPHA_BOUNDS, HammersteinWiener
@@ -216,7 +216,9 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
                 builder, theta, alpha, r, bounds, joint=(method == "single_innovation_lm"), **cfg)
         else:
             k_now = 0 if m == 1 else n_samples - 1
-            alpha = _alpha_step(builder, theta, alpha, bounds, k_now, alpha_window, **cfg)
+            rows = None if alpha_window == "record" else np.arange(k_now, max(k_now - P, -1), -1)
+            alpha = bounds(alpha_update(builder, theta, alpha, rows=rows, lm_lambda=lm_lambda,
+                                        sensitivity=sensitivity, delta_alpha=delta_alpha))
             Phi = builder.matrix(alpha)
             theta_path, r_path, _ = migd_pass(Phi, builder.y, innovation_length=P, theta0=theta,
                                               r0=r, normalisation=normalisation,
@@ -293,23 +295,6 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation
         theta_path[k] = theta
         alpha_path[k] = alpha
     return theta, alpha, r, theta_path, alpha_path
-
-
-def _alpha_step(builder, theta, alpha, bounds, k_now, window, *, P, lm_lambda, delta_alpha,
-                sensitivity, n_samples, **_):
-    """Steps 3–5: one MI-LM step of alpha on the chosen window."""
-    if window == "record":
-        rows = slice(None)
-    else:
-        rows = slice(k_now, k_now - P if k_now - P >= 0 else None, -1)
-    Phi = builder.matrix(alpha)
-    if sensitivity == "exact":
-        dPhi = builder.matrix_derivative(alpha)
-    else:
-        dPhi = (builder.matrix(alpha + delta_alpha) - Phi) / delta_alpha
-    xi = dPhi[rows] @ theta
-    innov = builder.y[rows] - Phi[rows] @ theta
-    return bounds(alpha + milm_step(xi, innov, n_samples=n_samples, lm_lambda=lm_lambda))
 
 
 class HybridIdentifier(BaseEstimator):

@@ -17,7 +17,7 @@ from ._validation import check_scalar
 from .exceptions import ParameterError
 from .gl import gl_weights, gl_weights_derivative
 
-__all__ = ["milm_step", "output_sensitivity", "SENSITIVITIES"]
+__all__ = ["milm_step", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
 #: ``"finite_difference"``: Eq. (44) with step ``delta_alpha``; ``"exact"``: by the exact
 #: derivative of the GL weights (:func:`fohw.gl_weights_derivative`).
@@ -107,6 +107,51 @@ def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference"
     if sensitivity == "exact":
         return builder.matrix_derivative(alpha) @ theta
     return (builder.matrix(alpha + delta_alpha) - builder.matrix(alpha)) @ theta / delta_alpha
+
+
+def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
+                 sensitivity="finite_difference", delta_alpha=1e-3):
+    """One MI-LM step of the fractional order on chosen samples of a record (Eq. 48).
+
+    Parameters
+    ----------
+    builder : RegressorBuilder
+        The record.
+    theta : ndarray, shape (n,)
+        Current parameters (held fixed during the step).
+    alpha : float
+        Current fractional order.
+    rows : slice or index array, optional
+        Samples that form ``Xi`` and ``E``: the last ``P`` samples for Eq. (48) as printed,
+        ``None`` (default) for the whole record (Eqs. 46a–b summed over the record).
+    lm_lambda, sensitivity, delta_alpha
+        As in :func:`milm_step` and :func:`output_sensitivity`.
+
+    Returns
+    -------
+    alpha : float
+        The updated order, not yet projected onto any bounds.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> from fohw.milm import alpha_update
+    >>> d = fohw.datasets.paper_example(2000, noise_variance=0.0, random_state=0)
+    >>> b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> a1 = alpha_update(b, d.model.theta, 0.5)      # true alpha is 0.6
+    >>> bool(0.5 < a1 < 0.7)
+    True
+    """
+    check_sensitivity(sensitivity, delta_alpha)
+    rows = slice(None) if rows is None else rows
+    Phi = builder.matrix(alpha)
+    if sensitivity == "exact":
+        dPhi = builder.matrix_derivative(alpha)
+    else:
+        dPhi = (builder.matrix(alpha + delta_alpha) - Phi) / delta_alpha
+    xi = dPhi[rows] @ theta
+    innov = builder.y[rows] - Phi[rows] @ theta
+    return alpha + milm_step(xi, innov, n_samples=builder.n_samples, lm_lambda=lm_lambda)
 
 
 def check_sensitivity(sensitivity, delta_alpha):

@@ -1,0 +1,177 @@
+"""The alternating driver: contracts, errors, convergence reporting and golden runs."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import fohw
+
+STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
+
+
+@pytest.fixture(scope="module")
+def data2000():
+    return fohw.datasets.paper_example(2000, random_state=0)
+
+
+def quiet_identify(u, y, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        return fohw.identify(u, y, **{**STRUCT, **kw})
+
+
+# Golden values: our own seeded runs (paper_example(2000, random_state=0)), recorded when the
+# driver was written, to catch drift. They are not the paper's numbers.
+GOLDEN_RECURSIVE_P5 = dict(
+    theta=[0.00684582826264101, 0.00195175258853691, -0.03718258438912721, 0.00133468644585263,
+           0.04016228276372388, 0.00429318065167809, -0.32574943934544703, -0.10302674537717035,
+           -0.13769025457300957, -0.03840861873949784],
+    alpha=0.4413516274473501, J=0.029220984981830553)
+GOLDEN_ITERATIVE_RECORD = dict(
+    theta=[-0.0714638841438226, 0.18455280057854057, 0.02635840962733589, 0.07227692660906304,
+           -0.00713967992212338, 0.06778159285331206, -0.404627823408371, -0.27880023664046355,
+           -0.21481352688505226, -0.1460610009297715],
+    alpha=0.6044781813087945, J=0.011781340983699042, n_iter=38)
+
+
+def test_golden_recursive_hybrid(data2000):
+    res = quiet_identify(data2000.u, data2000.y, innovation_length=5)
+    np.testing.assert_allclose(res.theta, GOLDEN_RECURSIVE_P5["theta"], rtol=1e-9, atol=1e-12)
+    assert res.alpha == pytest.approx(GOLDEN_RECURSIVE_P5["alpha"], rel=1e-10)
+    assert res.J == pytest.approx(GOLDEN_RECURSIVE_P5["J"], rel=1e-10)
+    assert (res.n_iter, res.converged, res.schedule) == (1, False, "recursive")
+
+
+def test_golden_iterative_record_window(data2000):
+    res = fohw.identify(data2000.u, data2000.y, schedule="iterative", alpha_window="record",
+                        restart_r=True, max_iter=100, **STRUCT)
+    assert res.converged and res.n_iter == GOLDEN_ITERATIVE_RECORD["n_iter"]
+    np.testing.assert_allclose(res.theta, GOLDEN_ITERATIVE_RECORD["theta"], rtol=1e-9, atol=1e-12)
+    assert res.alpha == pytest.approx(GOLDEN_ITERATIVE_RECORD["alpha"], rel=1e-10)
+    assert "converged" in res.message
+    assert res.J_history.shape == (res.n_iter,) and res.alpha_history[-1] == res.alpha
+
+
+def test_iterative_J_is_eq_41(data2000):
+    res = quiet_identify(data2000.u, data2000.y, schedule="iterative", max_iter=3)
+    Phi = fohw.information_matrix(data2000.u, data2000.y, res.alpha, **STRUCT)
+    assert res.J == pytest.approx(np.mean((data2000.y - Phi @ res.theta) ** 2), rel=1e-12)
+    np.testing.assert_allclose(res.predict(data2000.u, data2000.y), Phi @ res.theta, rtol=1e-12)
+
+
+def test_stopping_at_max_iter_warns_and_says_so(data2000):
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 3"):
+        res = fohw.identify(data2000.u, data2000.y, schedule="iterative", max_iter=3, tol=1e-12,
+                            **STRUCT)
+    assert not res.converged and res.n_iter == 3 and "max_iter = 3" in res.message
+    with pytest.warns(fohw.ConvergenceWarning, match="one pass only"):
+        res = fohw.identify(data2000.u[:300], data2000.y[:300], **STRUCT)
+    assert not res.converged
+
+
+def test_single_innovation_gradient_is_hybrid_with_P1(data2000):
+    a = quiet_identify(data2000.u, data2000.y, method="single_innovation_gradient",
+                       innovation_length=5)
+    b = quiet_identify(data2000.u, data2000.y, method="hybrid", innovation_length=1)
+    assert a.options["innovation_length"] == 1
+    np.testing.assert_array_equal(a.theta, b.theta)
+    assert a.alpha == b.alpha
+
+
+def test_single_innovation_lm_runs_and_differs(data2000):
+    lm = quiet_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_lm")
+    gd = quiet_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_gradient")
+    assert lm.method == "single_innovation_lm" and lm.theta_history.shape == (500, 10)
+    assert not np.allclose(lm.theta, gd.theta)
+
+
+def test_recursive_pass_of_hybrid_with_fixed_alpha_is_migd(data2000):
+    # With a huge LM damping alpha cannot move, so Table 1's theta recursion must be the MIGD
+    # pass at alpha0 (the windows being rebuilt per sample, exactly, from full memory).
+    u, y = data2000.u[:600], data2000.y[:600]
+    res = quiet_identify(u, y, alpha0=0.6, lm_lambda=1e300, innovation_length=3)
+    migd = fohw.MultiInnovationGradient(alpha=0.6, innovation_length=3, **STRUCT).fit(u, y)
+    assert np.all(res.alpha_sample_history == 0.6)
+    np.testing.assert_allclose(res.theta_history, migd.theta_history_, rtol=1e-10, atol=1e-13)
+
+
+def test_alpha_held_at_bound_is_reported(data2000):
+    res = quiet_identify(data2000.u, data2000.y, schedule="iterative", alpha_window="record",
+                         restart_r=True, lm_lambda=1e-8, alpha_bounds=(0.3, 0.5), alpha0=0.4,
+                         max_iter=5)
+    assert res.alpha_at_bound and "bound" in res.message
+    assert 0.3 < res.alpha < 0.5
+
+
+def test_result_object(data2000):
+    res = quiet_identify(data2000.u[:400], data2000.y[:400])
+    assert res.parameter_names[2] == "q2a1"
+    text = res.summary()
+    for word in ("alpha", "q3a2", "p2b2", "J (Eq. 41)", "converged = False"):
+        assert word in text
+    assert "IdentificationResult(method='hybrid'" in repr(res)
+    with pytest.raises(AttributeError):
+        res.alpha = 0.1
+    with pytest.raises(ValueError):
+        res.theta[0] = 1.0
+    assert res.relative_error(fohw.datasets.paper_model().theta, history=True).shape == (400,)
+    assert res.model is not None and res.model.alpha == res.alpha
+
+
+def test_result_plot_returns_figure(data2000):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    res = quiet_identify(data2000.u[:300], data2000.y[:300])
+    fig, axes = res.plot(theta_true=fohw.datasets.paper_model().theta)
+    assert len(axes) == 3
+    plt.close(fig)
+
+
+def test_hybrid_identifier_estimator(data2000):
+    est = fohw.HybridIdentifier(innovation_length=3, schedule="iterative", max_iter=40, **STRUCT)
+    assert est.get_params()["innovation_length"] == 3
+    with pytest.raises(fohw.NotFittedError):
+        est.predict(data2000.u, data2000.y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        assert est.fit(data2000.u, data2000.y) is est
+    assert est.theta_.shape == (10,) and est.result_.options["innovation_length"] == 3
+    with pytest.raises(fohw.ParameterError, match="unknown option"):
+        fohw.HybridIdentifier(P=3, **STRUCT)
+
+
+@pytest.mark.parametrize(
+    "kwargs, exc, match",
+    [
+        (dict(innovation_length=0), fohw.ParameterError, r"`innovation_length` must be at least 1"),
+        (dict(innovation_length=51), fohw.DimensionError, r"`innovation_length` must not exceed the record length 50"),
+        (dict(tol=0.0), fohw.ParameterError, r"`tol` must be in \(0, inf\]; got 0.0"),
+        (dict(tol=-1e-3), fohw.ParameterError, r"`tol`"),
+        (dict(alpha0=1.2), fohw.ParameterError, r"`alpha0` must be in \(0, 1\); got 1.2"),
+        (dict(alpha0=0.0), fohw.ParameterError, r"`alpha0` must be in \(0, 1\)"),
+        (dict(max_iter=0), fohw.ParameterError, r"`max_iter` must be at least 1"),
+        (dict(method="newton"), fohw.ParameterError, r"`method` must be one of"),
+        (dict(schedule="batch"), fohw.ParameterError, r"`schedule` must be one of"),
+        (dict(alpha_bounds=(0.5, 0.2)), fohw.ParameterError, r"`alpha_bounds`"),
+        (dict(alpha_bounds=(0.0, 2.5)), fohw.ParameterError, r"`alpha_bounds`"),
+        (dict(alpha_window="record"), fohw.ParameterError, r"iterative schedule only"),
+        (dict(lm_lambda=0.0), fohw.ParameterError, r"`lm_lambda`"),
+        (dict(delta_alpha=0.0), fohw.ParameterError, r"`delta_alpha`"),
+        (dict(sensitivity="analytic"), fohw.ParameterError, r"`sensitivity` must be one of"),
+        (dict(p0=0.0), fohw.ParameterError, r"`p0`"),
+        (dict(forgetting=1.5), fohw.ParameterError, r"`forgetting` must be in \(0, 1\]"),
+        (dict(normalisation="frobenius"), fohw.ParameterError, r"`normalisation` must be one of"),
+        (dict(na=50), fohw.DimensionError, r"longer than the lags: got 50 samples for na=50"),
+        (dict(y=np.ones(49)), fohw.DimensionError, r"`u` and `y` must have the same length; got 50 and 49"),
+        (dict(u=np.r_[np.ones(49), np.nan]), fohw.ParameterError, r"`u` must contain only finite values"),
+    ],
+)
+def test_identify_rejects_bad_input(kwargs, exc, match):
+    args = dict(u=np.random.default_rng(0).uniform(-1, 1, 50), y=np.zeros(50), **STRUCT)
+    args.update(kwargs)
+    with pytest.raises(exc, match=match):
+        fohw.identify(args.pop("u"), args.pop("y"), **args)
