@@ -7,6 +7,7 @@ matrix, and the paper's estimators.
 """
 
 from . import datasets
+from .crb import CRBResult, crb
 from .basis import Basis, as_basis, polynomial_basis
 from .exceptions import (
     ConvergenceWarning,
@@ -20,7 +21,9 @@ from .exceptions import (
 from .driver import HybridIdentifier, identify
 from .gl import gl_difference, gl_weights, gl_weights_derivative
 from .migd import MultiInnovationGradient
+from .montecarlo import monte_carlo
 from .params import ThetaLayout
+from .rls import MultiInnovationRLS
 from .regressors import RegressorBuilder, information_matrix
 from .results import IdentificationResult
 from .system import HammersteinWiener, simulate
@@ -29,6 +32,7 @@ __version__ = "0.1.0.dev0"
 
 __all__ = [
     "Basis",
+    "CRBResult",
     "ConvergenceWarning",
     "DataFileError",
     "DimensionError",
@@ -37,18 +41,21 @@ __all__ = [
     "HybridIdentifier",
     "IdentificationResult",
     "MultiInnovationGradient",
+    "MultiInnovationRLS",
     "NotFittedError",
     "ParameterError",
     "RegressorBuilder",
     "SimulationDivergedError",
     "ThetaLayout",
     "as_basis",
+    "crb",
     "datasets",
     "gl_difference",
     "gl_weights",
     "gl_weights_derivative",
     "identify",
     "information_matrix",
+    "monte_carlo",
     "polynomial_basis",
     "simulate",
 ]

@@ -51,10 +51,11 @@ from .milm import alpha_update, check_sensitivity, milm_step, sensitivity_weight
 from .regressors import RegressorBuilder
 from .results import IdentificationResult
 from .system import ALPHA_BOUNDS, HammersteinWiener
+from .varpro import separable_least_squares
 
 __all__ = ["identify", "HybridIdentifier", "METHODS", "SCHEDULES"]
 
-METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm")
+METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro")
 SCHEDULES = ("recursive", "iterative")
 _DEFAULT_MAX_ITER = {"recursive": 1, "iterative": 50}
 
@@ -91,7 +92,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
              alpha0=0.5, schedule="recursive", max_iter=None, tol=1e-4, random_state=None,
              alpha_bounds=(0.0, 1.0), p0=1e6, normalisation="window", forgetting=1.0,
              lm_lambda=1.0, delta_alpha=1e-3, sensitivity="finite_difference",
-             alpha_window="innovation", restart_r=False):
+             alpha_window="innovation", restart_r=False, n_grid=41):
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters
@@ -102,9 +103,14 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         Output and input lag orders.
     f_basis, g_basis : Basis, int or callables
         Input and output basis functions (an int is a polynomial degree).
-    method : {"hybrid", "single_innovation_gradient", "single_innovation_lm"}, optional
-        ``"hybrid"`` (default): MIGD for theta and MI-LM for alpha (the paper). The other two
-        are the baselines of Fig. 6 (see the module notes).
+    method : {"hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro"}, optional
+        ``"hybrid"`` (default): MIGD for theta and MI-LM for alpha (the paper). The
+        single-innovation methods are the baselines of Fig. 6 (see the module notes).
+        ``"varpro"``: separable least squares (:mod:`fohw.varpro`), beyond the paper: theta by
+        linear least squares for each alpha, alpha by a grid scan and a bounded search, then a
+        joint Gauss–Newton polish; it reaches the Cramér–Rao bound and reports standard errors.
+        It ignores the settings of the recursive methods (``innovation_length``, ``schedule``,
+        ``max_iter``, ``tol``, ``p0``, ``lm_lambda``, …) and the starting value ``alpha0``.
     innovation_length : int, optional
         ``P`` (default 5), ``1 <= P <= N``. Forced to 1 by the single-innovation methods.
     alpha0 : float, optional
@@ -138,6 +144,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         Which samples the alpha step of the iterative schedule uses (see the module notes).
     restart_r : bool, optional
         Restart ``r`` at 1 at every pass (default False).
+    n_grid : int, optional
+        ``"varpro"`` only: points of the coarse alpha scan (default 41).
 
     Returns
     -------
@@ -202,6 +210,11 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     if not isinstance(restart_r, (bool, np.bool_)):
         raise ParameterError(f"`restart_r` must be True or False; got {restart_r!r}.")
 
+    n_grid = check_int(n_grid, "n_grid", minimum=3)
+    if method == "varpro":
+        return _varpro_result(builder, bounds, n_grid, dict(alpha_bounds=(bounds.lo, bounds.hi),
+                                                            n_grid=n_grid))
+
     cfg = dict(P=P, normalisation=normalisation, forgetting=forgetting, lm_lambda=lm_lambda,
                delta_alpha=delta_alpha, sensitivity=sensitivity, n_samples=n_samples)
     theta = np.full(builder.layout.n_params, 1.0 / p0)
@@ -263,6 +276,34 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         theta_history=theta_path, alpha_sample_history=alpha_path,
         alpha_history=np.array(alpha_hist), J_history=np.array(J_hist), layout=builder.layout,
         f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=n_samples, options=options)
+
+
+def _varpro_result(builder, bounds, n_grid, options):
+    """Run separable least squares and wrap it as an IdentificationResult."""
+    fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
+    message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
+    margin = 1e-6 * (bounds.hi - bounds.lo)
+    at_bound = not (bounds.lo + margin < fit.alpha < bounds.hi - margin)
+    if at_bound:
+        message += (f" The estimate of alpha is at the edge of alpha_bounds = "
+                    f"{(bounds.lo, bounds.hi)}: widen the bounds.")
+    if not fit.converged:
+        warnings.warn(f"fohw.identify('varpro'): {message}", ConvergenceWarning, stacklevel=3)
+    model = None
+    try:
+        model = HammersteinWiener.from_theta(fit.theta, fit.alpha, na=builder.layout.na,
+                                             nb=builder.layout.nb, f_basis=builder.f_basis,
+                                             g_basis=builder.g_basis)
+    except ParameterError as exc:
+        message += f" No model: {exc}"
+    return IdentificationResult(
+        method="varpro", schedule="", alpha=fit.alpha, theta=fit.theta, model=model,
+        J=fit.rss / builder.n_samples, n_iter=len(fit.search_alphas), converged=fit.converged,
+        message=message, alpha_at_bound=at_bound, theta_history=None, alpha_sample_history=None,
+        alpha_history=np.array(fit.search_alphas), J_history=np.array(fit.search_J),
+        layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
+        n_samples=builder.n_samples, options=options, covariance=fit.covariance,
+        noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
 
 
 def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation, forgetting,
@@ -331,7 +372,7 @@ class HybridIdentifier(BaseEstimator):
 
     _OPTIONS = ("method", "innovation_length", "alpha0", "schedule", "max_iter", "tol",
                 "random_state", "alpha_bounds", "p0", "normalisation", "forgetting",
-                "lm_lambda", "delta_alpha", "sensitivity", "alpha_window", "restart_r")
+                "lm_lambda", "delta_alpha", "sensitivity", "alpha_window", "restart_r", "n_grid")
 
     def __init__(self, na, nb, f_basis, g_basis, **options):
         self.na = na

@@ -123,6 +123,51 @@ class ThetaLayout:
         p[1:] = (pb[1:] / b).mean(axis=1)
         return a, b, p, q
 
+    def recover_vector(self, theta) -> np.ndarray:
+        """``[a, b, p_2.., q_2..]`` from theta (Eqs. 39–40), in :attr:`model_parameter_names` order."""
+        a, b, p, q = self.recover(theta)
+        return np.concatenate([a, b, p[1:], q[1:]])
+
+    def recover_jacobian(self, theta) -> np.ndarray:
+        """Jacobian of :meth:`recover_vector` with respect to theta (for the delta method).
+
+        Returns
+        -------
+        jac : ndarray, shape (na + nb + n_f - 1 + n_g - 1, n)
+
+        Examples
+        --------
+        >>> import numpy as np, fohw
+        >>> layout = fohw.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+        >>> layout.recover_jacobian([0.5, 0.25, -1.0])   # q2 = theta[1] / theta[0]
+        array([[ 1.,  0.,  0.],
+               [ 0.,  0.,  1.],
+               [-1.,  2.,  0.]])
+        """
+        qa, pb = self.blocks(theta)
+        a, b, p, q = self.recover(theta)
+        na, nb, k = self.na, self.nb, self.n_output_params
+        rows = []
+        for i in range(na):
+            r = np.zeros(self.n_params)
+            r[i] = 1.0
+            rows.append(r)
+        for i in range(nb):
+            r = np.zeros(self.n_params)
+            r[k + i] = 1.0
+            rows.append(r)
+        for j in range(1, self.n_f):
+            r = np.zeros(self.n_params)
+            r[k + j * nb:k + (j + 1) * nb] = 1.0 / (nb * b)
+            r[k:k + nb] = -pb[j] / (nb * b**2)
+            rows.append(r)
+        for j in range(1, self.n_g):
+            r = np.zeros(self.n_params)
+            r[j * na:(j + 1) * na] = 1.0 / (na * a)
+            r[:na] = -qa[j] / (na * a**2)
+            rows.append(r)
+        return np.array(rows)
+
     def _check_blocks(self, a, b, p, q):
         a = check_array(a, "a")
         b = check_array(b, "b")

@@ -20,7 +20,50 @@ from .exceptions import DimensionError
 from .gl import _DIRECT_MAX_LENGTH, _convolve_weights, gl_weights, gl_weights_derivative
 from .params import ThetaLayout
 
-__all__ = ["information_matrix", "RegressorBuilder"]
+__all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
+
+
+class WindowKernel:
+    """Exact information-vector rows of a window from zero-padded basis signals.
+
+    Parameters
+    ----------
+    lags : sequence of int
+        Number of lags of each stacked basis signal (``na`` for the g-signals, ``nb`` for the
+        f-signals).
+    """
+
+    def __init__(self, lags):
+        self.lags = list(lags)
+        self.max_lag = max(self.lags)
+        self.n_params = sum(self.lags)
+        self._sig_idx = np.repeat(np.arange(len(self.lags)), self.lags)
+        self._lag_idx = np.concatenate([np.arange(1, m + 1) for m in self.lags])
+
+    def min_pad(self, innovation_length):
+        """Zeros needed before ``k = 0`` in the padded signals for windows of this length."""
+        return innovation_length + self.max_lag
+
+    def rows(self, padded, pad, k, innovation_length, weights):
+        """Rows ``phi[k], …, phi[k-P+1]`` (index >= 0) for each weight vector.
+
+        ``padded[:, pad + t]`` is the basis signals at time ``t`` (zeros for ``t < 0``), with
+        ``pad >= min_pad(P)`` and samples up to ``k - 1`` present.
+        """
+        n_rows = min(innovation_length, k + 1)
+        if k == 0:
+            return [np.zeros((1, self.n_params)) for _ in weights]
+        rows = np.arange(k, k - n_rows, -1)
+        t_lo = k - n_rows + 1 - self.max_lag          # earliest time a row needs
+        t_hi = k - 1                                   # latest time a row needs
+        length = k                                     # weights beta[0..t_hi]
+        segment = padded[:, pad + t_lo - length + 1:pad + t_hi + 1]
+        index = (self._sig_idx[None, :], rows[:, None] - self._lag_idx[None, :] - t_lo)
+        out = []
+        for w in weights:
+            d = np.array([np.convolve(seg, w[:length], mode="valid") for seg in segment])
+            out.append(d[index])
+        return out
 
 
 class RegressorBuilder:
@@ -109,27 +152,11 @@ class RegressorBuilder:
             One window per weight vector.
         """
         if not hasattr(self, "_padded"):
-            n_sig, n = self.signals.shape
-            self._max_lag = max(self._lags)
-            self._pad = n + self._max_lag        # zeros before k = 0, enough for any window
-            self._padded = np.concatenate([np.zeros((n_sig, self._pad)), self.signals], axis=1)
-            self._sig_idx = np.repeat(np.arange(n_sig), self._lags)
-            self._lag_idx = np.concatenate([np.arange(1, m + 1) for m in self._lags])
-        n_rows = min(innovation_length, k + 1)
-        rows = np.arange(k, k - n_rows, -1)
-        if k == 0:
-            return [np.zeros((1, self.layout.n_params)) for _ in weights]
-        t_lo = k - n_rows + 1 - self._max_lag          # earliest time a row needs
-        t_hi = k - 1                                   # latest time a row needs
-        length = k                                     # weights beta[0..t_hi]
-        start = self._pad + t_lo - length + 1
-        segment = self._padded[:, start:self._pad + t_hi + 1]
-        index = (self._sig_idx[None, :], rows[:, None] - self._lag_idx[None, :] - t_lo)
-        out = []
-        for w in weights:
-            d = np.array([np.convolve(seg, w[:length], mode="valid") for seg in segment])
-            out.append(d[index])
-        return out
+            self._kernel = WindowKernel(self._lags)
+            self._pad = self.n_samples + self._kernel.max_lag
+            self._padded = np.concatenate([np.zeros((self.signals.shape[0], self._pad)),
+                                           self.signals], axis=1)
+        return self._kernel.rows(self._padded, self._pad, k, innovation_length, weights)
 
     def lag(self, differences):
         """Arrange stacked differences into the ``(N, n)`` matrix of lagged columns."""

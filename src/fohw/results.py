@@ -15,6 +15,8 @@ __all__ = ["IdentificationResult"]
 
 
 def _readonly(a):
+    if a is None:
+        return None
     a = np.array(a, dtype=np.float64, copy=True)
     a.setflags(write=False)
     return a
@@ -47,13 +49,15 @@ class IdentificationResult:
         Why the run stopped, and anything the user must know about the estimates.
     alpha_at_bound : bool
         Whether ``alpha`` was held at an end of ``alpha_bounds`` at least once.
-    theta_history : ndarray, shape (N, n)
-        ``theta(k)`` after the update at every sample of the last pass.
-    alpha_sample_history : ndarray, shape (N,)
+    theta_history : ndarray, shape (N, n), or None
+        ``theta(k)`` after the update at every sample of the last pass (recursive methods;
+        ``None`` for ``"varpro"``).
+    alpha_sample_history : ndarray, shape (N,), or None
         ``alpha`` after every sample of the last pass (constant within a pass in the
-        iterative schedule).
+        iterative schedule; ``None`` for ``"varpro"``).
     alpha_history, J_history : ndarray, shape (n_iter,)
-        ``alpha`` and ``J`` at the end of every outer iteration.
+        ``alpha`` and ``J`` at the end of every outer iteration (for ``"varpro"``: at every
+        point of the bounded alpha search).
     layout : ThetaLayout
         Names and blocks of theta.
     f_basis, g_basis : Basis
@@ -62,6 +66,15 @@ class IdentificationResult:
         ``N``.
     options : dict
         The settings of the run (innovation length, bounds, …).
+    covariance : ndarray, shape (n + 1, n + 1), or None
+        Asymptotic covariance of ``(theta, alpha)`` (``alpha`` last), ``s^2 (G^T G)^{-1}`` with
+        ``G`` the Jacobian of the one-step predictor; only for least-squares estimates
+        (``"varpro"``). ``None`` where the estimator is not a least-squares optimum, since
+        standard errors would then be meaningless.
+    noise_variance : float or None
+        ``s^2 = RSS / (N - n - 1)``, with ``covariance``.
+    alpha_profile : ndarray, shape (2, n_grid), or None
+        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1.
     """
 
     method: str
@@ -83,10 +96,13 @@ class IdentificationResult:
     g_basis: Basis
     n_samples: int
     options: dict = field(default_factory=dict)
+    covariance: np.ndarray | None = None
+    noise_variance: float | None = None
+    alpha_profile: np.ndarray | None = None
 
     def __post_init__(self):
         for name in ("theta", "theta_history", "alpha_sample_history", "alpha_history",
-                     "J_history"):
+                     "J_history", "covariance", "alpha_profile"):
             object.__setattr__(self, name, _readonly(getattr(self, name)))
 
     @property
@@ -104,12 +120,75 @@ class IdentificationResult:
         """Input lag order."""
         return self.layout.nb
 
+    def _require_covariance(self):
+        if self.covariance is None:
+            raise ValueError(f"method {self.method!r} gives no covariance: standard errors are "
+                             "only defined at a least-squares optimum; use method='varpro'.")
+
+    def standard_errors(self) -> dict:
+        """Standard errors of theta, alpha and the recovered ``a, b, p, q``.
+
+        Returns
+        -------
+        dict of str to float
+            Keyed by :attr:`parameter_names`, ``"alpha"`` and the model parameter names
+            (``a1``, ``b1``, ``p2``, ``q2``, …; the delta method through Eqs. 39–40).
+
+        Raises
+        ------
+        ValueError
+            The method provides no covariance.
+        """
+        self._require_covariance()
+        se = np.sqrt(np.diag(self.covariance))
+        out = dict(zip(self.parameter_names, se[:-1]))
+        out["alpha"] = float(se[-1])
+        out.update(zip(self.layout.model_parameter_names, np.sqrt(np.diag(self._model_covariance()))))
+        return {k: float(v) for k, v in out.items()}
+
+    def _model_covariance(self):
+        jac = self.layout.recover_jacobian(self.theta)
+        n = self.theta.shape[0]
+        return jac @ self.covariance[:n, :n] @ jac.T
+
+    def confidence_intervals(self, level=0.95) -> dict:
+        """Wald confidence intervals ``estimate ± z * se`` (normal quantile ``z``).
+
+        Parameters
+        ----------
+        level : float
+            Coverage, in (0, 1). Default 0.95.
+
+        Returns
+        -------
+        dict of str to (float, float)
+            Same keys as :meth:`standard_errors`.
+        """
+        from scipy.stats import norm
+
+        from ._validation import check_scalar
+
+        level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
+                             upper_inclusive=False)
+        z = float(norm.ppf(0.5 + level / 2))
+        se = self.standard_errors()
+        est = self._estimates()
+        return {k: (est[k] - z * se[k], est[k] + z * se[k]) for k in se}
+
+    def _estimates(self) -> dict:
+        est = dict(zip(self.parameter_names, self.theta))
+        est["alpha"] = self.alpha
+        est.update(zip(self.layout.model_parameter_names, self.layout.recover_vector(self.theta)))
+        return {k: float(v) for k, v in est.items()}
+
     def relative_error(self, theta_true, *, history=False):
         """``delta = ||theta_hat - theta|| / ||theta||`` (Section 6.1).
 
         With ``history=True``, for every sample of :attr:`theta_history`.
         """
         theta_true = self.layout.check_theta(theta_true, "theta_true")
+        if history and self.theta_history is None:
+            raise ValueError(f"method {self.method!r} keeps no per-sample history.")
         est = self.theta_history if history else self.theta
         return np.linalg.norm(est - theta_true, axis=-1) / np.linalg.norm(theta_true)
 
@@ -134,16 +213,35 @@ class IdentificationResult:
                  f"  iterations = {self.n_iter}, converged = {self.converged}, J (Eq. 41) = "
                  f"{self.J:.6g}",
                  f"  {self.message}",
-                 "",
-                 f"  {'parameter':<12}{'estimate':>14}",
-                 f"  {'alpha':<12}{self.alpha:>14.6g}" + ("  (held at a bound)"
-                                                          if self.alpha_at_bound else "")]
-        lines += [f"  {n:<12}{v:>14.6g}" for n, v in zip(self.parameter_names, self.theta)]
-        if self.model is not None:
-            lines += ["", "  recovered by Eqs. (39)-(40):"]
-            for name in "abpq":
-                vals = ", ".join(f"{v:.6g}" for v in getattr(self.model, name))
-                lines.append(f"  {name} = [{vals}]")
+                 ""]
+        names = ["alpha"] + list(self.parameter_names)
+        est = self._estimates() if self.model is not None else dict(
+            zip(names, [self.alpha, *self.theta]))
+        if self.covariance is not None:
+            se = self.standard_errors()
+            ci = self.confidence_intervals()
+            lines.append(f"  {'parameter':<12}{'estimate':>14}{'std err':>12}"
+                         f"{'95% CI low':>14}{'95% CI high':>14}")
+
+            def row(n):
+                return (f"  {n:<12}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
+                        f"{ci[n][1]:>14.6g}")
+            lines += [row(n) for n in names]
+            if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
+                lines += ["", "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]
+                lines += [row(n) for n in self.layout.model_parameter_names
+                          if n[0] in "pq"]
+            lines += ["", f"  noise variance estimate s^2 = {self.noise_variance:.6g}"]
+        else:
+            lines.append(f"  {'parameter':<12}{'estimate':>14}")
+            lines += [f"  {n:<12}{est[n]:>14.6g}" for n in names]
+            if self.model is not None:
+                lines += ["", "  recovered by Eqs. (39)-(40):"]
+                for name in "abpq":
+                    vals = ", ".join(f"{v:.6g}" for v in getattr(self.model, name))
+                    lines.append(f"  {name} = [{vals}]")
+        if self.alpha_at_bound:
+            lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
         return "\n".join(lines)
 
     def __repr__(self):
