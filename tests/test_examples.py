@@ -17,6 +17,9 @@ EXAMPLES = {
     "figure_5.py": ["figure_5.png"],
     "figure_6.py": ["figure_6.png"],
     "schedule_variants.py": ["schedule_variants.md"],
+    "coverage.py": ["coverage.md"],
+    "accuracy_vs_crb.py": ["accuracy.md", "accuracy.csv", "accuracy_methods.png",
+                           "accuracy_vs_n.png"],
     "table_2_monte_carlo.py": ["table_2_monte_carlo.md", "table_2_monte_carlo.csv",
                                "table_2_monte_carlo.png"],
 }

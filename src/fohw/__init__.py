@@ -6,7 +6,7 @@ the discrete fractional-order Hammerstein–Wiener model and its simulator, the 
 matrix, and the paper's estimators.
 """
 
-from . import datasets
+from . import datasets, metrics
 from .crb import CRBResult, crb
 from .basis import Basis, as_basis, polynomial_basis
 from .exceptions import (
@@ -50,6 +50,7 @@ __all__ = [
     "as_basis",
     "crb",
     "datasets",
+    "metrics",
     "gl_difference",
     "gl_weights",
     "gl_weights_derivative",

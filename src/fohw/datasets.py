@@ -11,7 +11,8 @@ from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
 from .system import HammersteinWiener, simulate
 
-__all__ = ["SimulatedData", "paper_model", "paper_example", "load_daisy"]
+__all__ = ["SimulatedData", "MeasuredData", "paper_model", "paper_example", "load_daisy",
+           "robot_arm"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -190,3 +191,106 @@ def _is_float(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+#: sha256 of DaISy 96-009 ``robot_arm.dat`` as distributed (see the data README).
+ROBOT_ARM_SHA256 = "4ee167a8a28ce0da868d1b42f6a2fe0c456ea0e56b60c70915bf6d4a2a933635"
+ROBOT_ARM_FILENAME = "daisy_robot_arm.dat"
+
+
+@dataclass(frozen=True, repr=False)
+class MeasuredData:
+    """A measured input–output record.
+
+    Attributes
+    ----------
+    u, y : ndarray, shape (N,)
+        Input and output.
+    name : str
+        Where the record comes from.
+    sampling_time : float or None
+        ``None`` where the source gives none.
+    path : str
+        The file read.
+    """
+
+    u: np.ndarray
+    y: np.ndarray
+    name: str
+    sampling_time: float | None
+    path: str
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples ``N``."""
+        return self.u.shape[0]
+
+    def __repr__(self):
+        return f"MeasuredData({self.name!r}, n_samples={self.n_samples}, path={self.path!r})"
+
+
+def _robot_arm_help() -> str:
+    return ("The flexible robot arm record is DaISy data set 96-009 (KU Leuven; De Moor et al., "
+            "'DAISY: a database for identification of systems', 1997), file robot_arm.dat: "
+            "1024 lines of 'u y' (reaction torque, arm acceleration). fohw does not ship it. "
+            f"Save it as {ROBOT_ARM_FILENAME!r} and pass its path, "
+            "fohw.datasets.robot_arm(path=...), or set the environment variable FOHW_DATA_DIR "
+            "to the folder that holds it.")
+
+
+def robot_arm(path=None, *, verify=True):
+    """The DaISy flexible robot arm record (paper Section 6.2).
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        The file, or a folder holding ``daisy_robot_arm.dat``. Default: the folder named by the
+        environment variable ``FOHW_DATA_DIR``.
+    verify : bool, optional
+        Check the file's sha256 against the published one (default True).
+
+    Returns
+    -------
+    MeasuredData
+        ``u`` = reaction torque, ``y`` = arm acceleration, 1024 samples; the source gives no
+        sampling time (``sampling_time=None``; use one sample as the unit).
+
+    Raises
+    ------
+    FileNotFoundError
+        No path given and ``FOHW_DATA_DIR`` unset, or no file there; the message says what the
+        file is and where to get it.
+    DataFileError
+        The file's checksum or content is wrong.
+
+    Notes
+    -----
+    The second half of the record (samples 513–1024) is almost exactly the negative of the
+    first half (correlation −0.996 for u, −0.998 for y: a periodic sweep), so a first-half /
+    second-half split is a weak validation.
+    """
+    import hashlib
+
+    if path is None:
+        folder = os.environ.get("FOHW_DATA_DIR")
+        if not folder:
+            raise FileNotFoundError("no path given and FOHW_DATA_DIR is not set. "
+                                    + _robot_arm_help())
+        path = os.path.join(folder, ROBOT_ARM_FILENAME)
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        path = os.path.join(path, ROBOT_ARM_FILENAME)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"robot-arm data not found at {path!r}. " + _robot_arm_help())
+    if verify:
+        with open(path, "rb") as fh:
+            digest = hashlib.sha256(fh.read()).hexdigest()
+        if digest != ROBOT_ARM_SHA256:
+            raise DataFileError(f"{path}: sha256 {digest} does not match DaISy 96-009's "
+                                f"{ROBOT_ARM_SHA256}; the file is corrupted or another file. "
+                                + _robot_arm_help())
+    data = load_daisy(path, n_columns=2)
+    if data.shape[0] != 1024:
+        raise DataFileError(f"{path}: expected 1024 samples; got {data.shape[0]}.")
+    return MeasuredData(u=data[:, 0].copy(), y=data[:, 1].copy(),
+                        name="DaISy 96-009 flexible robot arm", sampling_time=None, path=path)

@@ -55,7 +55,7 @@ from .varpro import separable_least_squares
 
 __all__ = ["identify", "HybridIdentifier", "METHODS", "SCHEDULES"]
 
-METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro")
+METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro", "rls")
 SCHEDULES = ("recursive", "iterative")
 _DEFAULT_MAX_ITER = {"recursive": 1, "iterative": 50}
 
@@ -111,6 +111,9 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         joint Gauss–Newton polish; it reaches the Cramér–Rao bound and reports standard errors.
         It ignores the settings of the recursive methods (``innovation_length``, ``schedule``,
         ``max_iter``, ``tol``, ``p0``, ``lm_lambda``, …) and the starting value ``alpha0``.
+        ``"rls"``: one pass of :class:`fohw.MultiInnovationRLS` (recursive least squares with
+        recursive alpha), using ``innovation_length``, ``forgetting``, ``alpha0``,
+        ``alpha_bounds`` and ``p0``.
     innovation_length : int, optional
         ``P`` (default 5), ``1 <= P <= N``. Forced to 1 by the single-innovation methods.
     alpha0 : float, optional
@@ -197,7 +200,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     n_samples = builder.n_samples
     P, p0, normalisation, forgetting = check_migd_options(innovation_length, p0, normalisation,
                                                           forgetting, n_samples)
-    if method != "hybrid":
+    if method.startswith("single_innovation"):
         P = 1
     bounds = _AlphaBounds(alpha_bounds)
     alpha = check_scalar(alpha0, "alpha0", lower=bounds.lo, upper=bounds.hi,
@@ -214,6 +217,9 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     if method == "varpro":
         return _varpro_result(builder, bounds, n_grid, dict(alpha_bounds=(bounds.lo, bounds.hi),
                                                             n_grid=n_grid))
+
+    if method == "rls":
+        return _rls_result(builder, P, forgetting, alpha, bounds, p0, u, y)
 
     cfg = dict(P=P, normalisation=normalisation, forgetting=forgetting, lm_lambda=lm_lambda,
                delta_alpha=delta_alpha, sensitivity=sensitivity, n_samples=n_samples)
@@ -304,6 +310,36 @@ def _varpro_result(builder, bounds, n_grid, options):
         layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
         n_samples=builder.n_samples, options=options, covariance=fit.covariance,
         noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
+
+
+def _rls_result(builder, P, forgetting, alpha0, bounds, p0, u, y):
+    """One pass of MultiInnovationRLS wrapped as an IdentificationResult."""
+    from .rls import MultiInnovationRLS
+
+    est = MultiInnovationRLS(builder.layout.na, builder.layout.nb, builder.f_basis,
+                             builder.g_basis, innovation_length=P, forgetting=forgetting,
+                             alpha0=alpha0, alpha_bounds=(bounds.lo, bounds.hi), p0=p0).fit(u, y)
+    J = float(np.mean((y - builder.matrix(est.alpha_) @ est.theta_) ** 2))
+    message = ("one pass only (max_iter=1): convergence of J was not tested; a recursive "
+               "estimator's final value is its estimate.")
+    warnings.warn(f"fohw.identify('rls'): {message}", ConvergenceWarning, stacklevel=3)
+    if est.alpha_at_bound_:
+        message += " Alpha was held at a bound at least once."
+    model = None
+    try:
+        model = HammersteinWiener.from_theta(est.theta_, est.alpha_, na=builder.layout.na,
+                                             nb=builder.layout.nb, f_basis=builder.f_basis,
+                                             g_basis=builder.g_basis)
+    except ParameterError as exc:
+        message += f" No model: {exc}"
+    return IdentificationResult(
+        method="rls", schedule="recursive", alpha=est.alpha_, theta=est.theta_, model=model, J=J,
+        n_iter=1, converged=False, message=message, alpha_at_bound=est.alpha_at_bound_,
+        theta_history=est.theta_history_, alpha_sample_history=est.alpha_history_,
+        alpha_history=np.array([est.alpha_]), J_history=np.array([J]), layout=builder.layout,
+        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=builder.n_samples,
+        options=dict(innovation_length=P, forgetting=forgetting, alpha0=alpha0,
+                     alpha_bounds=(bounds.lo, bounds.hi), p0=p0))
 
 
 def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation, forgetting,
