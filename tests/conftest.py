@@ -17,6 +17,12 @@ def shared_data_dir() -> Path | None:
     return None
 
 
+# Tests and the examples they run read the robot-arm record from $FOHW_DATA_DIR; fall back to
+# the shared folder beside the checkout (where CI has it).
+if not os.environ.get("FOHW_DATA_DIR") and shared_data_dir() is not None:
+    os.environ["FOHW_DATA_DIR"] = str(shared_data_dir())
+
+
 @pytest.fixture
 def robot_arm_path():
     d = shared_data_dir()

@@ -26,7 +26,7 @@ from .params import ThetaLayout
 from .rls import MultiInnovationRLS
 from .regressors import RegressorBuilder, information_matrix
 from .results import IdentificationResult
-from .system import HammersteinWiener, simulate
+from .system import HammersteinWiener, simulate, simulate_theta
 
 __version__ = "0.1.0.dev0"
 
@@ -59,4 +59,5 @@ __all__ = [
     "monte_carlo",
     "polynomial_basis",
     "simulate",
+    "simulate_theta",
 ]

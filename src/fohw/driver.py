@@ -55,7 +55,8 @@ from .varpro import separable_least_squares
 
 __all__ = ["identify", "HybridIdentifier", "METHODS", "SCHEDULES"]
 
-METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro", "rls")
+METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro", "rls",
+           "output_error")
 SCHEDULES = ("recursive", "iterative")
 _DEFAULT_MAX_ITER = {"recursive": 1, "iterative": 50}
 
@@ -92,7 +93,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
              alpha0=0.5, schedule="recursive", max_iter=None, tol=1e-4, random_state=None,
              alpha_bounds=(0.0, 1.0), p0=1e6, normalisation="window", forgetting=1.0,
              lm_lambda=1.0, delta_alpha=1e-3, sensitivity="finite_difference",
-             alpha_window="innovation", restart_r=False, n_grid=41):
+             alpha_window="innovation", restart_r=False, n_grid=41, n_init=0, start=None):
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters
@@ -114,6 +115,9 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         ``"rls"``: one pass of :class:`fohw.MultiInnovationRLS` (recursive least squares with
         recursive alpha), using ``innovation_length``, ``forgetting``, ``alpha0``,
         ``alpha_bounds`` and ``p0``.
+        ``"output_error"``: beyond the paper, minimises the free-run *simulation* error over
+        ``(theta, alpha)`` (:mod:`fohw.output_error`), started from the ``"varpro"``
+        estimate; the criterion leaves out the first ``n_init`` samples.
     innovation_length : int, optional
         ``P`` (default 5), ``1 <= P <= N``. Forced to 1 by the single-innovation methods.
     alpha0 : float, optional
@@ -148,7 +152,12 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     restart_r : bool, optional
         Restart ``r`` at 1 at every pass (default False).
     n_grid : int, optional
-        ``"varpro"`` only: points of the coarse alpha scan (default 41).
+        ``"varpro"`` and ``"output_error"``: points of the coarse alpha scan (default 41).
+    n_init : int, optional
+        ``"output_error"`` only: leading samples left out of the simulation-error criterion
+        (start-up transient; default 0).
+    start : IdentificationResult or (theta, alpha), optional
+        ``"output_error"`` only: the starting point; default the ``"varpro"`` estimate.
 
     Returns
     -------
@@ -214,9 +223,12 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         raise ParameterError(f"`restart_r` must be True or False; got {restart_r!r}.")
 
     n_grid = check_int(n_grid, "n_grid", minimum=3)
+    n_init = check_int(n_init, "n_init", minimum=0, maximum=n_samples - 2)
     if method == "varpro":
         return _varpro_result(builder, bounds, n_grid, dict(alpha_bounds=(bounds.lo, bounds.hi),
                                                             n_grid=n_grid))
+    if method == "output_error":
+        return _output_error_result(builder, bounds, n_grid, n_init, start)
 
     if method == "rls":
         return _rls_result(builder, P, forgetting, alpha, bounds, p0, u, y)
@@ -310,6 +322,58 @@ def _varpro_result(builder, bounds, n_grid, options):
         layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
         n_samples=builder.n_samples, options=options, covariance=fit.covariance,
         noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
+
+
+def _output_error_result(builder, bounds, n_grid, n_init, start):
+    """Equation-error start (varpro) or a given one, then the simulation-error fit."""
+    from .output_error import fit_output_error
+
+    if start is None:
+        vp = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
+        theta0, alpha0, origin = vp.theta, vp.alpha, "the varpro estimate"
+        J0 = vp.rss / builder.n_samples
+    else:
+        if isinstance(start, IdentificationResult):
+            theta0, alpha0 = start.theta, start.alpha
+        else:
+            try:
+                theta0, alpha0 = start
+            except (TypeError, ValueError):
+                raise ParameterError("`start` must be an IdentificationResult or a pair "
+                                     f"(theta, alpha); got {start!r}.") from None
+        theta0 = builder.layout.check_theta(theta0, "start theta")
+        alpha0 = check_scalar(alpha0, "start alpha", lower=bounds.lo, upper=bounds.hi)
+        origin = "the given start"
+        J0 = float(np.mean((builder.y - builder.matrix(alpha0) @ theta0) ** 2))
+    fit = fit_output_error(builder.u, builder.y, layout=builder.layout, f_basis=builder.f_basis,
+                           g_basis=builder.g_basis, theta0=theta0, alpha0=alpha0,
+                           bounds=(bounds.lo, bounds.hi), n_init=n_init)
+    message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
+    message += (f" Started from {origin} (alpha = {alpha0:.6g})"
+                + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "
+                   "stable." if fit.start_shrink < 1 else "."))
+    message += f" Simulation error criterion from sample {n_init} on."
+    if not fit.converged:
+        warnings.warn(f"fohw.identify('output_error'): {message}", ConvergenceWarning,
+                      stacklevel=3)
+    model = None
+    try:
+        model = HammersteinWiener.from_theta(fit.theta, fit.alpha, na=builder.layout.na,
+                                             nb=builder.layout.nb, f_basis=builder.f_basis,
+                                             g_basis=builder.g_basis)
+    except ParameterError as exc:
+        message += f" No model: {exc}"
+    J = float(np.mean((builder.y - builder.matrix(fit.alpha) @ fit.theta) ** 2))
+    return IdentificationResult(
+        method="output_error", schedule="", alpha=fit.alpha, theta=fit.theta, model=model, J=J,
+        n_iter=fit.nfev, converged=fit.converged, message=message,
+        alpha_at_bound=not (bounds.lo < fit.alpha < bounds.hi), theta_history=None,
+        alpha_sample_history=None, alpha_history=np.array([alpha0, fit.alpha]),
+        J_history=np.array([J0, J]), layout=builder.layout,
+        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=builder.n_samples,
+        options=dict(alpha_bounds=(bounds.lo, bounds.hi), n_grid=n_grid, n_init=n_init,
+                     simulation_sse=fit.sse),
+        covariance=fit.covariance, noise_variance=fit.noise_variance)
 
 
 def _rls_result(builder, P, forgetting, alpha0, bounds, p0, u, y):
@@ -408,7 +472,8 @@ class HybridIdentifier(BaseEstimator):
 
     _OPTIONS = ("method", "innovation_length", "alpha0", "schedule", "max_iter", "tol",
                 "random_state", "alpha_bounds", "p0", "normalisation", "forgetting",
-                "lm_lambda", "delta_alpha", "sensitivity", "alpha_window", "restart_r", "n_grid")
+                "lm_lambda", "delta_alpha", "sensitivity", "alpha_window", "restart_r", "n_grid",
+                "n_init", "start")
 
     def __init__(self, na, nb, f_basis, g_basis, **options):
         self.na = na

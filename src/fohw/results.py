@@ -9,7 +9,7 @@ import numpy as np
 from .basis import Basis
 from .params import ThetaLayout
 from .regressors import RegressorBuilder
-from .system import HammersteinWiener, simulate
+from .system import HammersteinWiener, simulate_theta
 
 __all__ = ["IdentificationResult"]
 
@@ -199,10 +199,19 @@ class IdentificationResult:
         return builder.matrix(self.alpha) @ self.theta
 
     def simulate(self, u, **kwargs):
-        """Free-run simulation of the identified model (:func:`fohw.simulate`)."""
-        if self.model is None:
-            raise ValueError("this result has no model (see `message`): " + self.message)
-        return simulate(self.model, u, **kwargs)
+        """Free-run simulation of the identified predictor (:func:`fohw.simulate_theta`).
+
+        Uses ``theta`` itself, i.e. exactly the model that was fitted; for the rank-one
+        ``a, b, p, q`` of Eqs. (39)–(40) use ``fohw.simulate(result.model, u)``. Keyword
+        arguments go to :func:`fohw.simulate_theta` (``noise``, ``divergence_threshold``).
+
+        Raises
+        ------
+        SimulationDivergedError
+            The identified model is unstable on this input.
+        """
+        return simulate_theta(self.theta, self.alpha, u, na=self.na, nb=self.nb,
+                              f_basis=self.f_basis, g_basis=self.g_basis, **kwargs)
 
     def summary(self) -> str:
         """A text table of the estimates and the run's diagnostics."""
