@@ -127,3 +127,42 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         fohw.simulate(args.pop("model"), args.pop("u"), **args)
+
+
+@pytest.mark.parametrize("n", [1, 63, 64, 65, 200, 1000, 5000])
+def test_fast_simulator_equals_direct_recursion(n):
+    from fohw.system import _simulate_blocks
+
+    rng = np.random.default_rng(n)
+    m = paper_model()
+    u = rng.uniform(-np.sqrt(3), np.sqrt(3), n)
+    v = 0.1 * rng.standard_normal(n)
+    args = (np.outer(m.q, m.a), np.outer(m.p, m.b), m.alpha, m.f_basis, m.g_basis, u, v, 1e8)
+    direct = _simulate_blocks(*args, method="direct")
+    fast = _simulate_blocks(*args, method="fast")
+    np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-12)
+
+
+def test_fast_simulator_general_blocks_and_divergence():
+    from fohw.system import FAST_SIMULATION_THRESHOLD, _simulate_blocks
+
+    rng = np.random.default_rng(0)
+    n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path
+    qa = np.array([[0.3, -0.1, 0.05], [0.02, 0.01, -0.03]])
+    pb = np.array([[1.0], [0.2]])
+    f, g = fohw.as_basis([np.sin, np.tanh]), fohw.as_basis([np.sin, np.cos])
+    u = rng.uniform(-1, 1, n)
+    v = 0.05 * rng.standard_normal(n)
+    auto = _simulate_blocks(qa, pb, 1.3, f, g, u, v, 1e8)
+    direct = _simulate_blocks(qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
+    np.testing.assert_allclose(auto, direct, rtol=0, atol=1e-12)
+    # The same divergence report on both paths.
+    m = paper_model()
+    big = 4.0 * np.ones(3000)
+    errs = []
+    for method in ("direct", "fast"):
+        with pytest.raises(fohw.SimulationDivergedError) as info:
+            _simulate_blocks(np.outer(m.q, m.a), np.outer(m.p, m.b), 0.6, m.f_basis, m.g_basis,
+                             big, np.zeros(3000), 1e8, method=method)
+        errs.append(info.value.sample)
+    assert errs[0] == errs[1]

@@ -126,7 +126,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         Table 1 (default) or Steps 1–9; see the module notes.
     max_iter : int, optional
         Maximum outer iterations (passes). Default: 1 for ``"recursive"`` (one pass, as in
-        Table 1), 50 for ``"iterative"``.
+        Table 1), 50 for ``"iterative"``. For ``"output_error"``: the maximum number of
+        simulations of the least-squares solver (default 100), Jacobian evaluations aside.
     tol : float, optional
         Stop when ``|J_m - J_{m-1}| / |J_{m-1}| <= tol`` (Step 9), ``tol > 0``. Default 1e-4.
     random_state : None, int or numpy.random.Generator, optional
@@ -215,6 +216,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     alpha = check_scalar(alpha0, "alpha0", lower=bounds.lo, upper=bounds.hi,
                          lower_inclusive=False, upper_inclusive=False)
     tol = check_scalar(tol, "tol", lower=0.0, lower_inclusive=False)
+    max_iter_given = max_iter
     max_iter = _DEFAULT_MAX_ITER[schedule] if max_iter is None else max_iter
     max_iter = check_int(max_iter, "max_iter", minimum=1)
     lm_lambda = check_scalar(lm_lambda, "lm_lambda", lower=0.0, lower_inclusive=False)
@@ -228,7 +230,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         return _varpro_result(builder, bounds, n_grid, dict(alpha_bounds=(bounds.lo, bounds.hi),
                                                             n_grid=n_grid))
     if method == "output_error":
-        return _output_error_result(builder, bounds, n_grid, n_init, start)
+        max_nfev = 100 if max_iter_given is None else max_iter
+        return _output_error_result(builder, bounds, n_grid, n_init, start, max_nfev)
 
     if method == "rls":
         return _rls_result(builder, P, forgetting, alpha, bounds, p0, u, y)
@@ -324,7 +327,7 @@ def _varpro_result(builder, bounds, n_grid, options):
         noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
 
 
-def _output_error_result(builder, bounds, n_grid, n_init, start):
+def _output_error_result(builder, bounds, n_grid, n_init, start, max_nfev):
     """Equation-error start (varpro) or a given one, then the simulation-error fit."""
     from .output_error import fit_output_error
 
@@ -347,7 +350,7 @@ def _output_error_result(builder, bounds, n_grid, n_init, start):
         J0 = float(np.mean((builder.y - builder.matrix(alpha0) @ theta0) ** 2))
     fit = fit_output_error(builder.u, builder.y, layout=builder.layout, f_basis=builder.f_basis,
                            g_basis=builder.g_basis, theta0=theta0, alpha0=alpha0,
-                           bounds=(bounds.lo, bounds.hi), n_init=n_init)
+                           bounds=(bounds.lo, bounds.hi), n_init=n_init, max_nfev=max_nfev)
     message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
     message += (f" Started from {origin} (alpha = {alpha0:.6g})"
                 + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "

@@ -102,5 +102,6 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
     sse = float(ls.fun @ ls.fun)
     cov, s2 = parameter_covariance(ls.jac, sse, m)
     return _OEFit(theta=ls.x[:n].copy(), alpha=float(ls.x[n]), sse=sse, start_shrink=shrink,
-                  converged=ls.status > 0, message=f"output-error fit: {ls.message}",
+                  converged=ls.status > 0,
+                  message=f"output-error fit: {ls.message} ({ls.nfev} simulations)",
                   covariance=cov, noise_variance=s2, nfev=int(ls.nfev))

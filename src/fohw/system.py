@@ -175,44 +175,112 @@ def _scalar_basis(basis: Basis):
     return general
 
 
-def _simulate_blocks(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
-    """The recursion of Eq. (16) for general coefficient blocks.
+#: Below this record length the simulator uses the direct recursion (one dot product per
+#: lag and sample); above it, the divide-and-conquer scheme of :func:`_simulate_fast`.
+FAST_SIMULATION_THRESHOLD = 8192
+_LEAF = 64
 
-    ``qa[j, i]`` multiplies ``(Δ^α g_j(y))[k-1-i]`` and ``pb[j, i]`` multiplies
-    ``(Δ^α f_j(u))[k-1-i]``; the model's ``q ⊗ a`` and ``p ⊗ b`` are the rank-one case.
-    For lag ``i`` the output terms combine into one signal ``c_i(y) = sum_j qa[j, i] g_j(y)``,
-    whose GL difference is kept up to date with one dot product per lag and sample.
-    """
+
+def _prepare(qa, pb, alpha, f_basis, g_basis, u, v):
     n = u.shape[0]
-    na, nb = qa.shape[1], pb.shape[1]
+    nb = pb.shape[1]
     df = gl_difference(f_basis.evaluate(u, "u"), alpha)          # (n_f, N)
     w = v.copy()
     for i in range(nb):
         w[i + 1:] += pb[:, i] @ df[:, : n - i - 1]
-    beta_rev = gl_weights(alpha, n)[::-1].copy()
-    gvals = _scalar_basis(g_basis)
     qa_t = [[float(c) for c in col] for col in qa.T]     # qa_t[i][j] = qa[j, i]
+    return w, gl_weights(alpha, n), _scalar_basis(g_basis), qa_t
+
+
+def _step(k, w, dc, z, gvals, qa_t, na, threshold):
+    """Output at sample k from the finished differences, then c_i(y[k]) into z[:, k]."""
+    yk = w[k]
+    for i in range(min(na, k)):
+        yk += dc[i, k - 1 - i]
+    if not abs(yk) <= threshold:       # also catches nan
+        raise SimulationDivergedError(k, yk, threshold)
+    g = gvals(yk)
+    for i in range(na):
+        zi = 0.0
+        for c, gj in zip(qa_t[i], g):
+            zi += c * gj
+        if not np.isfinite(zi):
+            raise SimulationDivergedError(k, yk, threshold)
+        z[i, k] = zi
+    return yk
+
+
+def _simulate_direct(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
+    """The recursion of Eq. (16) for general coefficient blocks, one dot product per step.
+
+    ``qa[j, i]`` multiplies ``(Δ^α g_j(y))[k-1-i]`` and ``pb[j, i]`` multiplies
+    ``(Δ^α f_j(u))[k-1-i]``; the model's ``q ⊗ a`` and ``p ⊗ b`` are the rank-one case.
+    For lag ``i`` the output terms combine into one signal ``c_i(y) = sum_j qa[j, i] g_j(y)``,
+    whose GL difference ``dc`` is kept up to date with one dot product per sample.
+    """
+    n = u.shape[0]
+    na = qa.shape[1]
+    w, beta, gvals, qa_t = _prepare(qa, pb, alpha, f_basis, g_basis, u, v)
+    beta_rev = beta[::-1].copy()
     y = np.empty(n)
     z = np.zeros((na, n))       # z[i, k] = c_i(y[k])
     dc = np.zeros((na, n))      # dc[i, k] = (Δ^α c_i(y))[k]
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(n):
-            yk = w[k]
-            for i in range(min(na, k)):
-                yk += dc[i, k - 1 - i]
-            if not abs(yk) <= threshold:       # also catches nan
-                raise SimulationDivergedError(k, yk, threshold)
-            g = gvals(yk)
-            for i in range(na):
-                zi = 0.0
-                for c, gj in zip(qa_t[i], g):
-                    zi += c * gj
-                z[i, k] = zi
-            if not np.all(np.isfinite(z[:, k])):
-                raise SimulationDivergedError(k, yk, threshold)
-            y[k] = yk
+            y[k] = _step(k, w, dc, z, gvals, qa_t, na, threshold)
             dc[:, k] = z[:, : k + 1] @ beta_rev[n - 1 - k:]
     return y
+
+
+def _simulate_fast(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
+    """The same recursion in O(N log^2 N) by divide and conquer over time.
+
+    ``solve(l, r)`` first finishes ``[l, mid)``, then adds the contribution of
+    ``z[:, l:mid]`` to the differences at ``[mid, r)`` with one FFT convolution, then
+    finishes ``[mid, r)``. On entry to ``solve(l, r)`` the differences at ``[l, r)`` already
+    hold every contribution from samples before ``l``; leaves of at most 64 samples run the
+    recursion directly.
+    """
+    import scipy.signal
+
+    n = u.shape[0]
+    na = qa.shape[1]
+    w, beta, gvals, qa_t = _prepare(qa, pb, alpha, f_basis, g_basis, u, v)
+    beta_leaf = np.zeros(_LEAF)
+    beta_leaf[: min(n, _LEAF)] = beta[:_LEAF]
+    beta_rev_leaf = beta_leaf[::-1].copy()
+    y = np.empty(n)
+    z = np.zeros((na, n))
+    dc = np.zeros((na, n))      # contributions gathered so far
+
+    def leaf(lo, hi):
+        for k in range(lo, hi):
+            y[k] = _step(k, w, dc, z, gvals, qa_t, na, threshold)
+            m = k - lo + 1
+            dc[:, k] += z[:, lo:k + 1] @ beta_rev_leaf[_LEAF - m:]
+
+    def solve(lo, hi):
+        if hi - lo <= _LEAF:
+            leaf(lo, hi)
+            return
+        mid = (lo + hi) // 2
+        solve(lo, mid)
+        # dc[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi)
+        full = scipy.signal.fftconvolve(z[:, lo:mid], beta[None, : hi - lo], axes=-1)
+        dc[:, mid:hi] += full[:, mid - lo:hi - lo]
+        solve(mid, hi)
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        solve(0, n)
+    return y
+
+
+def _simulate_blocks(qa, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
+    """Dispatch to the direct or the fast simulator (``method`` in auto/direct/fast)."""
+    if method == "auto":
+        method = "fast" if u.shape[0] > FAST_SIMULATION_THRESHOLD else "direct"
+    impl = _simulate_fast if method == "fast" else _simulate_direct
+    return impl(qa, pb, alpha, f_basis, g_basis, u, v, threshold)
 
 
 def _noise(n, noise, noise_std, random_state):
