@@ -29,14 +29,17 @@ def test_migd_update_by_hand():
     assert r2 == 0.5 + 5.0
 
 
-def test_migd_pass_window_matches_definition():
+@pytest.mark.parametrize("normalisation, forgetting", [("window", 1.0), ("current", 1.0),
+                                                       ("window", 0.9)])
+def test_migd_pass_window_matches_definition(normalisation, forgetting):
     rng = np.random.default_rng(0)
     Phi, y = rng.standard_normal((20, 3)), rng.standard_normal(20)
-    hist, r_hist, _ = migd_pass(Phi, y, innovation_length=4, theta0=np.zeros(3))
+    opts = dict(normalisation=normalisation, forgetting=forgetting)
+    hist, r_hist, _ = migd_pass(Phi, y, innovation_length=4, theta0=np.zeros(3), **opts)
     theta, r = np.zeros(3), 1.0
     for k in range(20):
         rows = [k - i for i in range(4) if k - i >= 0]
-        theta, r, _ = migd_update(theta, Phi[rows], y[rows], r)
+        theta, r, _ = migd_update(theta, Phi[rows], y[rows], r, **opts)
         # Views and copies may take different BLAS paths: equal to rounding.
         np.testing.assert_allclose(hist[k], theta, rtol=1e-13, atol=1e-15)
         assert r_hist[k] == pytest.approx(r, rel=1e-14)

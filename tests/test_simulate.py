@@ -137,7 +137,8 @@ def test_fast_simulator_equals_direct_recursion(n):
     m = paper_model()
     u = rng.uniform(-np.sqrt(3), np.sqrt(3), n)
     v = 0.1 * rng.standard_normal(n)
-    args = (np.outer(m.q, m.a), np.outer(m.p, m.b), m.alpha, m.f_basis, m.g_basis, u, v, 1e8)
+    args = (m.q[:, None], m.a[None, :], np.outer(m.p, m.b), m.alpha, m.f_basis, m.g_basis, u, v,
+            1e8)
     direct = _simulate_blocks(*args, method="direct")
     fast = _simulate_blocks(*args, method="fast")
     np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-12)
@@ -153,8 +154,9 @@ def test_fast_simulator_general_blocks_and_divergence():
     f, g = fohw.as_basis([np.sin, np.tanh]), fohw.as_basis([np.sin, np.cos])
     u = rng.uniform(-1, 1, n)
     v = 0.05 * rng.standard_normal(n)
-    auto = _simulate_blocks(qa, pb, 1.3, f, g, u, v, 1e8)
-    direct = _simulate_blocks(qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
+    Q = np.eye(2)
+    auto = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8)
+    direct = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
     np.testing.assert_allclose(auto, direct, rtol=0, atol=1e-12)
     # The same divergence report on both paths.
     m = paper_model()
@@ -162,7 +164,7 @@ def test_fast_simulator_general_blocks_and_divergence():
     errs = []
     for method in ("direct", "fast"):
         with pytest.raises(fohw.SimulationDivergedError) as info:
-            _simulate_blocks(np.outer(m.q, m.a), np.outer(m.p, m.b), 0.6, m.f_basis, m.g_basis,
-                             big, np.zeros(3000), 1e8, method=method)
+            _simulate_blocks(m.q[:, None], m.a[None, :], np.outer(m.p, m.b), 0.6, m.f_basis,
+                             m.g_basis, big, np.zeros(3000), 1e8, method=method)
         errs.append(info.value.sample)
     assert errs[0] == errs[1]

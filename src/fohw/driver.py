@@ -45,7 +45,7 @@ import numpy as np
 from ._base import BaseEstimator, check_is_fitted
 from ._validation import check_array, check_int, check_same_length, check_scalar
 from .exceptions import ConvergenceWarning, ParameterError
-from .gl import gl_weights
+from .gl import _weights
 from .migd import check_migd_options, migd_pass, migd_update
 from .milm import alpha_update, check_sensitivity, milm_step, sensitivity_weights
 from .regressors import RegressorBuilder
@@ -422,9 +422,10 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation
     alpha_path = np.empty(n_samples)
     for k in range(n_samples):
         length = max(k, 1)
+        beta = _weights(alpha, length)
         phi_w, dphi_w = builder.window(k, P, [
-            gl_weights(alpha, length),
-            sensitivity_weights(alpha, length, sensitivity=sensitivity, delta_alpha=delta_alpha)])
+            beta, sensitivity_weights(alpha, length, sensitivity=sensitivity,
+                                      delta_alpha=delta_alpha, beta=beta)])
         y_w = y[k:k - phi_w.shape[0]:-1] if k - phi_w.shape[0] >= 0 else y[k::-1]
         if joint:
             jac = np.hstack([phi_w, (dphi_w @ theta)[:, None]])

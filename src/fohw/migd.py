@@ -95,20 +95,33 @@ def migd_pass(Phi, y, *, innovation_length, theta0, r0=1.0, normalisation="windo
     innovations : ndarray, shape (N,)
         The single innovation ``e(k) = y[k] - phi[k] @ theta(k-1)``.
     """
+    import scipy.signal
+
     n_samples, n = Phi.shape
     P = innovation_length
+    # r(k) does not depend on theta: all of it at once (Eq. 31 or Ding's MISG).
+    row2 = np.einsum("ij,ij->i", Phi, Phi)
+    if normalisation == "window":
+        c = np.cumsum(row2)
+        increment = c.copy()
+        increment[P:] -= c[:-P]
+    else:
+        increment = row2
+    if forgetting == 1.0:
+        r_hist = float(r0) + np.cumsum(increment)
+    else:
+        r_hist = scipy.signal.lfilter([1.0], [1.0, -forgetting], increment,
+                                      zi=[forgetting * float(r0)])[0]
     theta = np.array(theta0, dtype=np.float64)
-    r = float(r0)
     history = np.empty((n_samples, n))
-    r_hist = np.empty(n_samples)
     innov = np.empty(n_samples)
     for k in range(n_samples):
-        lo = max(0, k - P + 1)
-        window = Phi[k:lo - 1 if lo > 0 else None:-1]
-        theta, r, e = migd_update(theta, window, y[k:lo - 1 if lo > 0 else None:-1], r,
-                                  normalisation=normalisation, forgetting=forgetting)
+        lo = k - P + 1
+        window = Phi[k:lo - 1:-1] if lo > 0 else Phi[k::-1]
+        outputs = y[k:lo - 1:-1] if lo > 0 else y[k::-1]
+        e = outputs - window @ theta
+        theta = theta + window.T @ e / r_hist[k]
         history[k] = theta
-        r_hist[k] = r
         innov[k] = e[0]
     return history, r_hist, innov
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from ._validation import check_scalar
 from .exceptions import ParameterError
-from .gl import gl_weights, gl_weights_derivative
+from .gl import _weights, gl_weights_derivative
 
 __all__ = ["milm_step", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
@@ -60,15 +60,19 @@ def milm_step(sensitivities, innovations, *, n_samples, lm_lambda=1.0):
     return c * np.linalg.solve(hessian, xi.T @ innovations)
 
 
-def sensitivity_weights(alpha, n, *, sensitivity="finite_difference", delta_alpha=1e-3):
+def sensitivity_weights(alpha, n, *, sensitivity="finite_difference", delta_alpha=1e-3,
+                        beta=None):
     """Weights whose GL convolution gives the regressor sensitivity ``d phi / d alpha``.
 
     ``"finite_difference"`` returns ``(beta(alpha + delta) - beta(alpha)) / delta`` (Eq. 44),
-    ``"exact"`` returns :func:`fohw.gl_weights_derivative`.
+    ``"exact"`` returns :func:`fohw.gl_weights_derivative`. ``beta``, if given, is
+    ``gl_weights(alpha, n)`` already computed.
     """
     if sensitivity == "exact":
         return gl_weights_derivative(alpha, n)
-    return (gl_weights(alpha + delta_alpha, n) - gl_weights(alpha, n)) / delta_alpha
+    if beta is None:
+        beta = _weights(alpha, n)
+    return (_weights(alpha + delta_alpha, n) - beta) / delta_alpha
 
 
 def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference",

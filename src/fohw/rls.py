@@ -20,7 +20,7 @@ from ._base import BaseEstimator, check_is_fitted
 from ._validation import check_array, check_int, check_same_length, check_scalar
 from .basis import as_basis
 from .exceptions import DimensionError, ParameterError
-from .gl import gl_weights, gl_weights_derivative
+from .gl import _weights, gl_weights_derivative
 from .params import ThetaLayout
 from .regressors import WindowKernel
 
@@ -176,7 +176,7 @@ class MultiInnovationRLS(BaseEstimator):
         theta = x[:n]
         alpha = float(x[n]) if self.estimate_alpha else float(self.alpha0)
         length = max(k, 1)
-        weights = [gl_weights(alpha, length)]
+        weights = [_weights(alpha, length)]
         if self.estimate_alpha:
             weights.append(gl_weights_derivative(alpha, length))
         wins = self._kernel.rows(self._signals, self._pad, k, self._P, weights)

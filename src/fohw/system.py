@@ -157,107 +157,141 @@ class HammersteinWiener:
     __hash__ = None
 
 
-def _scalar_basis(basis: Basis):
-    """Return ``y -> [g_1(y), …, g_m(y)]`` for one float, fast for polynomial bases."""
-    m = len(basis)
-    if basis.is_polynomial:
+def _output_terms(g_basis: Basis, Q: np.ndarray):
+    """Return ``y -> [z_1, …, z_R]`` with ``z_r = sum_j Q[j, r] g_j(y)``, for one float.
+
+    The rank-one polynomial case (a model's ``gbar``) is a Horner scheme.
+    """
+    n_g, R = Q.shape
+    cols = [[float(Q[j, r]) for j in range(n_g)] for r in range(R)]
+    if g_basis.is_polynomial and R == 1:
+        rev = cols[0][::-1]
+
+        def horner(y):
+            acc = 0.0
+            for c in rev:
+                acc = acc * y + c
+            return [acc * y]
+        return horner
+    if g_basis.is_polynomial:
         def powers(y):
-            out = [y]
-            for _ in range(m - 1):
-                out.append(out[-1] * y)
-            return out
+            g, p = [], y
+            for _ in range(n_g):
+                g.append(p)
+                p *= y
+            return [sum(c * gj for c, gj in zip(col, g)) for col in cols]
         return powers
-    funcs = basis.functions
+    funcs = g_basis.functions
 
     def general(y):
         arr = np.array([y])
-        return [float(np.asarray(f(arr), dtype=np.float64)[0]) for f in funcs]
+        g = [float(np.asarray(f(arr), dtype=np.float64)[0]) for f in funcs]
+        return [sum(c * gj for c, gj in zip(col, g)) for col in cols]
     return general
 
 
 #: Below this record length the simulator uses the direct recursion (one dot product per
-#: lag and sample); above it, the divide-and-conquer scheme of :func:`_simulate_fast`.
-FAST_SIMULATION_THRESHOLD = 8192
-_LEAF = 64
+#: output signal and sample); above it, the divide-and-conquer scheme of :func:`_simulate_fast`.
+FAST_SIMULATION_THRESHOLD = 16384
+_LEAF = 128
 
 
-def _prepare(qa, pb, alpha, f_basis, g_basis, u, v):
+def _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v):
     n = u.shape[0]
     nb = pb.shape[1]
     df = gl_difference(f_basis.evaluate(u, "u"), alpha)          # (n_f, N)
     w = v.copy()
     for i in range(nb):
         w[i + 1:] += pb[:, i] @ df[:, : n - i - 1]
-    qa_t = [[float(c) for c in col] for col in qa.T]     # qa_t[i][j] = qa[j, i]
-    return w, gl_weights(alpha, n), _scalar_basis(g_basis), qa_t
+    # (r, i, coefficient) for every output term A[r, i] (Δ^α z_r)[k-1-i]
+    terms = [(r, i, float(A[r, i])) for r in range(A.shape[0]) for i in range(A.shape[1])]
+    return w, gl_weights(alpha, n), _output_terms(g_basis, Q), terms
 
 
-def _step(k, w, dc, z, gvals, qa_t, na, threshold):
-    """Output at sample k from the finished differences, then c_i(y[k]) into z[:, k]."""
-    yk = w[k]
-    for i in range(min(na, k)):
-        yk += dc[i, k - 1 - i]
-    if not abs(yk) <= threshold:       # also catches nan
-        raise SimulationDivergedError(k, yk, threshold)
-    g = gvals(yk)
-    for i in range(na):
-        zi = 0.0
-        for c, gj in zip(qa_t[i], g):
-            zi += c * gj
-        if not np.isfinite(zi):
-            raise SimulationDivergedError(k, yk, threshold)
-        z[i, k] = zi
-    return yk
+def _simulate_direct(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold):
+    """The recursion of Eq. (16), one dot product per output signal and sample.
 
-
-def _simulate_direct(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
-    """The recursion of Eq. (16) for general coefficient blocks, one dot product per step.
-
-    ``qa[j, i]`` multiplies ``(Δ^α g_j(y))[k-1-i]`` and ``pb[j, i]`` multiplies
-    ``(Δ^α f_j(u))[k-1-i]``; the model's ``q ⊗ a`` and ``p ⊗ b`` are the rank-one case.
-    For lag ``i`` the output terms combine into one signal ``c_i(y) = sum_j qa[j, i] g_j(y)``,
-    whose GL difference ``dc`` is kept up to date with one dot product per sample.
+    The output terms are written as ``sum_r sum_i A[r, i] (Δ^α z_r(y))[k-1-i]`` with
+    ``z_r(y) = sum_j Q[j, r] g_j(y)``: for a model ``Q = q``, ``A = a`` (one signal, gbar);
+    for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``.
     """
+    import math
+
     n = u.shape[0]
-    na = qa.shape[1]
-    w, beta, gvals, qa_t = _prepare(qa, pb, alpha, f_basis, g_basis, u, v)
+    R = Q.shape[1]
+    w, beta, zfun, terms = _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v)
+    w = w.tolist()
     beta_rev = beta[::-1].copy()
-    y = np.empty(n)
-    z = np.zeros((na, n))       # z[i, k] = c_i(y[k])
-    dc = np.zeros((na, n))      # dc[i, k] = (Δ^α c_i(y))[k]
+    y = [0.0] * n
+    z = np.zeros((R, n))
+    dz = np.zeros((R, n))
+    dz_item = dz.item
+    isfinite = math.isfinite
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(n):
-            y[k] = _step(k, w, dc, z, gvals, qa_t, na, threshold)
-            dc[:, k] = z[:, : k + 1] @ beta_rev[n - 1 - k:]
-    return y
+            yk = w[k]
+            for r, i, c in terms:
+                if i < k:
+                    yk += c * dz_item(r, k - 1 - i)
+            if not abs(yk) <= threshold:       # also catches nan
+                raise SimulationDivergedError(k, yk, threshold)
+            zk = zfun(yk)
+            if not all(isfinite(x) for x in zk):
+                raise SimulationDivergedError(k, yk, threshold)
+            y[k] = yk
+            z[:, k] = zk
+            dz[:, k] = z[:, : k + 1] @ beta_rev[n - 1 - k:]
+    return np.array(y)
 
 
-def _simulate_fast(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
+def _simulate_fast(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold):
     """The same recursion in O(N log^2 N) by divide and conquer over time.
 
     ``solve(l, r)`` first finishes ``[l, mid)``, then adds the contribution of
     ``z[:, l:mid]`` to the differences at ``[mid, r)`` with one FFT convolution, then
     finishes ``[mid, r)``. On entry to ``solve(l, r)`` the differences at ``[l, r)`` already
-    hold every contribution from samples before ``l``; leaves of at most 64 samples run the
+    hold every contribution from samples before ``l``; leaves of at most 128 samples run the
     recursion directly.
     """
+    import math
+
     import scipy.signal
 
     n = u.shape[0]
-    na = qa.shape[1]
-    w, beta, gvals, qa_t = _prepare(qa, pb, alpha, f_basis, g_basis, u, v)
+    R = Q.shape[1]
+    w, beta, zfun, terms = _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v)
+    w = w.tolist()
     beta_leaf = np.zeros(_LEAF)
     beta_leaf[: min(n, _LEAF)] = beta[:_LEAF]
     beta_rev_leaf = beta_leaf[::-1].copy()
-    y = np.empty(n)
-    z = np.zeros((na, n))
-    dc = np.zeros((na, n))      # contributions gathered so far
+    y = [0.0] * n
+    z = np.zeros((R, n))
+    dz = np.zeros((R, n))       # contributions gathered so far
+    dz_item = dz.item
+    isfinite = math.isfinite
+
+    zrows = list(z)             # 1-D views, one per output signal
+    dzrows = list(dz)
+    dot = np.dot
+    signals = range(R)
 
     def leaf(lo, hi):
         for k in range(lo, hi):
-            y[k] = _step(k, w, dc, z, gvals, qa_t, na, threshold)
-            m = k - lo + 1
-            dc[:, k] += z[:, lo:k + 1] @ beta_rev_leaf[_LEAF - m:]
+            yk = w[k]
+            for r, i, c in terms:
+                if i < k:
+                    yk += c * dz_item(r, k - 1 - i)
+            if not abs(yk) <= threshold:       # also catches nan
+                raise SimulationDivergedError(k, yk, threshold)
+            zk = zfun(yk)
+            if not all(isfinite(x) for x in zk):
+                raise SimulationDivergedError(k, yk, threshold)
+            y[k] = yk
+            b = beta_rev_leaf[_LEAF - (k - lo + 1):]
+            for r in signals:
+                zr = zrows[r]
+                zr[k] = zk[r]
+                dzrows[r][k] += dot(zr[lo:k + 1], b)
 
     def solve(lo, hi):
         if hi - lo <= _LEAF:
@@ -265,22 +299,22 @@ def _simulate_fast(qa, pb, alpha, f_basis, g_basis, u, v, threshold):
             return
         mid = (lo + hi) // 2
         solve(lo, mid)
-        # dc[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi)
+        # dz[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi)
         full = scipy.signal.fftconvolve(z[:, lo:mid], beta[None, : hi - lo], axes=-1)
-        dc[:, mid:hi] += full[:, mid - lo:hi - lo]
+        dz[:, mid:hi] += full[:, mid - lo:hi - lo]
         solve(mid, hi)
 
     with np.errstate(over="ignore", invalid="ignore"):
         solve(0, n)
-    return y
+    return np.array(y)
 
 
-def _simulate_blocks(qa, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
+def _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
     """Dispatch to the direct or the fast simulator (``method`` in auto/direct/fast)."""
     if method == "auto":
         method = "fast" if u.shape[0] > FAST_SIMULATION_THRESHOLD else "direct"
     impl = _simulate_fast if method == "fast" else _simulate_direct
-    return impl(qa, pb, alpha, f_basis, g_basis, u, v, threshold)
+    return impl(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold)
 
 
 def _noise(n, noise, noise_std, random_state):
@@ -351,8 +385,8 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     v = _noise(u.shape[0], noise, noise_std, random_state)
     threshold = check_scalar(divergence_threshold, "divergence_threshold", lower=0.0,
                              lower_inclusive=False)
-    return _simulate_blocks(np.outer(model.q, model.a), np.outer(model.p, model.b), model.alpha,
-                            model.f_basis, model.g_basis, u, v, threshold)
+    return _simulate_blocks(model.q[:, None], model.a[None, :], np.outer(model.p, model.b),
+                            model.alpha, model.f_basis, model.g_basis, u, v, threshold)
 
 
 def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, noise=None, noise_std=0.0,
@@ -399,4 +433,8 @@ def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, noise=None, noi
     v = _noise(u.shape[0], noise, noise_std, random_state)
     threshold = check_scalar(divergence_threshold, "divergence_threshold", lower=0.0,
                              lower_inclusive=False)
-    return _simulate_blocks(qa, pb, alpha, f_basis, g_basis, u, v, threshold)
+    if qa.shape[0] <= qa.shape[1]:      # fewer g-signals than lags: z_j = g_j(y)
+        Q, A = np.eye(qa.shape[0]), qa
+    else:                               # fewer lags: z_i = sum_j qa[j, i] g_j(y)
+        Q, A = qa, np.eye(qa.shape[1])
+    return _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold)

@@ -7,7 +7,7 @@ at the best theta) is a function of one variable. The estimator
 1. scans ``J(alpha)`` on a grid inside the bounds (so a local minimum is not taken for the
    global one),
 2. refines the best grid cell by a bounded scalar search (Brent), and
-3. polishes ``(theta, alpha)`` jointly by a trust-region Gauss–Newton / LM solver with the exact
+3. polishes ``(theta, alpha)`` jointly by Gauss–Newton steps (QR, backtracking) with the exact
    alpha-sensitivity ``d Phi / d alpha`` (:meth:`fohw.RegressorBuilder.matrix_derivative`).
 
 Each ``J(alpha)`` costs one inverse FFT of the stacked basis signals, whose FFTs are computed once
@@ -55,7 +55,7 @@ def profile_theta(Phi, y):
     return theta, float(resid @ resid)
 
 
-def parameter_covariance(jacobian, rss, n_samples):
+def parameter_covariance(jacobian, rss, n_samples, *, overwrite=False):
     """Asymptotic covariance ``s^2 (G^T G)^{-1}`` of least-squares estimates.
 
     Parameters
@@ -75,14 +75,15 @@ def parameter_covariance(jacobian, rss, n_samples):
 
     Notes
     -----
-    Computed from the singular values of ``G`` (never from the normal equations), so an
-    ill-conditioned Jacobian costs accuracy only in the poorly determined directions.
+    Computed from the triangular factor ``R`` of ``G = QR`` (never from the normal equations):
+    ``(G^T G)^{-1} = R^{-1} R^{-T}``. With ``overwrite=True`` the factorisation may reuse the
+    memory of ``jacobian`` (no copy of an ``N x d`` array).
     """
     d = jacobian.shape[1]
     s2 = rss / (n_samples - d)
-    _, sing, vt = np.linalg.svd(jacobian, full_matrices=False)
-    inv = vt.T @ np.diag(1.0 / sing**2) @ vt
-    return s2 * inv, s2
+    (r,) = scipy.linalg.qr(jacobian, mode="r", overwrite_a=overwrite, check_finite=False)
+    rinv = scipy.linalg.solve_triangular(r[:d, :d], np.eye(d))
+    return s2 * (rinv @ rinv.T), s2
 
 
 @dataclass
@@ -98,6 +99,51 @@ class _VarproFit:
     message: str
     covariance: np.ndarray
     noise_variance: float
+
+
+def _jacobian(builder, theta, alpha):
+    """``G = [Phi(alpha), dPhi/dalpha @ theta]``, built in one ``N x (n + 1)`` array."""
+    n = theta.shape[0]
+    G = np.empty((builder.n_samples, n + 1))
+    G[:, :n] = builder.matrix(alpha)
+    G[:, n] = builder.matrix_derivative(alpha) @ theta
+    return G
+
+
+def _gauss_newton(builder, theta, alpha, rss, lo, hi, max_iter=20):
+    """Joint Gauss–Newton polish of ``(theta, alpha)`` with backtracking.
+
+    Each step solves ``min ||G step - r||`` by an orthogonal factorisation (QR with column
+    pivoting) of the exact Jacobian; a step is accepted only if it lowers the residual sum of
+    squares, halving it up to 30 times otherwise. Memory: one ``N x (n + 1)`` array at a time.
+    Returns the new estimates, whether the step size fell below ``1e-10`` relative, and a note.
+    """
+    y = builder.y
+    n = theta.shape[0]
+    margin = 1e-9 * (hi - lo)
+    for it in range(1, max_iter + 1):
+        G = _jacobian(builder, theta, alpha)
+        r = y - G[:, :n] @ theta
+        step, *_ = scipy.linalg.lstsq(G, r, lapack_driver="gelsy", overwrite_a=True,
+                                      overwrite_b=True, check_finite=False)
+        del G
+        size = np.linalg.norm(step) / (np.linalg.norm(np.append(theta, alpha)) + 1e-300)
+        t = 1.0
+        for _ in range(30):
+            th2 = theta + t * step[:n]
+            a2 = float(np.clip(alpha + t * step[n], lo + margin, hi - margin))
+            resid = y - builder.matrix(a2) @ th2
+            rss2 = float(resid @ resid)
+            if rss2 <= rss:
+                theta, alpha, rss = th2, a2, rss2
+                break
+            t *= 0.5
+        else:
+            return theta, alpha, rss, True, (f"Gauss-Newton stopped after {it} iterations: no "
+                                             "descent along the step (at the optimum)")
+        if t * size < 1e-10:
+            return theta, alpha, rss, True, f"Gauss-Newton converged in {it} iterations"
+    return theta, alpha, rss, False, f"Gauss-Newton stopped at {max_iter} iterations"
 
 
 def separable_least_squares(builder, *, bounds, n_grid=41, xtol=1e-10, polish=True):
@@ -151,27 +197,11 @@ def separable_least_squares(builder, *, bounds, n_grid=41, xtol=1e-10, polish=Tr
     theta, rss = cache[alpha]
     converged, message = bool(opt.success), f"alpha search: {opt.message}"
     if polish:
-        n = theta.shape[0]
-
-        def residual(x):
-            return y - builder.matrix(x[n]) @ x[:n]
-
-        def jacobian(x):
-            return -np.hstack([builder.matrix(x[n]), (builder.matrix_derivative(x[n]) @ x[:n])[:, None]])
-
-        margin = 1e-9 * (hi - lo)
-        x0 = np.append(theta, np.clip(alpha, lo + margin, hi - margin))
-        ls = scipy.optimize.least_squares(
-            residual, x0, jac=jacobian, method="trf", x_scale="jac", xtol=1e-12, ftol=1e-12,
-            gtol=1e-12, bounds=(np.r_[np.full(n, -np.inf), lo + margin],
-                                np.r_[np.full(n, np.inf), hi - margin]))
-        new_rss = float(ls.fun @ ls.fun)
-        if new_rss <= rss:        # the polish can only improve on the profile optimum
-            theta, alpha, rss = ls.x[:n].copy(), float(ls.x[n]), new_rss
-        converged = converged and ls.status > 0
-        message += f"; polish: {ls.message}"
-    jac = np.hstack([builder.matrix(alpha), (builder.matrix_derivative(alpha) @ theta)[:, None]])
-    cov, s2 = parameter_covariance(jac, rss, n_samples)
+        theta, alpha, rss, ok, note = _gauss_newton(builder, theta, alpha, rss, lo, hi)
+        converged = converged and ok
+        message += f"; polish: {note}"
+    cov, s2 = parameter_covariance(_jacobian(builder, theta, alpha), rss, n_samples,
+                                   overwrite=True)
     return _VarproFit(theta=theta, alpha=alpha, rss=rss, grid=grid, grid_J=grid_J,
                       search_alphas=search_alphas, search_J=search_J, converged=converged,
                       message=message, covariance=cov, noise_variance=s2)
