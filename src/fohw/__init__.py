@@ -19,6 +19,7 @@ from .exceptions import (
     SimulationDivergedError,
 )
 from .driver import HybridIdentifier, identify
+from .io import load_model, load_result, save_model
 from .gl import gl_difference, gl_weights, gl_weights_derivative
 from .migd import MultiInnovationGradient
 from .montecarlo import monte_carlo
@@ -56,7 +57,10 @@ __all__ = [
     "gl_weights_derivative",
     "identify",
     "information_matrix",
+    "load_model",
+    "load_result",
     "monte_carlo",
+    "save_model",
     "polynomial_basis",
     "simulate",
     "simulate_theta",

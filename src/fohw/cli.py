@@ -1,12 +1,20 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
-``fohw reproduce table2 --outdir DIR [--fast]`` reproduces Table 2 and Figs. 3–6 of the paper;
-``fohw reproduce figures`` writes the figures only.
+* ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
+  [--json] [--plot FILE] [--save FILE]`` — identify from a whitespace- or comma-separated file;
+  prints a summary (or, with ``--json``, the estimates as JSON).
+* ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
+  [--output FILE]`` — simulate a saved model (``fohw.save_model``) for an input.
+* ``fohw reproduce {table2,figures,robot-arm,accuracy} --outdir DIR [--fast]``.
+
+Usage errors and bad input print one line ``fohw: error: …`` and exit with status 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
 
 from . import __version__
@@ -17,6 +25,10 @@ _REPRODUCE = {
 }
 
 
+class UsageError(Exception):
+    """A command-line problem reported as one line and exit status 2."""
+
+
 class _Parser(argparse.ArgumentParser):
     """Usage errors as one line on stderr and exit status 2."""
 
@@ -24,36 +36,250 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"fohw: error: {message}\n")
 
 
+def read_table(path):
+    """Read a numeric table: whitespace- or comma-separated, optional header line of names.
+
+    Returns
+    -------
+    data : ndarray, shape (n_rows, n_columns)
+    names : list of str or None
+        The header's column names, if the first line is a header.
+    """
+    import numpy as np
+
+    from .exceptions import DataFileError
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"data file not found: {path!r}")
+    rows, names, ncol = [], None, None
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for lineno, line in enumerate(fh, start=1):
+            text = line.strip()
+            if not text or text[0] in "%#":
+                continue
+            fields = [f.strip() for f in (text.split(",") if "," in text else text.split())]
+            try:
+                values = [float(f) for f in fields]
+            except ValueError:
+                if not rows and names is None:
+                    names = fields
+                    ncol = len(fields)
+                    continue
+                bad = next(f for f in fields if not _is_number(f))
+                raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.") from None
+            if ncol is None:
+                ncol = len(values)
+            if len(values) != ncol:
+                raise DataFileError(f"{path}: line {lineno} has {len(values)} column(s); "
+                                    f"expected {ncol}.")
+            if not all(np.isfinite(values)):
+                raise DataFileError(f"{path}: line {lineno} holds a non-finite value.")
+            rows.append(values)
+    if not rows:
+        raise DataFileError(f"{path}: no data lines found.")
+    return np.array(rows), names
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _pick_columns(data, names, spec, count, path):
+    """Column indices from ``--columns`` ("0,1" or header names), ``count`` of them."""
+    if spec is None:
+        idx = list(range(count))
+    else:
+        parts = [p.strip() for p in spec.split(",")]
+        if len(parts) != count:
+            raise UsageError(f"--columns needs {count} entr{'y' if count == 1 else 'ies'}; "
+                             f"got {spec!r}.")
+        idx = []
+        for p in parts:
+            if p.lstrip("-").isdigit():
+                idx.append(int(p))
+            elif names is not None and p in names:
+                idx.append(names.index(p))
+            else:
+                raise UsageError(f"--columns: {p!r} is neither a column number nor a header name"
+                                 f" of {path}" + (f" ({', '.join(names)})." if names else "."))
+    for i in idx:
+        if not 0 <= i < data.shape[1]:
+            raise UsageError(f"--columns: column {i} does not exist; {path} has "
+                             f"{data.shape[1]} column(s) (numbered from 0).")
+    return [data[:, i] for i in idx]
+
+
+def _basis_arg(text):
+    try:
+        degree = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a basis is a polynomial degree >= 1; got {text!r}") \
+            from None
+    if degree < 1:
+        raise argparse.ArgumentTypeError(f"a basis is a polynomial degree >= 1; got {degree}")
+    return degree
+
+
+def _pair_arg(text):
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected two numbers 'low,high'; got {text!r}") \
+            from None
+    return lo, hi
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
+    from .driver import METHODS, SCHEDULES
+
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")
     parser.add_argument("--version", action="version", version=f"fohw {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    ide = sub.add_parser("identify", help="identify a model from a data file")
+    ide.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
+    ide.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'u,y' "
+                     "(default: the first two)")
+    ide.add_argument("--na", type=int, required=True, help="output lags")
+    ide.add_argument("--nb", type=int, required=True, help="input lags")
+    ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
+    ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
+    ide.add_argument("--method", choices=METHODS, default="varpro")
+    ide.add_argument("--schedule", choices=SCHEDULES, default="recursive")
+    ide.add_argument("--innovation-length", type=int, default=5)
+    ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
+                     help="open interval for alpha, 'low,high' (default 0,1)")
+    ide.add_argument("--max-iter", type=int, default=None)
+    ide.add_argument("--json", action="store_true", help="print the estimates as JSON")
+    ide.add_argument("--plot", help="write the fit figure (PNG) to this file")
+    ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
+
+    sim = sub.add_parser("simulate", help="simulate a saved model for an input")
+    sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model")
+    sim.add_argument("--input", required=True, help="data file with the input column")
+    sim.add_argument("--column", default="0", help="input column number or name (default 0)")
+    sim.add_argument("--noise-std", type=float, default=0.0)
+    sim.add_argument("--seed", type=int, default=None)
+    sim.add_argument("--output", help="write y here (one value per line); default stdout")
+
     rep = sub.add_parser("reproduce", help="reproduce the paper's tables and figures")
-    rep.add_argument("what", choices=sorted(_REPRODUCE), help="table2: Table 2 and Figs. 3-6; "
-                     "figures: Figs. 3-6 only")
+    rep.add_argument("what", choices=sorted(list(_REPRODUCE) + ["robot-arm", "accuracy"]),
+                     help="table2: Table 2 and Figs. 3-6; figures: Figs. 3-6; robot-arm: "
+                     "Section 6.2; accuracy: methods against the Cramér-Rao bound")
     rep.add_argument("--outdir", default="results", help="folder for the files (default: results)")
-    rep.add_argument("--fast", action="store_true", help="N = 2000 instead of 10 000")
-    rep.add_argument("--seed", type=int, default=0, help="seed of the simulated record (default 0)")
+    rep.add_argument("--fast", action="store_true", help="a quick, smaller run")
+    rep.add_argument("--seed", type=int, default=0, help="table2/figures: seed of the record")
+    rep.add_argument("--data", default=None, help="robot-arm: the DaISy file or its folder")
     return parser
 
 
-def main(argv=None) -> int:
-    """Run the ``fohw`` command; return its exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help()
-        return 0
-    if args.command == "reproduce":
+def _identify(args):
+    import warnings
+
+    from . import identify
+    from .exceptions import ConvergenceWarning
+
+    data, names = read_table(args.data)
+    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConvergenceWarning)
+        res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
+                       method=args.method, schedule=args.schedule,
+                       innovation_length=args.innovation_length, alpha_bounds=args.alpha_bounds,
+                       max_iter=args.max_iter)
+    for w in caught:
+        print(f"fohw: warning: {w.message}", file=sys.stderr)
+    if args.json:
+        out = {"alpha": res.alpha, "theta": dict(zip(res.parameter_names, res.theta.tolist())),
+               "J": res.J, "converged": res.converged, "method": res.method,
+               "n_samples": res.n_samples, "message": res.message}
+        if res.model is not None:
+            out["model"] = {k: getattr(res.model, k).tolist() for k in "abpq"}
+        if res.covariance is not None:
+            out["standard_errors"] = res.standard_errors()
+        print(json.dumps(out, indent=1))
+    else:
+        print(res.summary())
+    if args.save:
+        res.to_json(args.save)
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(9, 4))
+        ax.plot(y, "k", lw=1, label="measured y")
+        ax.plot(res.predict(u, y), "C1--", lw=0.9, label="one-step prediction")
+        ax.set_xlabel("sample k")
+        ax.legend()
+        ax.set_title(f"fohw identify ({res.method}), J = {res.J:.3g}")
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=120)
+        plt.close(fig)
+    return 0
+
+
+def _simulate(args):
+    import numpy as np
+
+    from .io import load_model
+    from .system import simulate
+
+    model = load_model(args.model)
+    data, names = read_table(args.input)
+    (u,) = _pick_columns(data, names, args.column, 1, args.input)
+    y = simulate(model, u, noise_std=args.noise_std, random_state=args.seed)
+    text = "\n".join(repr(float(v)) for v in y) + "\n"
+    if args.output:
+        with open(args.output, "w") as fh:
+            fh.write(text)
+    else:
+        sys.stdout.write(text)
+    return int(not np.all(np.isfinite(y)))
+
+
+def _reproduce(args):
+    if args.what in _REPRODUCE:
         from .reproduction import example_main
 
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
             forwarded.append("--fast")
         return example_main(_REPRODUCE[args.what], f"fohw reproduce {args.what}", forwarded)
-    return 0  # pragma: no cover
+    forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
+    if args.what == "robot-arm":
+        from .studies.robot_arm import main as study
+        if args.data:
+            forwarded += ["--data", args.data]
+    else:
+        from .studies.accuracy import main as study
+    return study(forwarded)
+
+
+def main(argv=None) -> int:
+    """Run the ``fohw`` command; return its exit status."""
+    from .exceptions import FohwError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    handler = {"identify": _identify, "simulate": _simulate, "reproduce": _reproduce}
+    try:
+        return handler[args.command](args)
+    except (UsageError, FohwError, FileNotFoundError) as exc:
+        message = str(exc).replace("\n", " ")
+        print(f"fohw: error: {message}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

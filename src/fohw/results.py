@@ -213,6 +213,30 @@ class IdentificationResult:
         return simulate_theta(self.theta, self.alpha, u, na=self.na, nb=self.nb,
                               f_basis=self.f_basis, g_basis=self.g_basis, **kwargs)
 
+    def to_dict(self) -> dict:
+        """A JSON-ready dict (see :mod:`fohw.io`)."""
+        from .io import result_to_dict
+
+        return result_to_dict(self)
+
+    def to_json(self, path):
+        """Write the result to a versioned JSON file; :func:`fohw.load_result` reads it back
+        with every float exact."""
+        from .io import _write_json
+
+        _write_json(self.to_dict(), path)
+
+    def _repr_html_(self):
+        import html
+
+        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{v:.6g}</td></tr>"
+                       for n, v in zip(("alpha",) + self.parameter_names,
+                                       (self.alpha, *self.theta)))
+        return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
+                f"N={self.n_samples}, J={self.J:.4g}, converged={self.converged}<br>"
+                f"<small>{html.escape(self.message)}</small>"
+                f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
+
     def summary(self) -> str:
         """A text table of the estimates and the run's diagnostics."""
         lines = [f"fohw identification: method={self.method!r}"
@@ -270,6 +294,20 @@ class IdentificationResult:
 
         fig, axes = plt.subplots(3, 1, figsize=(8, 7))
         k = np.arange(1, self.n_samples + 1)
+        if self.theta_history is None:       # batch methods: no per-sample history
+            names = ("alpha",) + self.parameter_names
+            axes[0].bar(range(len(names)), [self.alpha, *self.theta])
+            axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
+            axes[0].set_ylabel("estimate")
+            if self.alpha_profile is not None:
+                axes[1].plot(*self.alpha_profile, marker=".")
+                axes[1].set_xlabel("alpha")
+                axes[1].set_ylabel("J(alpha), profile")
+            axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
+            axes[2].set_xlabel("evaluation")
+            axes[2].set_ylabel("J")
+            fig.tight_layout()
+            return fig, axes
         if theta_true is None:
             axes[0].plot(k, self.theta_history, lw=0.8)
             axes[0].set_ylabel("theta(k)")

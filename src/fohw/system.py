@@ -156,6 +156,17 @@ class HammersteinWiener:
 
     __hash__ = None
 
+    def _repr_html_(self):
+        import html
+
+        return f"<pre>{html.escape(repr(self))}</pre>"
+
+    def to_json(self, path):
+        """Write the model to a versioned JSON file (:func:`fohw.save_model`)."""
+        from .io import save_model
+
+        save_model(self, path)
+
 
 def _output_terms(g_basis: Basis, Q: np.ndarray):
     """Return ``y -> [z_1, …, z_R]`` with ``z_r = sum_j Q[j, r] g_j(y)``, for one float.

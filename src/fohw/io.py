@@ -1,0 +1,186 @@
+"""Saving and loading models and identification results as versioned JSON (never pickle).
+
+Floats are written with Python's shortest round-trip representation, so every number reads
+back bit for bit. Polynomial bases are stored by degree; any other basis is stored by the
+names of its functions only (code is never serialised), and loading then needs the same basis
+passed in, checked by those names.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from .basis import Basis, as_basis, polynomial_basis
+from .exceptions import DataFileError, ParameterError
+from .params import ThetaLayout
+from .system import HammersteinWiener
+
+__all__ = ["save_model", "load_model", "load_result", "FORMAT_VERSION"]
+
+FORMAT_VERSION = 1
+
+
+def _basis_to_dict(basis: Basis) -> dict:
+    if basis.is_polynomial:
+        return {"kind": "polynomial", "degree": len(basis)}
+    return {"kind": "custom", "names": list(basis.names)}
+
+
+def _basis_from_dict(d: dict, given, name: str, path: str) -> Basis:
+    if d.get("kind") == "polynomial":
+        stored = polynomial_basis(int(d["degree"]))
+        if given is not None and as_basis(given, name) != stored:
+            raise ParameterError(f"`{name}` does not match the polynomial basis of degree "
+                                 f"{d['degree']} stored in {path}.")
+        return stored
+    if given is None:
+        raise ParameterError(f"{path} was saved with a custom `{name}` ({d.get('names')}); "
+                             f"pass the same basis: load_…(path, {name}=...).")
+    basis = as_basis(given, name)
+    if list(basis.names) != list(d.get("names", [])):
+        raise ParameterError(f"`{name}` has functions {list(basis.names)}, but {path} was saved "
+                             f"with {d.get('names')}.")
+    return basis
+
+
+def _floats(a) -> list:
+    return [float(x) for x in np.asarray(a, dtype=np.float64).ravel()]
+
+
+def model_to_dict(model: HammersteinWiener) -> dict:
+    """A JSON-ready dict of a model."""
+    return {"format": "fohw-model", "version": FORMAT_VERSION,
+            "a": _floats(model.a), "b": _floats(model.b), "p": _floats(model.p),
+            "q": _floats(model.q), "alpha": float(model.alpha),
+            "f_basis": _basis_to_dict(model.f_basis), "g_basis": _basis_to_dict(model.g_basis)}
+
+
+def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> HammersteinWiener:
+    """Inverse of :func:`model_to_dict`."""
+    _check_header(d, "fohw-model", path)
+    try:
+        return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["alpha"],
+                                 f_basis=_basis_from_dict(d["f_basis"], f_basis, "f_basis", path),
+                                 g_basis=_basis_from_dict(d["g_basis"], g_basis, "g_basis", path))
+    except KeyError as exc:
+        raise DataFileError(f"{path}: missing field {exc.args[0]!r}.") from None
+
+
+def _check_header(d, kind, path):
+    if not isinstance(d, dict) or d.get("format") != kind:
+        raise DataFileError(f"{path} is not a {kind} file (field 'format' must be {kind!r}).")
+    if d.get("version") != FORMAT_VERSION:
+        raise DataFileError(f"{path} has {kind} format version {d.get('version')!r}; this fohw "
+                            f"reads version {FORMAT_VERSION}.")
+
+
+def _read_json(path) -> dict:
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except json.JSONDecodeError as exc:
+        raise DataFileError(f"{path} is not valid JSON: {exc}.") from None
+
+
+def _write_json(obj, path):
+    with open(os.fspath(path), "w", encoding="utf-8") as fh:
+        json.dump(obj, fh, indent=1, allow_nan=False)
+        fh.write("\n")
+
+
+def save_model(model, path):
+    """Write a model to a JSON file.
+
+    Examples
+    --------
+    >>> import os, tempfile, fohw
+    >>> m = fohw.datasets.paper_model()
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     fohw.save_model(m, os.path.join(d, "m.json"))
+    ...     fohw.load_model(os.path.join(d, "m.json")) == m
+    True
+    """
+    if not isinstance(model, HammersteinWiener):
+        raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
+    _write_json(model_to_dict(model), path)
+
+
+def load_model(path, *, f_basis=None, g_basis=None):
+    """Read a model written by :func:`save_model` (custom bases must be passed again)."""
+    return model_from_dict(_read_json(path), f_basis=f_basis, g_basis=g_basis,
+                           path=os.fspath(path))
+
+
+_ARRAYS = ("theta", "theta_history", "alpha_sample_history", "alpha_history", "J_history",
+           "covariance", "alpha_profile")
+
+
+def result_to_dict(result) -> dict:
+    """A JSON-ready dict of an :class:`fohw.IdentificationResult`."""
+    d = {"format": "fohw-result", "version": FORMAT_VERSION}
+    for key in ("method", "schedule", "alpha", "J", "n_iter", "converged", "message",
+                "alpha_at_bound", "n_samples", "noise_variance"):
+        value = getattr(result, key)
+        d[key] = value.item() if isinstance(value, np.generic) else value
+    for key in _ARRAYS:
+        value = getattr(result, key)
+        d[key] = None if value is None else {"shape": list(value.shape), "data": _floats(value)}
+    d["layout"] = {"na": result.layout.na, "nb": result.layout.nb}
+    d["f_basis"] = _basis_to_dict(result.f_basis)
+    d["g_basis"] = _basis_to_dict(result.g_basis)
+    d["options"] = {k: (list(v) if isinstance(v, tuple) else v) for k, v in result.options.items()
+                    if isinstance(v, (int, float, str, bool, tuple, type(None)))}
+    d["parameter_names"] = list(result.parameter_names)
+    return d
+
+
+def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
+    """Inverse of :func:`result_to_dict`."""
+    from .results import IdentificationResult
+
+    _check_header(d, "fohw-result", path)
+    try:
+        f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
+        g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
+        layout = ThetaLayout(na=d["layout"]["na"], nb=d["layout"]["nb"], n_g=len(g), n_f=len(f))
+        arrays = {k: (None if d[k] is None else
+                      np.array(d[k]["data"], dtype=np.float64).reshape(d[k]["shape"]))
+                  for k in _ARRAYS}
+        model = None
+        try:
+            model = HammersteinWiener.from_theta(arrays["theta"], d["alpha"], na=layout.na,
+                                                 nb=layout.nb, f_basis=f, g_basis=g)
+        except ParameterError:
+            pass
+        opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in d["options"].items()}
+        return IdentificationResult(
+            method=d["method"], schedule=d["schedule"], alpha=d["alpha"], model=model, J=d["J"],
+            n_iter=d["n_iter"], converged=d["converged"], message=d["message"],
+            alpha_at_bound=d["alpha_at_bound"], layout=layout, f_basis=f, g_basis=g,
+            n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"], **arrays)
+    except (KeyError, TypeError, ValueError) as exc:
+        if isinstance(exc, ParameterError):
+            raise
+        raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
+                            f"{exc}).") from None
+
+
+def load_result(path, *, f_basis=None, g_basis=None):
+    """Read an identification result written by ``IdentificationResult.to_json``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    f_basis, g_basis : Basis, optional
+        Needed (and checked by name) when the result used custom basis functions.
+
+    Returns
+    -------
+    IdentificationResult
+    """
+    return result_from_dict(_read_json(path), f_basis=f_basis, g_basis=g_basis,
+                            path=os.fspath(path))
