@@ -1,0 +1,197 @@
+"""The catalogue of bad inputs: each gets a clear error naming the argument, never a crash,
+a hang or NaNs. docs/bad_input.md is generated from this table:
+
+    python tests/test_bad_input.py > docs/bad_input.md
+
+and a test checks that the page is current.
+"""
+
+import io
+import sys
+from contextlib import redirect_stderr
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fohw
+from fohw.cli import main as cli
+
+ROOT = Path(__file__).resolve().parents[1]
+S = dict(na=2, nb=2, f_basis=2, g_basis=3)
+U = np.random.default_rng(0).uniform(-1, 1, 50)
+Y = np.zeros(50)
+M = fohw.datasets.paper_model
+
+
+def _bad_file(tmp, text, name="bad.dat"):
+    p = tmp / name
+    p.write_text(text)
+    return str(p)
+
+
+# (where, what is wrong, call, exception, text the message must contain)
+API = [
+    ("gl_difference", "alpha is NaN", lambda t: fohw.gl_difference(np.ones(5), np.nan),
+     fohw.ParameterError, "`alpha` must be finite"),
+    ("gl_difference", "x holds NaN", lambda t: fohw.gl_difference([1.0, np.nan], 0.5),
+     fohw.ParameterError, "`x` must contain only finite values"),
+    ("gl_difference", "axis out of range", lambda t: fohw.gl_difference(np.ones((2, 3)), 0.5, axis=3),
+     fohw.DimensionError, "`axis` 3 is out of range"),
+    ("gl_difference", "memory = 0", lambda t: fohw.gl_difference(np.ones(5), 0.5, memory=0),
+     fohw.ParameterError, "`memory` must be at least 1"),
+    ("gl_difference", "h <= 0", lambda t: fohw.gl_difference(np.ones(5), 0.5, h=-1.0),
+     fohw.ParameterError, "`h` must be in (0, inf]"),
+    ("gl_weights", "n is a float", lambda t: fohw.gl_weights(0.5, 3.0),
+     fohw.ParameterError, "`n` must be an integer"),
+    ("HammersteinWiener", "alpha outside (0, 2)",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 2.7),
+     fohw.ParameterError, "`alpha` must be in (0, 2); got 2.7"),
+    ("HammersteinWiener", "p[0] != 1", lambda t: fohw.HammersteinWiener([0.1], [1.0], [2.0], [1.0], 0.5),
+     fohw.ParameterError, "`p[0]` must be exactly 1"),
+    ("HammersteinWiener", "q longer than g_basis",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0, 0.5], 0.5, g_basis=1),
+     fohw.DimensionError, "`q` must have one entry per g-basis function"),
+    ("HammersteinWiener", "a basis entry not callable",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0, 0.2], [1.0], 0.5, f_basis=[np.sin, "cos"]),
+     fohw.ParameterError, "`f_basis` entry 1 must be callable"),
+    ("HammersteinWiener.from_theta", "theta of the wrong length",
+     lambda t: fohw.HammersteinWiener.from_theta(np.ones(9), 0.5, **S),
+     fohw.DimensionError, "`theta` must have 10 entries"),
+    ("simulate", "u holds inf", lambda t: fohw.simulate(M(), [0.0, np.inf]),
+     fohw.ParameterError, "`u` must contain only finite values"),
+    ("simulate", "noise of another length", lambda t: fohw.simulate(M(), U, noise=np.zeros(3)),
+     fohw.DimensionError, "`noise` and `u` must have the same length; got 3 and 50"),
+    ("simulate", "unstable model or input", lambda t: fohw.simulate(M(), 4.0 * np.ones(100)),
+     fohw.SimulationDivergedError, "diverged at sample k ="),
+    ("information_matrix", "u and y of different lengths",
+     lambda t: fohw.information_matrix(U, Y[:49], 0.5, **S),
+     fohw.DimensionError, "`u` and `y` must have the same length; got 50 and 49"),
+    ("information_matrix", "record shorter than the lags",
+     lambda t: fohw.information_matrix(U[:2], Y[:2], 0.5, **S),
+     fohw.DimensionError, "the record must be longer than the lags"),
+    ("information_matrix", "na < 1", lambda t: fohw.information_matrix(U, Y, 0.5, **{**S, "na": 0}),
+     fohw.ParameterError, "`na` must be at least 1; got 0"),
+    ("identify", "innovation_length longer than the record",
+     lambda t: fohw.identify(U, Y, innovation_length=51, **S),
+     fohw.DimensionError, "`innovation_length` must not exceed the record length 50"),
+    ("identify", "tol <= 0", lambda t: fohw.identify(U, Y, tol=0.0, **S),
+     fohw.ParameterError, "`tol` must be in (0, inf]; got 0.0"),
+    ("identify", "alpha0 outside alpha_bounds", lambda t: fohw.identify(U, Y, alpha0=1.5, **S),
+     fohw.ParameterError, "`alpha0` must be in (0, 1); got 1.5"),
+    ("identify", "unknown method", lambda t: fohw.identify(U, Y, method="newton", **S),
+     fohw.ParameterError, "`method` must be one of"),
+    ("identify", "alpha_bounds reversed", lambda t: fohw.identify(U, Y, alpha_bounds=(0.9, 0.1), **S),
+     fohw.ParameterError, "`alpha_bounds` must satisfy"),
+    ("IdentificationResult.standard_errors", "asked of a recursive method",
+     lambda t: _hybrid().standard_errors(), ValueError, "only defined at a least-squares optimum"),
+    ("MultiInnovationRLS.predict", "used before fit",
+     lambda t: fohw.MultiInnovationRLS(**S).predict(U, Y), fohw.NotFittedError, "not fitted yet"),
+    ("crb", "noise_variance = 0", lambda t: fohw.crb(M(), U, 0.0),
+     fohw.ParameterError, "`noise_variance` must be in (0, inf]"),
+    ("datasets.paper_example", "unknown input_kind",
+     lambda t: fohw.datasets.paper_example(100, input_kind="binary"),
+     fohw.ParameterError, "`input_kind` must be 'uniform' or 'gaussian'"),
+    ("datasets.load_daisy", "a non-numeric entry",
+     lambda t: fohw.datasets.load_daisy(_bad_file(t, "1 2\n3 x\n")),
+     fohw.DataFileError, "line 2: 'x' is not a number"),
+    ("datasets.load_daisy", "a ragged line", lambda t: fohw.datasets.load_daisy(_bad_file(t, "1 2\n3\n")),
+     fohw.DataFileError, "line 2 has 1 column(s); expected 2"),
+    ("datasets.robot_arm", "file missing", lambda t: fohw.datasets.robot_arm(t),
+     FileNotFoundError, "DaISy data set 96-009"),
+    ("datasets.robot_arm", "file corrupted",
+     lambda t: fohw.datasets.robot_arm(_bad_file(t, "1 2\n", "daisy_robot_arm.dat")),
+     fohw.DataFileError, "does not match DaISy 96-009"),
+    ("load_result", "not a result file", lambda t: fohw.load_result(_bad_file(t, "{}", "r.json")),
+     fohw.DataFileError, "is not a fohw-result file"),
+    ("metrics.fit_percent", "n_init leaves no samples",
+     lambda t: fohw.metrics.fit_percent(Y, Y, n_init=49),
+     fohw.DimensionError, "`n_init` must leave at least 2 samples"),
+]
+
+CLI = [
+    ("fohw identify", "data file missing", lambda t: ["identify", "/nonexistent.dat", "--na", "2", "--nb", "2"],
+     "data file not found"),
+    ("fohw identify", "column that does not exist",
+     lambda t: ["identify", _bad_file(t, "1 2\n3 4\n5 6\n"), "--columns", "0,5", "--na", "1", "--nb", "1"],
+     "column 5 does not exist"),
+    ("fohw identify", "unknown header name",
+     lambda t: ["identify", _bad_file(t, "a,b\n1,2\n3,4\n5,6\n"), "--columns", "u,y", "--na", "1", "--nb", "1"],
+     "'u' is neither a column number nor a header name"),
+    ("fohw identify", "basis degree 0",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--f-basis", "0"],
+     "a basis is a polynomial degree >= 1"),
+    ("fohw identify", "na missing", lambda t: ["identify", "x.dat", "--nb", "1"],
+     "the following arguments are required: --na"),
+    ("fohw identify", "malformed line", lambda t: ["identify", _bad_file(t, "1 2\n3 oops\n"), "--na", "1", "--nb", "1"],
+     "line 2: 'oops' is not a number"),
+    ("fohw identify", "alpha bounds not a pair",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--alpha-bounds", "0.5"],
+     "expected two numbers 'low,high'"),
+    ("fohw simulate", "model file is not JSON",
+     lambda t: ["simulate", "--model", _bad_file(t, "not json", "m.json"), "--input", _bad_file(t, "1\n2\n")],
+     "is not valid JSON"),
+    ("fohw reproduce", "unknown target", lambda t: ["reproduce", "table9"], "invalid choice"),
+]
+
+
+def _hybrid():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        return fohw.identify(U, Y + 0.01 * U, **S)
+
+
+@pytest.mark.parametrize("where, what, call, exc, text", API, ids=[f"{w}: {x}" for w, x, *_ in API])
+def test_api_bad_input(where, what, call, exc, text, tmp_path):
+    with pytest.raises(exc) as info:
+        call(tmp_path)
+    assert text in str(info.value)
+
+
+@pytest.mark.parametrize("where, what, args, text", CLI, ids=[f"{w}: {x}" for w, x, *_ in CLI])
+def test_cli_bad_input(where, what, args, text, tmp_path):
+    err = io.StringIO()
+    with redirect_stderr(err):
+        try:
+            status = cli(args(tmp_path))
+        except SystemExit as stop:          # argparse usage errors
+            status = stop.code
+    message = err.getvalue()
+    assert status == 2
+    assert message.count("\n") == 1 and message.startswith("fohw: error:"), message
+    assert text in message
+
+
+def test_catalogue_is_large_enough():
+    assert len(API) + len(CLI) >= 25
+
+
+def markdown():
+    lines = ["# Bad input and the errors it gets", "",
+             "Every public entry point validates its input through one layer "
+             "(`fohw._validation`): errors name the argument and echo what arrived, and input is "
+             "never silently fixed. Domain exceptions subclass the matching built-in "
+             "(`ParameterError` and `DimensionError` are `ValueError`s, `NotFittedError` is an "
+             "`AttributeError`, `SimulationDivergedError` an `ArithmeticError`). The command line "
+             "prints one line `fohw: error: …` and exits with status 2.", "",
+             "This page is generated from `tests/test_bad_input.py`, which checks every row.", "",
+             "## Python API", "", "| entry point | bad input | exception | message contains |",
+             "|---|---|---|---|"]
+    for where, what, _, exc, text in API:
+        escaped = text.replace("|", "\\|")
+        lines.append(f"| `{where}` | {what} | `{exc.__name__}` | {escaped} |")
+    lines += ["", "## Command line", "", "| command | bad input | message contains |",
+              "|---|---|---|"]
+    for where, what, _, text in CLI:
+        lines.append(f"| `{where}` | {what} | {text} |")
+    return "\n".join(lines) + "\n"
+
+
+def test_docs_page_is_current():
+    assert (ROOT / "docs" / "bad_input.md").read_text() == markdown()
+
+
+if __name__ == "__main__":
+    sys.stdout.write(markdown())
