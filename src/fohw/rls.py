@@ -56,8 +56,9 @@ class MultiInnovationRLS(BaseEstimator):
     ----------
     theta_, alpha_ : ndarray, float
         Current estimates.
-    theta_history_ : ndarray, shape (n_samples_seen_, n)
-    alpha_history_ : ndarray, shape (n_samples_seen_,)
+    theta_history_ : ndarray, shape (N, n)
+    alpha_history_ : ndarray, shape (N,)
+        ``N`` is ``n_samples_seen_``.
     n_samples_seen_ : int
     covariance_ : ndarray
         The RLS matrix ``S`` (for ``lambda = 1`` and white noise of variance ``s^2``, ``s^2 S``
