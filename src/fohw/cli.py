@@ -45,48 +45,9 @@ def read_table(path):
     names : list of str or None
         The header's column names, if the first line is a header.
     """
-    import numpy as np
+    from .datasets import _parse_table
 
-    from .exceptions import DataFileError
-
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"data file not found: {path!r}")
-    rows, names, ncol = [], None, None
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            text = line.strip()
-            if not text or text[0] in "%#":
-                continue
-            fields = [f.strip() for f in (text.split(",") if "," in text else text.split())]
-            try:
-                values = [float(f) for f in fields]
-            except ValueError:
-                if not rows and names is None:
-                    names = fields
-                    ncol = len(fields)
-                    continue
-                bad = next(f for f in fields if not _is_number(f))
-                raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.") from None
-            if ncol is None:
-                ncol = len(values)
-            if len(values) != ncol:
-                raise DataFileError(f"{path}: line {lineno} has {len(values)} column(s); "
-                                    f"expected {ncol}.")
-            if not all(np.isfinite(values)):
-                raise DataFileError(f"{path}: line {lineno} holds a non-finite value.")
-            rows.append(values)
-    if not rows:
-        raise DataFileError(f"{path}: no data lines found.")
-    return np.array(rows), names
-
-
-def _is_number(text):
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    return _parse_table(path, header=True)
 
 
 def _pick_columns(data, names, spec, count, path):

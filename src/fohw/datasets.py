@@ -151,25 +151,40 @@ def load_daisy(path, *, n_columns=None):
     array([[ 0.1, -0.2],
            [ 0.3,  0.4]])
     """
-    path = os.fspath(path)
     if n_columns is not None:
         n_columns = check_int(n_columns, "n_columns", minimum=1)
+    return _parse_table(path, n_columns=n_columns)[0]
+
+
+def _parse_table(path, *, n_columns=None, header=False):
+    """Numeric rows of a text file, with the errors of :func:`load_daisy`.
+
+    DaISy mode (``header=False``): ASCII, whitespace-separated. Table mode (``header=True``):
+    UTF-8, comma-separated where a line has a comma, and a first line of names allowed.
+    Returns ``(data, names)``.
+    """
+    path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"data file not found: {path!r}")
-    rows = []
+    rows, names = [], None
+    encoding = "utf-8" if header else "ascii"
     with open(path, "rb") as fh:
         for lineno, raw in enumerate(fh, start=1):
             try:
-                line = raw.decode("ascii")
+                text = raw.decode(encoding).strip()
             except UnicodeDecodeError:
-                raise DataFileError(f"{path}: line {lineno} is not ASCII text.") from None
-            text = line.strip()
+                label = "UTF-8" if header else "ASCII"
+                raise DataFileError(f"{path}: line {lineno} is not {label} text.") from None
             if not text or text[0] in "%#":
                 continue
-            fields = text.split()
+            fields = [f.strip() for f in (text.split(",") if header and "," in text
+                                          else text.split())]
             try:
                 values = [float(f) for f in fields]
             except ValueError:
+                if header and not rows and names is None:
+                    names, n_columns = fields, len(fields)
+                    continue
                 bad = next(f for f in fields if not _is_float(f))
                 raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.") from None
             if n_columns is None:
@@ -182,7 +197,7 @@ def load_daisy(path, *, n_columns=None):
             rows.append(values)
     if not rows:
         raise DataFileError(f"{path}: no data lines found.")
-    return np.array(rows, dtype=np.float64)
+    return np.array(rows, dtype=np.float64), names
 
 
 def _is_float(text: str) -> bool:

@@ -278,13 +278,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     if not converged:
         warnings.warn(f"fohw.identify({method!r}, schedule={schedule!r}): {message}",
                       ConvergenceWarning, stacklevel=2)
-    model = None
-    try:
-        model = HammersteinWiener.from_theta(theta, alpha, na=builder.layout.na,
-                                             nb=builder.layout.nb, f_basis=builder.f_basis,
-                                             g_basis=builder.g_basis)
-    except ParameterError as exc:
-        message += f" No model: {exc}"
+    model, note = _recover_model(builder, theta, alpha)
+    message += note
     if bounds.hit:
         message += f" Alpha was held at a bound of {tuple(bounds.inner)} at least once."
     options = dict(innovation_length=P, alpha0=float(alpha0), max_iter=max_iter, tol=tol,
@@ -299,6 +294,16 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=n_samples, options=options)
 
 
+def _recover_model(builder, theta, alpha):
+    """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
+    try:
+        return HammersteinWiener.from_theta(theta, alpha, na=builder.layout.na,
+                                            nb=builder.layout.nb, f_basis=builder.f_basis,
+                                            g_basis=builder.g_basis), ""
+    except ParameterError as exc:
+        return None, f" No model: {exc}"
+
+
 def _varpro_result(builder, bounds, n_grid, options):
     """Run separable least squares and wrap it as an IdentificationResult."""
     fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
@@ -310,13 +315,8 @@ def _varpro_result(builder, bounds, n_grid, options):
                     f"{(bounds.lo, bounds.hi)}: widen the bounds.")
     if not fit.converged:
         warnings.warn(f"fohw.identify('varpro'): {message}", ConvergenceWarning, stacklevel=3)
-    model = None
-    try:
-        model = HammersteinWiener.from_theta(fit.theta, fit.alpha, na=builder.layout.na,
-                                             nb=builder.layout.nb, f_basis=builder.f_basis,
-                                             g_basis=builder.g_basis)
-    except ParameterError as exc:
-        message += f" No model: {exc}"
+    model, note = _recover_model(builder, fit.theta, fit.alpha)
+    message += note
     return IdentificationResult(
         method="varpro", schedule="", alpha=fit.alpha, theta=fit.theta, model=model,
         J=fit.rss / builder.n_samples, n_iter=len(fit.search_alphas), converged=fit.converged,
@@ -359,13 +359,8 @@ def _output_error_result(builder, bounds, n_grid, n_init, start, max_nfev):
     if not fit.converged:
         warnings.warn(f"fohw.identify('output_error'): {message}", ConvergenceWarning,
                       stacklevel=3)
-    model = None
-    try:
-        model = HammersteinWiener.from_theta(fit.theta, fit.alpha, na=builder.layout.na,
-                                             nb=builder.layout.nb, f_basis=builder.f_basis,
-                                             g_basis=builder.g_basis)
-    except ParameterError as exc:
-        message += f" No model: {exc}"
+    model, note = _recover_model(builder, fit.theta, fit.alpha)
+    message += note
     J = float(np.mean((builder.y - builder.matrix(fit.alpha) @ fit.theta) ** 2))
     return IdentificationResult(
         method="output_error", schedule="", alpha=fit.alpha, theta=fit.theta, model=model, J=J,
@@ -392,13 +387,8 @@ def _rls_result(builder, P, forgetting, alpha0, bounds, p0, u, y):
     warnings.warn(f"fohw.identify('rls'): {message}", ConvergenceWarning, stacklevel=3)
     if est.alpha_at_bound_:
         message += " Alpha was held at a bound at least once."
-    model = None
-    try:
-        model = HammersteinWiener.from_theta(est.theta_, est.alpha_, na=builder.layout.na,
-                                             nb=builder.layout.nb, f_basis=builder.f_basis,
-                                             g_basis=builder.g_basis)
-    except ParameterError as exc:
-        message += f" No model: {exc}"
+    model, note = _recover_model(builder, est.theta_, est.alpha_)
+    message += note
     return IdentificationResult(
         method="rls", schedule="recursive", alpha=est.alpha_, theta=est.theta_, model=model, J=J,
         n_iter=1, converged=False, message=message, alpha_at_bound=est.alpha_at_bound_,
