@@ -194,3 +194,10 @@ def test_paper_claim_larger_P_measured_on_the_paper_example():
         assert r5.alpha < 0.5
     assert abs(np.median(d1) - np.median(d5)) < 0.05 * np.median(d1)
     assert 0.3 < np.median(d5) < 0.8
+
+
+def test_notebook_reprs(data2000):
+    res = quiet_identify(data2000.u[:300], data2000.y[:300], method="varpro")
+    html = res._repr_html_()
+    assert "<table>" in html and "q3a2" in html and "varpro" in html
+    assert "HammersteinWiener(a=[0.1, 0.2]" in fohw.datasets.paper_model()._repr_html_()

@@ -53,6 +53,12 @@ ODD = fohw.Basis((identity, cube), names=("x", "x^3"))
 LINEAR = fohw.polynomial_basis(1)
 
 
+def progress(message):
+    """Stage messages on stderr when a terminal is attached (the study takes minutes)."""
+    if sys.stderr.isatty():
+        print(f"robot-arm: {message}", file=sys.stderr, flush=True)
+
+
 def quiet(fn, *args, **kwargs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
@@ -119,6 +125,7 @@ def main(argv=None):
     else:
         orders = list(itertools.product(range(1, 7), range(1, 7)))
         degrees = list(itertools.product((1, 2, 3), (1, 2, 3)))
+    progress(f"structure scan over {len(orders) * len(degrees)} candidates")
     scan = bic_scan(u, y, orders, degrees)
     best = scan[0]
     struct = dict(na=best["na"], nb=best["nb"], f_basis=best["f"], g_basis=best["g"])
@@ -132,6 +139,7 @@ def main(argv=None):
 
     # 2. The paper's hybrid, P = 1, 3, 5 (iterative schedule: J per iteration, Fig. 7).
     max_iter = 5 if args.fast else 50
+    progress("the paper's hybrid, P = 1, 3, 5")
     hybrid = {P: quiet(fohw.identify, u, y, innovation_length=P, schedule="iterative",
                        max_iter=max_iter, **struct) for P in (1, 3, 5)}
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -206,6 +214,8 @@ def main(argv=None):
                   [(m, fb, gb) for m in (3, 4, 5, 6)
                    for fb, gb in ((LINEAR, LINEAR), (LINEAR, ODD), (ODD, LINEAR))])
     sel_rows = []
+    progress(f"structure selection: {len(lin_orders)} linear and {len(frac_cands)} fractional "
+             "output-error candidates")
     for m in lin_orders:
         lin = fit_linear_output_error(u[est_sel], y[est_sel], nb=m, nf=m, n_init=N_INIT)
         sel_rows.append(dict(kind="linear OE", desc=f"nb = nf = {m}", m=m, d=lin.n_params,
@@ -216,6 +226,7 @@ def main(argv=None):
         sel_rows.append(dict(kind="fractional HW OE", desc=f"na = nb = {m}, f = {fb.names}, "
                              f"g = {gb.names}", m=m, fb=fb, gb=gb, d=r.theta.size + 1,
                              fit=sim_fit(r.simulate, u[:512], y[:512], sel)))
+    progress("refitting the chosen structures and the equal-order comparison")
     chosen = {}
     for kind in ("linear OE", "fractional HW OE"):
         cands = [r for r in sel_rows if r["kind"] == kind and np.isfinite(r["fit"])]
