@@ -241,6 +241,10 @@ def main(argv=None) -> int:
         message = str(exc).replace("\n", " ")
         print(f"fohw: error: {message}", file=sys.stderr)
         return 2
+    except BrokenPipeError:          # e.g. `fohw identify ... | head`: the reader left early
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
