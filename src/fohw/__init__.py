@@ -7,8 +7,9 @@ matrix, and the paper's estimators.
 """
 
 from . import datasets, metrics
-from .crb import CRBResult, crb
 from .basis import Basis, as_basis, polynomial_basis
+from .crb import CRBResult, crb
+from .driver import HybridIdentifier, identify
 from .exceptions import (
     ConvergenceWarning,
     DataFileError,
@@ -18,15 +19,14 @@ from .exceptions import (
     ParameterError,
     SimulationDivergedError,
 )
-from .driver import HybridIdentifier, identify
-from .io import load_model, load_result, save_model
 from .gl import gl_difference, gl_weights, gl_weights_derivative
+from .io import load_model, load_result, save_model
 from .migd import MultiInnovationGradient
 from .montecarlo import monte_carlo
 from .params import ThetaLayout
-from .rls import MultiInnovationRLS
 from .regressors import RegressorBuilder, information_matrix
 from .results import IdentificationResult
+from .rls import MultiInnovationRLS
 from .system import HammersteinWiener, simulate, simulate_theta
 
 __version__ = "0.1.0.dev0"

@@ -99,3 +99,27 @@ def check_random_state(random_state) -> np.random.Generator:
         return np.random.default_rng(int(random_state))
     raise ParameterError("`random_state` must be None, a non-negative int or a "
                          f"numpy.random.Generator; got {random_state!r}.")
+
+
+class AlphaBounds:
+    """Keeps alpha inside the open interval (lo, hi), a margin away from its ends."""
+
+    def __init__(self, bounds):
+        try:
+            lo, hi = (float(b) for b in bounds)
+        except (TypeError, ValueError):
+            raise ParameterError(f"`alpha_bounds` must be a pair (low, high); got {bounds!r}.") \
+                from None
+        if not (0.0 <= lo < hi <= 2.0):
+            raise ParameterError(f"`alpha_bounds` must satisfy {0.0:g} <= low < high "
+                                 f"<= {2.0:g}; got {bounds!r}.")
+        self.lo, self.hi = lo, hi
+        margin = 1e-3 * (hi - lo)
+        self.inner = (lo + margin, hi - margin)
+        self.hit = False
+
+    def __call__(self, alpha):
+        if alpha < self.inner[0] or alpha > self.inner[1] or not np.isfinite(alpha):
+            self.hit = True
+            return float(np.clip(np.nan_to_num(alpha, nan=self.inner[0]), *self.inner))
+        return alpha

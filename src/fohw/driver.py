@@ -43,14 +43,14 @@ import warnings
 import numpy as np
 
 from ._base import BaseEstimator, check_is_fitted
-from ._validation import check_array, check_int, check_same_length, check_scalar
+from ._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
 from .exceptions import ConvergenceWarning, ParameterError
 from .gl import _weights
 from .migd import check_migd_options, migd_pass, migd_update
 from .milm import alpha_update, check_sensitivity, milm_step, sensitivity_weights
 from .regressors import RegressorBuilder
 from .results import IdentificationResult
-from .system import ALPHA_BOUNDS, HammersteinWiener
+from .system import HammersteinWiener
 from .varpro import separable_least_squares
 
 __all__ = ["identify", "HybridIdentifier", "METHODS", "SCHEDULES"]
@@ -59,30 +59,6 @@ METHODS = ("hybrid", "single_innovation_gradient", "single_innovation_lm", "varp
            "output_error")
 SCHEDULES = ("recursive", "iterative")
 _DEFAULT_MAX_ITER = {"recursive": 1, "iterative": 50}
-
-
-class _AlphaBounds:
-    """Keeps alpha inside the open interval (lo, hi), a margin away from its ends."""
-
-    def __init__(self, bounds):
-        try:
-            lo, hi = (float(b) for b in bounds)
-        except (TypeError, ValueError):
-            raise ParameterError(f"`alpha_bounds` must be a pair (low, high); got {bounds!r}.") \
-                from None
-        if not (ALPHA_BOUNDS[0] <= lo < hi <= ALPHA_BOUNDS[1]):
-            raise ParameterError(f"`alpha_bounds` must satisfy {ALPHA_BOUNDS[0]:g} <= low < high "
-                                 f"<= {ALPHA_BOUNDS[1]:g}; got {bounds!r}.")
-        self.lo, self.hi = lo, hi
-        margin = 1e-3 * (hi - lo)
-        self.inner = (lo + margin, hi - margin)
-        self.hit = False
-
-    def __call__(self, alpha):
-        if alpha < self.inner[0] or alpha > self.inner[1] or not np.isfinite(alpha):
-            self.hit = True
-            return float(np.clip(np.nan_to_num(alpha, nan=self.inner[0]), *self.inner))
-        return alpha
 
 
 def _criterion(J_prev, J):
@@ -212,7 +188,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
                                                           forgetting, n_samples)
     if method.startswith("single_innovation"):
         P = 1
-    bounds = _AlphaBounds(alpha_bounds)
+    bounds = AlphaBounds(alpha_bounds)
     alpha = check_scalar(alpha0, "alpha0", lower=bounds.lo, upper=bounds.hi,
                          lower_inclusive=False, upper_inclusive=False)
     tol = check_scalar(tol, "tol", lower=0.0, lower_inclusive=False)

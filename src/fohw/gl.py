@@ -155,7 +155,7 @@ def _convolve_weights(x, weights):
 
 @functools.lru_cache(maxsize=4)
 def _weight_spectrum(alpha, m, nfft):
-    """rfft of the first ``m`` GL weights, zero-padded to ``nfft`` (cached: repeated orders)."""
+    """Rfft of the first ``m`` GL weights, zero-padded to ``nfft`` (cached: repeated orders)."""
     spec = scipy.fft.rfft(gl_weights(alpha, m), n=nfft)
     spec.setflags(write=False)
     return spec

@@ -220,8 +220,10 @@ class IdentificationResult:
         return result_to_dict(self)
 
     def to_json(self, path):
-        """Write the result to a versioned JSON file; :func:`fohw.load_result` reads it back
-        with every float exact."""
+        """Write the result to a versioned JSON file.
+
+        :func:`fohw.load_result` reads it back with every float exact.
+        """
         from .io import _write_json
 
         _write_json(self.to_dict(), path)

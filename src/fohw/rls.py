@@ -17,9 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from ._base import BaseEstimator, check_is_fitted
-from ._validation import check_array, check_int, check_same_length, check_scalar
+from ._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
 from .basis import as_basis
-from .exceptions import DimensionError, ParameterError
 from .gl import _weights, gl_weights_derivative
 from .params import ThetaLayout
 from .regressors import WindowKernel
@@ -99,15 +98,9 @@ class MultiInnovationRLS(BaseEstimator):
         self._P = check_int(self.innovation_length, "innovation_length", minimum=1)
         self._lam = check_scalar(self.forgetting, "forgetting", lower=0.0, upper=1.0,
                                  lower_inclusive=False)
-        try:
-            lo, hi = (float(b) for b in self.alpha_bounds)
-        except (TypeError, ValueError):
-            raise ParameterError(f"`alpha_bounds` must be a pair; got {self.alpha_bounds!r}.") from None
-        if not 0.0 <= lo < hi <= 2.0:
-            raise ParameterError(f"`alpha_bounds` must satisfy 0 <= low < high <= 2; got "
-                                 f"{self.alpha_bounds!r}.")
-        margin = 1e-3 * (hi - lo)
-        self._inner = (lo + margin, hi - margin)
+        bounds = AlphaBounds(self.alpha_bounds)
+        lo, hi = bounds.lo, bounds.hi
+        self._inner = bounds.inner
         alpha = check_scalar(self.alpha0, "alpha0", lower=lo, upper=hi, lower_inclusive=False,
                              upper_inclusive=False)
         p0 = check_scalar(self.p0, "p0", lower=0.0, lower_inclusive=False)

@@ -1,5 +1,6 @@
-"""The discrete fractional-order Hammerstein–Wiener system and its exact simulator
-(paper Section 2.3, Eqs. 10–18 and 56–57; SPEC §3).
+"""The fractional-order Hammerstein–Wiener system and its simulator (Section 2.3, Eqs. 10–18).
+
+Also Eqs. 56–57 and SPEC §3.
 
 .. math:: y[k] = \\sum_{i=1}^{n_a} a_i (\\Delta^{\\alpha} \\bar g(y))[k-i]
           + \\sum_{i=1}^{n_b} b_i (\\Delta^{\\alpha} \\bar f(u))[k-i] + v[k]

@@ -1,2 +1,4 @@
-"""Longer studies shipped with fohw, runnable as ``fohw reproduce robot-arm`` and
-``fohw reproduce accuracy`` (and as ``examples/robot_arm.py``, ``examples/accuracy_vs_crb.py``)."""
+"""Longer studies shipped with fohw: ``fohw reproduce robot-arm`` and ``fohw reproduce accuracy``.
+
+Also runnable as ``examples/robot_arm.py`` and ``examples/accuracy_vs_crb.py``.
+"""

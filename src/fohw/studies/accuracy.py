@@ -33,13 +33,13 @@ def identity(x):
 
 
 def system_b():
-    """alpha = 0.3, na = 1, nb = 3, f = [u, u^3], g = [y, y^2]."""
+    """Alpha = 0.3, na = 1, nb = 3, f = [u, u^3], g = [y, y^2]."""
     return fohw.HammersteinWiener([0.4], [0.5, -0.3, 0.2], [1, -0.2], [1, 0.3], 0.3,
                                   f_basis={"u": identity, "u^3": cube}, g_basis=2)
 
 
 def system_c():
-    """alpha = 1.4, na = 2, nb = 1, f = [u, tanh u], g = [y]."""
+    """Alpha = 1.4, na = 2, nb = 1, f = [u, tanh u], g = [y]."""
     return fohw.HammersteinWiener([0.2, -0.1], [0.8], [1, 0.5], [1], 1.4,
                                   f_basis={"u": identity, "tanh": np.tanh}, g_basis=1)
 
@@ -93,7 +93,7 @@ def main(argv=None):
     bound = crb_for(paper_data, n_main)
     d_sum = summarise(rows, value="delta")
     a_sum = summarise(rows, value="alpha_error")
-    lines = [f"# Accuracy against the Cramér-Rao bound", "",
+    lines = ["# Accuracy against the Cramér-Rao bound", "",
              f"## The paper's example, N = {n_main}, {n_seeds} seeds", "",
              "| method | RMS delta | RMS delta / CRB | RMS alpha error | / CRB | median seconds |",
              "|---|---:|---:|---:|---:|---:|"]

@@ -32,8 +32,7 @@ import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
 from fohw.baselines import fit_linear_output_error  # noqa: E402
-from fohw.metrics import (cross_correlation_test, error_range, fit_percent,  # noqa: E402
-                          whiteness_test)
+from fohw.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test  # noqa: E402
 from fohw.reproduction import paper_table2  # noqa: E402
 
 N_INIT = 20          # start-up samples excluded from every error measure
@@ -79,7 +78,7 @@ def bic_scan(u, y, orders, degrees):
 
 
 def linear_start(layout, lin):
-    """theta of a fractional model that equals the linear OE model B/F when alpha -> 0."""
+    """Theta of a fractional model that equals the linear OE model B/F when alpha -> 0."""
     theta = np.zeros(layout.n_params)
     theta[:layout.na] = -lin.f
     k = layout.n_output_params
