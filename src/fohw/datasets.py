@@ -248,7 +248,7 @@ def _robot_arm_help() -> str:
     return ("The flexible robot arm record is DaISy data set 96-009 (KU Leuven; De Moor et al., "
             "'DAISY: a database for identification of systems', 1997), file robot_arm.dat: "
             "1024 lines of 'u y' (reaction torque, arm acceleration). fohw does not ship it. "
-            f"Save it as {ROBOT_ARM_FILENAME!r} and pass its path, "
+            f"Save it as {ROBOT_ARM_FILENAME!r} and pass its path (command line: --data PATH), "
             "fohw.datasets.robot_arm(path=...), or set the environment variable FOHW_DATA_DIR "
             "to the folder that holds it.")
 
