@@ -129,7 +129,7 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
         fohw.simulate(args.pop("model"), args.pop("u"), **args)
 
 
-@pytest.mark.parametrize("n", [1, 63, 64, 65, 200, 1000, 5000])
+@pytest.mark.parametrize("n", [1, 127, 128, 129, 256, 257, 1000, 5000])
 def test_fast_simulator_equals_direct_recursion(n):
     from fohw.system import _simulate_blocks
 
