@@ -218,6 +218,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     r = 1.0
     alpha_hist, J_hist = [], []
     converged = False
+    Phi = None              # the information matrix at the current alpha, once built
     for m in range(1, max_iter + 1):
         if restart_r:
             r = 1.0
@@ -228,14 +229,17 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
             k_now = 0 if m == 1 else n_samples - 1
             rows = None if alpha_window == "record" else np.arange(k_now, max(k_now - P, -1), -1)
             alpha = bounds(alpha_update(builder, theta, alpha, rows=rows, lm_lambda=lm_lambda,
-                                        sensitivity=sensitivity, delta_alpha=delta_alpha))
+                                        sensitivity=sensitivity, delta_alpha=delta_alpha,
+                                        Phi=Phi))
             Phi = builder.matrix(alpha)
             theta_path, r_path, _ = migd_pass(Phi, builder.y, innovation_length=P, theta0=theta,
                                               r0=r, normalisation=normalisation,
                                               forgetting=forgetting)
             theta, r = theta_path[-1].copy(), float(r_path[-1])
             alpha_path = np.full(n_samples, alpha)
-        J = float(np.mean((builder.y - builder.matrix(alpha) @ theta) ** 2))
+        if schedule == "recursive":
+            Phi = builder.matrix(alpha)
+        J = float(np.mean((builder.y - Phi @ theta) ** 2))
         alpha_hist.append(alpha)
         J_hist.append(J)
         if m >= 2 and _criterion(J_hist[-2], J) <= tol:

@@ -114,7 +114,7 @@ def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference"
 
 
 def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
-                 sensitivity="finite_difference", delta_alpha=1e-3):
+                 sensitivity="finite_difference", delta_alpha=1e-3, Phi=None):
     """One MI-LM step of the fractional order on chosen samples of a record (Eq. 48).
 
     Parameters
@@ -130,6 +130,8 @@ def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
         ``None`` (default) for the whole record (Eqs. 46a–b summed over the record).
     lm_lambda, sensitivity, delta_alpha
         As in :func:`milm_step` and :func:`output_sensitivity`.
+    Phi : ndarray, optional
+        ``builder.matrix(alpha)`` if the caller already has it.
 
     Returns
     -------
@@ -148,7 +150,8 @@ def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
     """
     check_sensitivity(sensitivity, delta_alpha)
     rows = slice(None) if rows is None else rows
-    Phi = builder.matrix(alpha)
+    if Phi is None:
+        Phi = builder.matrix(alpha)
     if sensitivity == "exact":
         dPhi = builder.matrix_derivative(alpha)
     else:
