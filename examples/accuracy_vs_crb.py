@@ -2,12 +2,12 @@
 
     python examples/accuracy_vs_crb.py --outdir results [--fast] [--seeds 20] [--jobs 2]
 
-The study lives in fohw.studies.accuracy (also: fohw reproduce accuracy); see its docstring.
+The study lives in fohw.paper.accuracy (also: fohw reproduce accuracy); see its docstring.
 """
 
 import sys
 
-from fohw.studies.accuracy import main
+from fohw.paper.accuracy import main
 
 if __name__ == "__main__":
     sys.exit(main())

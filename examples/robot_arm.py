@@ -2,12 +2,12 @@
 
     python examples/robot_arm.py --outdir results [--fast] [--data PATH]
 
-The study lives in fohw.studies.robot_arm (also: fohw reproduce robot-arm); see its docstring.
+The study lives in fohw.paper.robot_arm (also: fohw reproduce robot-arm); see its docstring.
 """
 
 import sys
 
-from fohw.studies.robot_arm import main
+from fohw.paper.robot_arm import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -8,7 +8,7 @@ table. The paper's printed values come from fohw/data/paper_table2.json.
 
 import sys
 
-from fohw.reproduction import OUTPUTS, example_main
+from fohw.paper.reproduction import OUTPUTS, example_main
 
 if __name__ == "__main__":
     sys.exit(example_main(OUTPUTS, __doc__.splitlines()[0]))

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.cli import main as cli
+from fohw.io.cli import main as cli
 
 ROOT = Path(__file__).resolve().parents[1]
 S = dict(na=2, nb=2, f_basis=2, g_basis=3)

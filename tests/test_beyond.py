@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.varpro import profile_theta
+from fohw.estimators.varpro import profile_theta
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -166,7 +166,7 @@ def test_monte_carlo_rows_and_parallel_equals_serial(monkeypatch):
     with pytest.warns(RuntimeWarning, match="joblib is not installed"):
         fallback = fohw.monte_carlo(methods, n_jobs=2, **kw)
     assert [r["delta"] for r in fallback] == [r["delta"] for r in serial]
-    summary = fohw.montecarlo.summarise(serial, by=("method", "n_samples"))
+    summary = fohw.analysis.montecarlo.summarise(serial, by=("method", "n_samples"))
     assert summary[("varpro", 800)]["n"] == 3
 
 

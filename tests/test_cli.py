@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.cli import main
+from fohw.io.cli import main
 
 
 def test_reproduce_table2_fast(tmp_path, capsys):

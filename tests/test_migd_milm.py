@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.migd import migd_pass, migd_update
-from fohw.milm import alpha_update, milm_step, output_sensitivity
+from fohw.estimators.migd import migd_pass, migd_update
+from fohw.estimators.milm import alpha_update, milm_step, output_sensitivity
 
 
 def simple_record(seed, n=3000):

@@ -9,7 +9,7 @@ import scipy.signal
 
 import fohw
 from fohw import metrics
-from fohw.baselines import fit_linear_output_error
+from fohw.estimators.baselines import fit_linear_output_error
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 

@@ -131,7 +131,7 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
 
 @pytest.mark.parametrize("n", [1, 127, 128, 129, 256, 257, 1000, 5000])
 def test_fast_simulator_equals_direct_recursion(n):
-    from fohw.system import _simulate_blocks
+    from fohw.model.system import _simulate_blocks
 
     rng = np.random.default_rng(n)
     m = paper_model()
@@ -145,7 +145,7 @@ def test_fast_simulator_equals_direct_recursion(n):
 
 
 def test_fast_simulator_general_blocks_and_divergence():
-    from fohw.system import FAST_SIMULATION_THRESHOLD, _simulate_blocks
+    from fohw.model.system import FAST_SIMULATION_THRESHOLD, _simulate_blocks
 
     rng = np.random.default_rng(0)
     n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path

@@ -6,10 +6,13 @@ the discrete fractional-order Hammerstein–Wiener model and its simulator, the 
 matrix, and the paper's estimators.
 """
 
-from . import datasets, metrics
-from .basis import Basis, as_basis, polynomial_basis
-from .crb import CRBResult, crb
-from .driver import HybridIdentifier, identify
+from . import datasets
+from .analysis import metrics
+from .analysis.crb import CRBResult, crb
+from .analysis.montecarlo import monte_carlo
+from .estimators.hybrid import HybridIdentifier, identify
+from .estimators.migd import MultiInnovationGradient
+from .estimators.rls import MultiInnovationRLS
 from .exceptions import (
     ConvergenceWarning,
     DataFileError,
@@ -19,17 +22,41 @@ from .exceptions import (
     ParameterError,
     SimulationDivergedError,
 )
-from .gl import gl_difference, gl_weights, gl_weights_derivative
-from .io import load_model, load_result, save_model
-from .migd import MultiInnovationGradient
-from .montecarlo import monte_carlo
-from .params import ThetaLayout
-from .regressors import RegressorBuilder, information_matrix
+from .io.jsonio import load_model, load_result, save_model
+from .model.basis import Basis, as_basis, polynomial_basis
+from .model.gl import gl_difference, gl_weights, gl_weights_derivative
+from .model.params import ThetaLayout
+from .model.regressors import RegressorBuilder, information_matrix
+from .model.system import HammersteinWiener, simulate, simulate_theta
 from .results import IdentificationResult
-from .rls import MultiInnovationRLS
-from .system import HammersteinWiener, simulate, simulate_theta
 
 __version__ = "0.1.0.dev0"
+
+
+def _keep_old_module_paths():
+    """``import fohw.migd``, ``from fohw.metrics import rmse``, … as in fohw 0.1.
+
+    The modules moved into subpackages (``fohw.estimators.migd``, ``fohw.analysis.metrics``);
+    their old dotted paths stay importable and reachable as attributes.
+    """
+    import sys
+
+    from .analysis import crb, montecarlo
+    from .estimators import baselines, hybrid, migd, milm, output_error, rls, varpro
+    from .io import cli
+    from .model import basis, gl, params, regressors, system
+    from .paper import reproduction
+
+    moved = dict(gl=gl, basis=basis, params=params, system=system, regressors=regressors,
+                 migd=migd, milm=milm, varpro=varpro, output_error=output_error, rls=rls,
+                 baselines=baselines, driver=hybrid, crb=crb, metrics=metrics,
+                 montecarlo=montecarlo, reproduction=reproduction, cli=cli)
+    for old, module in moved.items():
+        sys.modules.setdefault(f"{__name__}.{old}", module)
+        globals().setdefault(old, module)
+
+
+_keep_old_module_paths()
 
 __all__ = [
     "Basis",

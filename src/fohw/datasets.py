@@ -9,7 +9,7 @@ import numpy as np
 
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
-from .system import HammersteinWiener, simulate
+from .model.system import HammersteinWiener, simulate
 
 __all__ = ["SimulatedData", "MeasuredData", "paper_model", "paper_example", "load_daisy",
            "robot_arm"]

@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .basis import Basis
-from .params import ThetaLayout
-from .regressors import RegressorBuilder
-from .system import HammersteinWiener, simulate_theta
+from .model.basis import Basis
+from .model.params import ThetaLayout
+from .model.regressors import RegressorBuilder
+from .model.system import HammersteinWiener, simulate_theta
 
 __all__ = ["IdentificationResult"]
 
@@ -214,8 +214,8 @@ class IdentificationResult:
                               f_basis=self.f_basis, g_basis=self.g_basis, **kwargs)
 
     def to_dict(self) -> dict:
-        """A JSON-ready dict (see :mod:`fohw.io`)."""
-        from .io import result_to_dict
+        """A JSON-ready dict (see :mod:`fohw.io.jsonio`)."""
+        from .io.jsonio import result_to_dict
 
         return result_to_dict(self)
 
@@ -224,7 +224,7 @@ class IdentificationResult:
 
         :func:`fohw.load_result` reads it back with every float exact.
         """
-        from .io import _write_json
+        from .io.jsonio import _write_json
 
         _write_json(self.to_dict(), path)
 

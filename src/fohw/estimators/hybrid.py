@@ -1,7 +1,7 @@
 """The alternating identification driver (paper Section 4, Steps 1–9 and Table 1).
 
-``identify`` estimates ``theta`` by multi-innovation gradient descent (:mod:`fohw.migd`) and
-the fractional order by the multi-innovation Levenberg–Marquardt step (:mod:`fohw.milm`),
+``identify`` estimates ``theta`` by multi-innovation gradient descent (:mod:`fohw.estimators.migd`) and
+the fractional order by the multi-innovation Levenberg–Marquardt step (:mod:`fohw.estimators.milm`),
 alternately, under one of two schedules the paper describes:
 
 ``"recursive"`` (Table 1, the default)
@@ -42,15 +42,15 @@ import warnings
 
 import numpy as np
 
-from ._base import BaseEstimator, check_is_fitted
-from ._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from .exceptions import ConvergenceWarning, ParameterError
-from .gl import _weights
+from .._base import BaseEstimator, check_is_fitted
+from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
+from ..exceptions import ConvergenceWarning, ParameterError
+from ..model.gl import _weights
+from ..model.regressors import RegressorBuilder
+from ..model.system import HammersteinWiener
+from ..results import IdentificationResult
 from .migd import check_migd_options, migd_pass, migd_update
 from .milm import alpha_update, check_sensitivity, milm_step, sensitivity_weights
-from .regressors import RegressorBuilder
-from .results import IdentificationResult
-from .system import HammersteinWiener
 from .varpro import separable_least_squares
 
 __all__ = ["identify", "HybridIdentifier", "METHODS", "SCHEDULES"]
@@ -83,7 +83,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
     method : {"hybrid", "single_innovation_gradient", "single_innovation_lm", "varpro"}, optional
         ``"hybrid"`` (default): MIGD for theta and MI-LM for alpha (the paper). The
         single-innovation methods are the baselines of Fig. 6 (see the module notes).
-        ``"varpro"``: separable least squares (:mod:`fohw.varpro`), beyond the paper: theta by
+        ``"varpro"``: separable least squares (:mod:`fohw.estimators.varpro`), beyond the paper: theta by
         linear least squares for each alpha, alpha by a grid scan and a bounded search, then a
         joint Gauss–Newton polish; it reaches the Cramér–Rao bound and reports standard errors.
         It ignores the settings of the recursive methods (``innovation_length``, ``schedule``,
@@ -92,7 +92,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="hybrid", innovation_leng
         recursive alpha), using ``innovation_length``, ``forgetting``, ``alpha0``,
         ``alpha_bounds`` and ``p0``.
         ``"output_error"``: beyond the paper, minimises the free-run *simulation* error over
-        ``(theta, alpha)`` (:mod:`fohw.output_error`), started from the ``"varpro"``
+        ``(theta, alpha)`` (:mod:`fohw.estimators.output_error`), started from the ``"varpro"``
         estimate; the criterion leaves out the first ``n_init`` samples.
     innovation_length : int, optional
         ``P`` (default 5), ``1 <= P <= N``. Forced to 1 by the single-innovation methods.

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_array, check_int
-from .exceptions import DimensionError, ParameterError
+from .._validation import check_array, check_int
+from ..exceptions import DimensionError, ParameterError
 
 __all__ = ["ThetaLayout"]
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import check_scalar
-from .exceptions import ParameterError
-from .gl import _weights, gl_weights_derivative
+from .._validation import check_scalar
+from ..exceptions import ParameterError
+from ..model.gl import _weights, gl_weights_derivative
 
 __all__ = ["milm_step", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
@@ -47,7 +47,7 @@ def milm_step(sensitivities, innovations, *, n_samples, lm_lambda=1.0):
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.milm import milm_step
+    >>> from fohw.estimators.milm import milm_step
     >>> # (2/N) = 1: increment = (Xi @ E) / (Xi @ Xi + lambda) = 1 / (2 + 1)
     >>> milm_step(np.array([1.0, 1.0]), np.array([0.5, 0.5]), n_samples=2, lm_lambda=1.0)
     0.3333333333333333
@@ -99,7 +99,7 @@ def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference"
     Examples
     --------
     >>> import fohw
-    >>> from fohw.milm import output_sensitivity
+    >>> from fohw.estimators.milm import output_sensitivity
     >>> d = fohw.datasets.paper_example(500, random_state=0)
     >>> b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> fd = output_sensitivity(b, 0.6, d.model.theta)
@@ -141,7 +141,7 @@ def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
     Examples
     --------
     >>> import fohw
-    >>> from fohw.milm import alpha_update
+    >>> from fohw.estimators.milm import alpha_update
     >>> d = fohw.datasets.paper_example(2000, noise_variance=0.0, random_state=0)
     >>> b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> a1 = alpha_update(b, d.model.theta, 0.5)      # true alpha is 0.6

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import BaseEstimator, check_is_fitted
-from ._validation import check_alpha, check_array, check_int, check_same_length, check_scalar
-from .exceptions import DimensionError, ParameterError
-from .regressors import RegressorBuilder
+from .._base import BaseEstimator, check_is_fitted
+from .._validation import check_alpha, check_array, check_int, check_same_length, check_scalar
+from ..exceptions import DimensionError, ParameterError
+from ..model.regressors import RegressorBuilder
 
 __all__ = ["migd_update", "migd_pass", "MultiInnovationGradient", "NORMALISATIONS"]
 
@@ -54,7 +54,7 @@ def migd_update(theta, window, outputs, r_prev, *, normalisation="window", forge
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.migd import migd_update
+    >>> from fohw.estimators.migd import migd_update
     >>> theta, r, e = migd_update(np.zeros(2), np.array([[1.0, 0.0]]), np.array([2.0]), 1.0)
     >>> theta, r, e
     (array([1., 0.]), 2.0, array([2.]))

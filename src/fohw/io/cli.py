@@ -17,7 +17,7 @@ import json
 import os
 import sys
 
-from . import __version__
+from .. import __version__
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -45,7 +45,7 @@ def read_table(path):
     names : list of str or None
         The header's column names, if the first line is a header.
     """
-    from .datasets import _parse_table
+    from ..datasets import _parse_table
 
     return _parse_table(path, header=True)
 
@@ -97,7 +97,7 @@ def _pair_arg(text):
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
-    from .driver import METHODS, SCHEDULES
+    from ..estimators.hybrid import METHODS, SCHEDULES
 
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")
@@ -144,8 +144,8 @@ def build_parser() -> argparse.ArgumentParser:
 def _identify(args):
     import warnings
 
-    from . import identify
-    from .exceptions import ConvergenceWarning
+    from .. import identify
+    from ..exceptions import ConvergenceWarning
 
     data, names = read_table(args.data)
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
@@ -191,8 +191,8 @@ def _identify(args):
 def _simulate(args):
     import numpy as np
 
-    from .io import load_model
-    from .system import simulate
+    from ..model.system import simulate
+    from .jsonio import load_model
 
     model = load_model(args.model)
     data, names = read_table(args.input)
@@ -209,7 +209,7 @@ def _simulate(args):
 
 def _reproduce(args):
     if args.what in _REPRODUCE:
-        from .reproduction import example_main
+        from ..paper.reproduction import example_main
 
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
@@ -217,17 +217,17 @@ def _reproduce(args):
         return example_main(_REPRODUCE[args.what], f"fohw reproduce {args.what}", forwarded)
     forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
     if args.what == "robot-arm":
-        from .studies.robot_arm import main as study
+        from ..paper.robot_arm import main as study
         if args.data:
             forwarded += ["--data", args.data]
     else:
-        from .studies.accuracy import main as study
+        from ..paper.accuracy import main as study
     return study(forwarded)
 
 
 def main(argv=None) -> int:
     """Run the ``fohw`` command; return its exit status."""
-    from .exceptions import FohwError
+    from ..exceptions import FohwError
 
     parser = build_parser()
     args = parser.parse_args(argv)

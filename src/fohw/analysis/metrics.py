@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ._validation import check_array, check_int, check_same_length, check_scalar
-from .exceptions import DimensionError
+from .._validation import check_array, check_int, check_same_length, check_scalar
+from ..exceptions import DimensionError
 
 __all__ = ["fit_percent", "error_range", "rmse", "whiteness_test", "cross_correlation_test",
            "CorrelationTest"]
@@ -48,7 +48,7 @@ def fit_percent(y, yhat, *, n_init=0):
 
     Examples
     --------
-    >>> from fohw.metrics import fit_percent
+    >>> from fohw.analysis.metrics import fit_percent
     >>> fit_percent([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]), fit_percent([1.0, 2.0, 3.0], [2.0, 2.0, 2.0])
     (100.0, 0.0)
     """
@@ -64,7 +64,7 @@ def error_range(y, yhat, *, n_init=0):
 
     Examples
     --------
-    >>> from fohw.metrics import error_range
+    >>> from fohw.analysis.metrics import error_range
     >>> error_range([0.0, 1.0, 2.0], [5.0, 1.1, 1.8], n_init=1)
     (-0.10000000000000009, 0.19999999999999996)
     """
@@ -142,7 +142,7 @@ def whiteness_test(residuals, *, max_lag=25, confidence=0.99, n_init=0):
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.metrics import whiteness_test
+    >>> from fohw.analysis.metrics import whiteness_test
     >>> whiteness_test(np.random.default_rng(0).standard_normal(5000)).passed
     True
     """

@@ -15,10 +15,10 @@ from importlib import resources
 
 import numpy as np
 
-from .datasets import SimulatedData, paper_example
-from .driver import identify
-from .exceptions import ConvergenceWarning
-from .results import IdentificationResult
+from ..datasets import SimulatedData, paper_example
+from ..estimators.hybrid import identify
+from ..exceptions import ConvergenceWarning
+from ..results import IdentificationResult
 
 __all__ = ["paper_table2", "PaperRuns", "run_paper_example", "table2_rows", "table2_markdown",
            "monte_carlo_table2", "plot_figure_3", "plot_figure_4", "plot_figure_5",
@@ -36,7 +36,7 @@ def paper_table2() -> dict:
 
     Examples
     --------
-    >>> from fohw.reproduction import paper_table2
+    >>> from fohw.paper.reproduction import paper_table2
     >>> t = paper_table2()
     >>> t["true"]["alpha"], len(t["rows"])
     (0.6, 9)
@@ -278,7 +278,7 @@ def plot_figure_5(runs: PaperRuns, P=5, window=200):
     """
     import matplotlib.pyplot as plt
 
-    from .exceptions import SimulationDivergedError
+    from ..exceptions import SimulationDivergedError
 
     res = runs.hybrid[P]
     data = runs.data

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_array, check_int, check_random_state, check_scalar
-from .exceptions import ParameterError
-from .regressors import RegressorBuilder
-from .system import HammersteinWiener, simulate
+from .._validation import check_array, check_int, check_random_state, check_scalar
+from ..exceptions import ParameterError
+from ..model.regressors import RegressorBuilder
+from ..model.system import HammersteinWiener, simulate
 
 __all__ = ["crb", "CRBResult"]
 

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
-from ._validation import check_array, check_int, check_same_length
+from .._validation import check_array, check_int, check_same_length
 
 __all__ = ["LinearOutputError", "fit_linear_output_error"]
 
@@ -74,7 +74,7 @@ def fit_linear_output_error(u, y, *, nb, nf, n_init=0):
     Examples
     --------
     >>> import numpy as np, scipy.signal
-    >>> from fohw.baselines import fit_linear_output_error
+    >>> from fohw.estimators.baselines import fit_linear_output_error
     >>> u = np.random.default_rng(0).standard_normal(500)
     >>> y = scipy.signal.lfilter([0, 0.5], [1, -0.8], u)
     >>> m = fit_linear_output_error(u, y, nb=1, nf=1)

@@ -13,10 +13,10 @@ import os
 
 import numpy as np
 
-from .basis import Basis, as_basis, polynomial_basis
-from .exceptions import DataFileError, ParameterError
-from .params import ThetaLayout
-from .system import HammersteinWiener
+from ..exceptions import DataFileError, ParameterError
+from ..model.basis import Basis, as_basis, polynomial_basis
+from ..model.params import ThetaLayout
+from ..model.system import HammersteinWiener
 
 __all__ = ["save_model", "load_model", "load_result", "FORMAT_VERSION"]
 
@@ -140,7 +140,7 @@ def result_to_dict(result) -> dict:
 
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     """Inverse of :func:`result_to_dict`."""
-    from .results import IdentificationResult
+    from ..results import IdentificationResult
 
     _check_header(d, "fohw-result", path)
     try:

@@ -23,9 +23,9 @@ import warnings
 
 import numpy as np
 
-from .datasets import paper_example
-from .driver import identify
-from .exceptions import ConvergenceWarning, SimulationDivergedError
+from ..datasets import paper_example
+from ..estimators.hybrid import identify
+from ..exceptions import ConvergenceWarning, SimulationDivergedError
 
 __all__ = ["monte_carlo", "summarise"]
 

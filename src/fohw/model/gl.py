@@ -17,8 +17,8 @@ import functools
 import numpy as np
 import scipy.fft
 
-from ._validation import check_array, check_int, check_scalar
-from .exceptions import DimensionError
+from .._validation import check_array, check_int, check_scalar
+from ..exceptions import DimensionError
 
 __all__ = ["gl_weights", "gl_weights_derivative", "gl_difference"]
 

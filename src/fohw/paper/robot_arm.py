@@ -31,9 +31,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
-from fohw.baselines import fit_linear_output_error  # noqa: E402
-from fohw.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test  # noqa: E402
-from fohw.reproduction import paper_table2  # noqa: E402
+from fohw.analysis.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test  # noqa: E402
+from fohw.estimators.baselines import fit_linear_output_error  # noqa: E402
+from fohw.paper.reproduction import paper_table2  # noqa: E402
 
 N_INIT = 20          # start-up samples excluded from every error measure
 

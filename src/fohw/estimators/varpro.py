@@ -44,7 +44,7 @@ def profile_theta(Phi, y):
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.varpro import profile_theta
+    >>> from fohw.estimators.varpro import profile_theta
     >>> theta, rss = profile_theta(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]),
     ...                            np.array([1.0, 2.0, 3.0]))
     >>> theta.round(12), round(rss, 12)

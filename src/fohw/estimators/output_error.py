@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-from .exceptions import SimulationDivergedError
-from .system import simulate_theta
+from ..exceptions import SimulationDivergedError
+from ..model.system import simulate_theta
 from .varpro import parameter_covariance
 
 __all__ = ["fit_output_error"]

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import check_alpha, check_array, check_random_state, check_scalar
+from .._validation import check_alpha, check_array, check_random_state, check_scalar
+from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .basis import Basis, as_basis, polynomial_basis
-from .exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .gl import gl_difference, gl_weights
 from .params import ThetaLayout
 
@@ -164,7 +164,7 @@ class HammersteinWiener:
 
     def to_json(self, path):
         """Write the model to a versioned JSON file (:func:`fohw.save_model`)."""
-        from .io import save_model
+        from ..io.jsonio import save_model
 
         save_model(self, path)
 

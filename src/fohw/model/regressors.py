@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
-from ._validation import check_array, check_int, check_same_length, check_scalar
+from .._validation import check_array, check_int, check_same_length, check_scalar
+from ..exceptions import DimensionError
 from .basis import as_basis
-from .exceptions import DimensionError
 from .gl import _DIRECT_MAX_LENGTH, _convolve_weights, gl_weights, gl_weights_derivative
 from .params import ThetaLayout
 

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import BaseEstimator, check_is_fitted
-from ._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from .basis import as_basis
-from .gl import _weights, gl_weights_derivative
-from .params import ThetaLayout
-from .regressors import WindowKernel
+from .._base import BaseEstimator, check_is_fitted
+from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
+from ..model.basis import as_basis
+from ..model.gl import _weights, gl_weights_derivative
+from ..model.params import ThetaLayout
+from ..model.regressors import WindowKernel
 
 __all__ = ["MultiInnovationRLS"]
 
@@ -196,7 +196,7 @@ class MultiInnovationRLS(BaseEstimator):
     def predict(self, u, y):
         """One-step-ahead prediction of a record with the current estimates (Eq. 19)."""
         check_is_fitted(self, "theta_")
-        from .regressors import RegressorBuilder
+        from ..model.regressors import RegressorBuilder
 
         builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
                                    g_basis=self.g_basis)

@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
-from fohw.montecarlo import summarise  # noqa: E402
+from fohw.analysis.montecarlo import summarise  # noqa: E402
 
 
 def cube(x):

@@ -1,0 +1,7 @@
+"""What a fractional-order Hammerstein–Wiener system is (paper Sections 2.1–2.3).
+
+GL weights and differences (:mod:`~fohw.model.gl`), basis functions of the static
+nonlinearities (:mod:`~fohw.model.basis`), the parameter layout (:mod:`~fohw.model.params`),
+the model and its simulator (:mod:`~fohw.model.system`) and the information matrix
+(:mod:`~fohw.model.regressors`). Nothing in here estimates anything.
+"""
