@@ -10,7 +10,8 @@ from . import datasets
 from .analysis import metrics
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
-from .estimators.hybrid import HybridIdentifier, identify
+from .estimators.hybrid import HybridIdentifier
+from .estimators.identify import identify
 from .estimators.migd import MultiInnovationGradient
 from .estimators.rls import MultiInnovationRLS
 from .exceptions import (
@@ -42,14 +43,14 @@ def _keep_old_module_paths():
     import sys
 
     from .analysis import crb, montecarlo
-    from .estimators import baselines, hybrid, migd, milm, output_error, rls, varpro
+    from .estimators import baselines, migd, milm, output_error, rls, varpro
     from .io import cli
     from .model import basis, gl, params, regressors, system
     from .paper import reproduction
 
     moved = dict(gl=gl, basis=basis, params=params, system=system, regressors=regressors,
                  migd=migd, milm=milm, varpro=varpro, output_error=output_error, rls=rls,
-                 baselines=baselines, driver=hybrid, crb=crb, metrics=metrics,
+                 baselines=baselines, crb=crb, metrics=metrics,
                  montecarlo=montecarlo, reproduction=reproduction, cli=cli)
     for old, module in moved.items():
         sys.modules.setdefault(f"{__name__}.{old}", module)

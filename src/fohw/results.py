@@ -325,3 +325,15 @@ class IdentificationResult:
         axes[2].set_xlabel("iteration m")
         fig.tight_layout()
         return fig, axes
+
+
+def recover_model(builder, theta, alpha):
+    """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
+    from .exceptions import ParameterError
+
+    try:
+        return HammersteinWiener.from_theta(theta, alpha, na=builder.layout.na,
+                                            nb=builder.layout.nb, f_basis=builder.f_basis,
+                                            g_basis=builder.g_basis), ""
+    except ParameterError as exc:
+        return None, f" No model: {exc}"

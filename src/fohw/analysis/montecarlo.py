@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 
 from ..datasets import paper_example
-from ..estimators.hybrid import identify
+from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, SimulationDivergedError
 
 __all__ = ["monte_carlo", "summarise"]

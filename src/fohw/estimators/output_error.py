@@ -16,14 +16,17 @@ unstable starting model is first made stable by shrinking its output-feedback bl
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.optimize
 
-from ..exceptions import SimulationDivergedError
+from .._validation import check_scalar
+from ..exceptions import ConvergenceWarning, ParameterError, SimulationDivergedError
 from ..model.system import simulate_theta
-from .varpro import parameter_covariance
+from ..results import IdentificationResult, recover_model
+from .varpro import parameter_covariance, separable_least_squares
 
 __all__ = ["fit_output_error"]
 
@@ -105,3 +108,48 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
                   converged=ls.status > 0,
                   message=f"output-error fit: {ls.message} ({ls.nfev} simulations)",
                   covariance=cov, noise_variance=s2, nfev=int(ls.nfev))
+
+
+def output_error_result(builder, bounds, n_grid, n_init, start, max_nfev):
+    """Equation-error start (varpro) or a given one, then the simulation-error fit."""
+    if start is None:
+        vp = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
+        theta0, alpha0, origin = vp.theta, vp.alpha, "the varpro estimate"
+        J0 = vp.rss / builder.n_samples
+    else:
+        if isinstance(start, IdentificationResult):
+            theta0, alpha0 = start.theta, start.alpha
+        else:
+            try:
+                theta0, alpha0 = start
+            except (TypeError, ValueError):
+                raise ParameterError("`start` must be an IdentificationResult or a pair "
+                                     f"(theta, alpha); got {start!r}.") from None
+        theta0 = builder.layout.check_theta(theta0, "start theta")
+        alpha0 = check_scalar(alpha0, "start alpha", lower=bounds.lo, upper=bounds.hi)
+        origin = "the given start"
+        J0 = float(np.mean((builder.y - builder.matrix(alpha0) @ theta0) ** 2))
+    fit = fit_output_error(builder.u, builder.y, layout=builder.layout, f_basis=builder.f_basis,
+                           g_basis=builder.g_basis, theta0=theta0, alpha0=alpha0,
+                           bounds=(bounds.lo, bounds.hi), n_init=n_init, max_nfev=max_nfev)
+    message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
+    message += (f" Started from {origin} (alpha = {alpha0:.6g})"
+                + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "
+                   "stable." if fit.start_shrink < 1 else "."))
+    message += f" Simulation error criterion from sample {n_init} on."
+    if not fit.converged:
+        warnings.warn(f"fohw.identify('output_error'): {message}", ConvergenceWarning,
+                      stacklevel=3)
+    model, note = recover_model(builder, fit.theta, fit.alpha)
+    message += note
+    J = float(np.mean((builder.y - builder.matrix(fit.alpha) @ fit.theta) ** 2))
+    return IdentificationResult(
+        method="output_error", schedule="", alpha=fit.alpha, theta=fit.theta, model=model, J=J,
+        n_iter=fit.nfev, converged=fit.converged, message=message,
+        alpha_at_bound=not (bounds.lo < fit.alpha < bounds.hi), theta_history=None,
+        alpha_sample_history=None, alpha_history=np.array([alpha0, fit.alpha]),
+        J_history=np.array([J0, J]), layout=builder.layout,
+        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=builder.n_samples,
+        options=dict(alpha_bounds=(bounds.lo, bounds.hi), n_grid=n_grid, n_init=n_init,
+                     simulation_sse=fit.sse),
+        covariance=fit.covariance, noise_variance=fit.noise_variance)

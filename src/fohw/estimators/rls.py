@@ -14,14 +14,18 @@ estimator streams: ``partial_fit`` on consecutive chunks gives exactly the estim
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .._base import BaseEstimator, check_is_fitted
 from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
+from ..exceptions import ConvergenceWarning
 from ..model.basis import as_basis
 from ..model.gl import _weights, gl_weights_derivative
 from ..model.params import ThetaLayout
 from ..model.regressors import WindowKernel
+from ..results import IdentificationResult, recover_model
 
 __all__ = ["MultiInnovationRLS"]
 
@@ -201,3 +205,26 @@ class MultiInnovationRLS(BaseEstimator):
         builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
                                    g_basis=self.g_basis)
         return builder.matrix(self.alpha_) @ self.theta_
+
+
+def rls_result(builder, P, forgetting, alpha0, bounds, p0, u, y):
+    """One pass of MultiInnovationRLS wrapped as an IdentificationResult."""
+    est = MultiInnovationRLS(builder.layout.na, builder.layout.nb, builder.f_basis,
+                             builder.g_basis, innovation_length=P, forgetting=forgetting,
+                             alpha0=alpha0, alpha_bounds=(bounds.lo, bounds.hi), p0=p0).fit(u, y)
+    J = float(np.mean((y - builder.matrix(est.alpha_) @ est.theta_) ** 2))
+    message = ("one pass only (max_iter=1): convergence of J was not tested; a recursive "
+               "estimator's final value is its estimate.")
+    warnings.warn(f"fohw.identify('rls'): {message}", ConvergenceWarning, stacklevel=3)
+    if est.alpha_at_bound_:
+        message += " Alpha was held at a bound at least once."
+    model, note = recover_model(builder, est.theta_, est.alpha_)
+    message += note
+    return IdentificationResult(
+        method="rls", schedule="recursive", alpha=est.alpha_, theta=est.theta_, model=model, J=J,
+        n_iter=1, converged=False, message=message, alpha_at_bound=est.alpha_at_bound_,
+        theta_history=est.theta_history_, alpha_sample_history=est.alpha_history_,
+        alpha_history=np.array([est.alpha_]), J_history=np.array([J]), layout=builder.layout,
+        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=builder.n_samples,
+        options=dict(innovation_length=P, forgetting=forgetting, alpha0=alpha0,
+                     alpha_bounds=(bounds.lo, bounds.hi), p0=p0))

@@ -18,11 +18,15 @@ bound (:func:`fohw.crb`).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 import scipy.optimize
+
+from ..exceptions import ConvergenceWarning
+from ..results import IdentificationResult, recover_model
 
 __all__ = ["profile_theta", "separable_least_squares", "parameter_covariance"]
 
@@ -205,3 +209,26 @@ def separable_least_squares(builder, *, bounds, n_grid=41, xtol=1e-10, polish=Tr
     return _VarproFit(theta=theta, alpha=alpha, rss=rss, grid=grid, grid_J=grid_J,
                       search_alphas=search_alphas, search_J=search_J, converged=converged,
                       message=message, covariance=cov, noise_variance=s2)
+
+
+def varpro_result(builder, bounds, n_grid, options):
+    """Run separable least squares and wrap it as an IdentificationResult."""
+    fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
+    message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
+    margin = 1e-6 * (bounds.hi - bounds.lo)
+    at_bound = not (bounds.lo + margin < fit.alpha < bounds.hi - margin)
+    if at_bound:
+        message += (f" The estimate of alpha is at the edge of alpha_bounds = "
+                    f"{(bounds.lo, bounds.hi)}: widen the bounds.")
+    if not fit.converged:
+        warnings.warn(f"fohw.identify('varpro'): {message}", ConvergenceWarning, stacklevel=3)
+    model, note = recover_model(builder, fit.theta, fit.alpha)
+    message += note
+    return IdentificationResult(
+        method="varpro", schedule="", alpha=fit.alpha, theta=fit.theta, model=model,
+        J=fit.rss / builder.n_samples, n_iter=len(fit.search_alphas), converged=fit.converged,
+        message=message, alpha_at_bound=at_bound, theta_history=None, alpha_sample_history=None,
+        alpha_history=np.array(fit.search_alphas), J_history=np.array(fit.search_J),
+        layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
+        n_samples=builder.n_samples, options=options, covariance=fit.covariance,
+        noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))

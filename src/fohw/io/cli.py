@@ -97,7 +97,7 @@ def _pair_arg(text):
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
-    from ..estimators.hybrid import METHODS, SCHEDULES
+    from ..estimators.identify import METHODS, SCHEDULES
 
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")

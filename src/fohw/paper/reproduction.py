@@ -16,7 +16,7 @@ from importlib import resources
 import numpy as np
 
 from ..datasets import SimulatedData, paper_example
-from ..estimators.hybrid import identify
+from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning
 from ..results import IdentificationResult
 
