@@ -112,8 +112,7 @@ class MultiInnovationRLS(BaseEstimator):
         n = self._layout.n_params
         d = n + 1 if self.estimate_alpha else n
         self._kernel = WindowKernel([na] * len(self._g) + [nb] * len(self._f))
-        self._pad = self._kernel.min_pad(self._P)
-        self._signals = np.zeros((len(self._g) + len(self._f), self._pad + 1024))
+        self._signals = np.zeros((len(self._g) + len(self._f), 1024))
         self._y = np.zeros(1024)
         self._x = np.zeros(d)
         self._x[n:] = alpha
@@ -147,7 +146,7 @@ class MultiInnovationRLS(BaseEstimator):
             self._initialise()
         k0 = self.n_samples_seen_
         m = y.shape[0]
-        need = self._pad + k0 + m
+        need = k0 + m
         if need > self._signals.shape[1]:
             grown = np.zeros((self._signals.shape[0], max(need, 2 * self._signals.shape[1])))
             grown[:, :self._signals.shape[1]] = self._signals
@@ -155,7 +154,7 @@ class MultiInnovationRLS(BaseEstimator):
             ygrown = np.zeros(grown.shape[1])
             ygrown[:self._y.shape[0]] = self._y
             self._y = ygrown
-        self._signals[:, self._pad + k0:self._pad + k0 + m] = np.vstack(
+        self._signals[:, k0:k0 + m] = np.vstack(
             [self._g.evaluate(y, "y"), self._f.evaluate(u, "u")])
         self._y[k0:k0 + m] = y
         n = self._layout.n_params
@@ -177,7 +176,7 @@ class MultiInnovationRLS(BaseEstimator):
         weights = [_weights(alpha, length)]
         if self.estimate_alpha:
             weights.append(gl_weights_derivative(alpha, length))
-        wins = self._kernel.rows(self._signals, self._pad, k, self._P, weights)
+        wins = self._kernel.rows(self._signals, k, self._P, weights)
         phi = wins[0]
         rows = phi.shape[0]
         yw = self._y[k - rows + 1:k + 1][::-1]

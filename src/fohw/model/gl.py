@@ -12,8 +12,6 @@ short signals and short memories use the direct sum.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 import scipy.fft
 
@@ -59,17 +57,11 @@ def gl_weights(alpha, n):
     return _weights(check_scalar(alpha, "alpha"), check_int(n, "n", minimum=1))
 
 
-_J = np.arange(1, 2, dtype=np.float64)
-
-
 def _weights(alpha, n):
     """:func:`gl_weights` without validation (for per-sample loops)."""
-    global _J
-    if _J.shape[0] < n - 1:
-        _J = np.arange(1, max(n, 2 * _J.shape[0]), dtype=np.float64)
     beta = np.empty(n)
     beta[0] = 1.0
-    np.cumprod(1.0 - (alpha + 1.0) / _J[: n - 1], out=beta[1:])
+    np.cumprod(1.0 - (alpha + 1.0) / np.arange(1.0, n), out=beta[1:])
     return beta
 
 
@@ -129,36 +121,77 @@ def _use_direct(n, m):
     return m <= _DIRECT_MAX_MEMORY or n <= _DIRECT_MAX_LENGTH
 
 
-def _fft_size(n, m):
-    return scipy.fft.next_fast_len(n + m - 1, real=True)
+def _direct(x, weights):
+    """``out[..., t] = sum_j weights[j] x[..., t - j]`` by shifted sums (short memories)."""
+    out = weights[0] * x
+    for j in range(1, weights.shape[0]):
+        out[..., j:] += weights[j] * x[..., :-j]
+    return out
 
 
-def _fft_convolve(x, spectrum, n, nfft):
-    """Linear convolution through a zero-padded rfft of size ``nfft``, cut to ``n`` samples."""
-    xf = scipy.fft.rfft(x, n=nfft, axis=-1)
-    xf *= spectrum
-    return scipy.fft.irfft(xf, n=nfft, axis=-1, overwrite_x=True)[..., :n]
+class CausalConvolution:
+    """The one GL convolution kernel: ``D[..., t] = sum_{j=0}^{t} w[j] x[..., t - j]``.
+
+    A *linear* (zero-padded, never circular) convolution of fixed signals ``x`` (along the last
+    axis, zero before ``t = 0``) with any number of weight vectors, cut to the length ``N`` of
+    ``x``. Long signals are transformed once (real FFT of size at least ``N + L - 1``) and each
+    weight vector then costs one forward and one inverse transform; short signals and short
+    memories use shifted sums. :meth:`at` evaluates a few consecutive samples only, by sums of
+    products that stay out of the (multithreaded) BLAS path, for recursions that rebuild the
+    latest samples at every step.
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., N)
+        Signals, float64. Not copied; do not modify them while the object is in use.
+    memory : int, optional
+        Longest weight vector that will be used (default ``N``: full memory).
+    """
+
+    def __init__(self, x, memory=None):
+        self.x = x
+        self.n = x.shape[-1]
+        self.memory = self.n if memory is None else min(int(memory), self.n)
+        self.direct = _use_direct(self.n, self.memory)
+        self._spectrum = None
+
+    def _nfft(self):
+        return scipy.fft.next_fast_len(self.n + self.memory - 1, real=True)
+
+    def __call__(self, weights, *, weights_spectrum=None):
+        """Convolve with ``weights`` (at most ``memory`` of them); shape of ``x``."""
+        if self.direct:
+            return _direct(self.x, weights)
+        nfft = self._nfft()
+        if self._spectrum is None:
+            self._spectrum = scipy.fft.rfft(self.x, n=nfft, axis=-1)
+        if weights_spectrum is None:
+            weights_spectrum = scipy.fft.rfft(weights, n=nfft)
+        return scipy.fft.irfft(self._spectrum * weights_spectrum, n=nfft, axis=-1)[..., :self.n]
+
+    def at(self, weights, t_lo, t_hi):
+        """Samples ``t_lo..t_hi`` of the convolution (:func:`convolution_at`)."""
+        return convolution_at(self.x, weights, t_lo, t_hi)
 
 
-def _convolve_weights(x, weights):
-    """Causal convolution of ``x`` (last axis) with ``weights``, cut to ``x.shape[-1]``."""
-    n = x.shape[-1]
-    m = weights.shape[0]
-    if _use_direct(n, m):
-        out = weights[0] * x
-        for j in range(1, m):
-            out[..., j:] += weights[j] * x[..., :-j]
-        return out
-    nfft = _fft_size(n, m)
-    return _fft_convolve(x, scipy.fft.rfft(weights, n=nfft), n, nfft)
+def convolution_at(x, weights, t_lo, t_hi):
+    """Samples ``t_lo..t_hi`` (inclusive) of :class:`CausalConvolution` of ``x`` and ``weights``.
+
+    ``x`` needs samples ``0..t_hi`` along its last axis and ``weights`` at least ``t_hi + 1``
+    entries; samples with ``t < 0`` are zero. Each sample is one sum of products over the whole
+    past (``np.einsum``, never BLAS), so a recursion that rebuilds its latest samples at every
+    step runs at the same speed whatever the machine's BLAS threading.
+    """
+    out = np.zeros(x.shape[:-1] + (t_hi - t_lo + 1,))
+    w_rev = np.ascontiguousarray(weights[:t_hi + 1][::-1])   # contiguous: SIMD sums
+    for t in range(max(t_lo, 0), t_hi + 1):
+        out[..., t - t_lo] = np.einsum("...j,j->...", x[..., :t + 1], w_rev[t_hi - t:])
+    return out
 
 
-@functools.lru_cache(maxsize=4)
-def _weight_spectrum(alpha, m, nfft):
-    """Rfft of the first ``m`` GL weights, zero-padded to ``nfft`` (cached: repeated orders)."""
-    spec = scipy.fft.rfft(gl_weights(alpha, m), n=nfft)
-    spec.setflags(write=False)
-    return spec
+def causal_convolve(x, weights):
+    """``sum_{j=0}^{t} weights[j] x[..., t - j]`` along the last axis, cut to ``x.shape[-1]``."""
+    return CausalConvolution(x, memory=weights.shape[0])(weights)
 
 
 def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
@@ -196,10 +229,9 @@ def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
     -----
     Eq. (4) of the paper (Eq. (5) for ``h = 1``). The sum is a linear convolution computed by
     a real FFT zero-padded to at least ``N + L - 1`` points, so no sample wraps around; short
-    signals (``N <= 160``) and short memories (``L <= 48``) use the direct sum instead. The
-    spectra of the weights for the last few ``(alpha, L, FFT size)`` are cached, so repeated
-    calls with the same order (batches, regressor builds) skip one of the three transforms.
-    The result agrees with the direct sum to about ``1e-12 * max|x|`` at ``N = 10**6``.
+    signals (``N <= 160``) and short memories (``L <= 48``) use the direct sum instead
+    (:class:`CausalConvolution`, the one kernel every part of fohw uses). The result agrees
+    with the direct sum to about ``1e-12 * max|x|`` at ``N = 10**6``.
 
     Examples
     --------
@@ -223,11 +255,7 @@ def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
     else:
         m = min(check_int(memory, "memory", minimum=1), n)
     xt = np.moveaxis(x, axis, -1)
-    if _use_direct(n, m):
-        out = _convolve_weights(xt, gl_weights(alpha, m))
-    else:
-        nfft = _fft_size(n, m)
-        out = _fft_convolve(xt, _weight_spectrum(alpha, m, nfft), n, nfft)
+    out = causal_convolve(xt, _weights(alpha, m))
     if h != 1.0:
         out *= h ** (-alpha)
     return np.moveaxis(out, -1, axis)

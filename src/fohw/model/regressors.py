@@ -12,19 +12,18 @@ so that ``y = Phi @ theta + v`` for a simulated record.
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError
 from .basis import as_basis
-from .gl import _DIRECT_MAX_LENGTH, _convolve_weights, gl_weights, gl_weights_derivative
+from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative
 from .params import ThetaLayout
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
 
 
 class WindowKernel:
-    """Exact information-vector rows of a window from zero-padded basis signals.
+    """Exact information-vector rows of a window, from the basis signals up to the present.
 
     Parameters
     ----------
@@ -40,30 +39,20 @@ class WindowKernel:
         self._sig_idx = np.repeat(np.arange(len(self.lags)), self.lags)
         self._lag_idx = np.concatenate([np.arange(1, m + 1) for m in self.lags])
 
-    def min_pad(self, innovation_length):
-        """Zeros needed before ``k = 0`` in the padded signals for windows of this length."""
-        return innovation_length + self.max_lag
-
-    def rows(self, padded, pad, k, innovation_length, weights):
+    def rows(self, signals, k, innovation_length, weights):
         """Rows ``phi[k], …, phi[k-P+1]`` (index >= 0) for each weight vector.
 
-        ``padded[:, pad + t]`` is the basis signals at time ``t`` (zeros for ``t < 0``), with
-        ``pad >= min_pad(P)`` and samples up to ``k - 1`` present.
+        ``signals[:, t]`` holds the basis signals at time ``t``, for at least ``t = 0..k-1``;
+        each weight vector has at least ``k`` entries. The GL sums are evaluated by
+        :func:`fohw.model.gl.convolution_at` (the whole past, no FFT).
         """
         n_rows = min(innovation_length, k + 1)
         if k == 0:
             return [np.zeros((1, self.n_params)) for _ in weights]
         rows = np.arange(k, k - n_rows, -1)
         t_lo = k - n_rows + 1 - self.max_lag          # earliest time a row needs
-        t_hi = k - 1                                   # latest time a row needs
-        length = k                                     # weights beta[0..t_hi]
-        segment = padded[:, pad + t_lo - length + 1:pad + t_hi + 1]
         index = (self._sig_idx[None, :], rows[:, None] - self._lag_idx[None, :] - t_lo)
-        out = []
-        for w in weights:
-            d = np.array([np.convolve(seg, w[:length], mode="valid") for seg in segment])
-            out.append(d[index])
-        return out
+        return [convolution_at(signals, w, t_lo, k - 1)[index] for w in weights]
 
 
 class RegressorBuilder:
@@ -110,11 +99,8 @@ class RegressorBuilder:
         # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
         self.signals = np.vstack([self.g_basis.evaluate(y, "y"), self.f_basis.evaluate(u, "u")])
         self._lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
-        if n > _DIRECT_MAX_LENGTH:
-            self._nfft = scipy.fft.next_fast_len(2 * n - 1, real=True)
-            self._spectra = scipy.fft.rfft(self.signals, n=self._nfft, axis=-1)
-        else:
-            self._nfft = None
+        self._convolution = CausalConvolution(self.signals)
+        self._window_kernel = WindowKernel(self._lags)
 
     def differences(self, alpha, *, derivative=False):
         """GL differences of all basis signals, shape ``(n_g + n_f, N)``.
@@ -125,10 +111,7 @@ class RegressorBuilder:
         alpha = check_scalar(alpha, "alpha")
         n = self.n_samples
         w = gl_weights_derivative(alpha, n) if derivative else gl_weights(alpha, n)
-        if self._nfft is None:
-            return _convolve_weights(self.signals.copy(), w)
-        wf = scipy.fft.rfft(w, n=self._nfft)
-        return scipy.fft.irfft(self._spectra * wf, n=self._nfft, axis=-1)[:, :n]
+        return self._convolution(w)
 
     def window(self, k, innovation_length, weights):
         """Rows ``phi[k], phi[k-1], …, phi[k-P+1]`` (those with index >= 0), for given weights.
@@ -151,12 +134,7 @@ class RegressorBuilder:
         rows : list of ndarray, each of shape (min(P, k + 1), n)
             One window per weight vector.
         """
-        if not hasattr(self, "_padded"):
-            self._kernel = WindowKernel(self._lags)
-            self._pad = self.n_samples + self._kernel.max_lag
-            self._padded = np.concatenate([np.zeros((self.signals.shape[0], self._pad)),
-                                           self.signals], axis=1)
-        return self._kernel.rows(self._padded, self._pad, k, innovation_length, weights)
+        return self._window_kernel.rows(self.signals, k, innovation_length, weights)
 
     def lag(self, differences):
         """Arrange stacked differences into the ``(N, n)`` matrix of lagged columns."""
@@ -176,6 +154,24 @@ class RegressorBuilder:
     def matrix_derivative(self, alpha):
         """Exact ``d Phi / d alpha``, shape ``(N, n)``."""
         return self.lag(self.differences(alpha, derivative=True))
+
+    def jacobian(self, theta, alpha):
+        """Jacobian ``G = [Phi(alpha), dPhi/dalpha @ theta]`` of the one-step predictor.
+
+        The derivative of ``yhat = Phi(alpha) theta`` with respect to ``(theta, alpha)``, built
+        in one ``N x (n + 1)`` array; the estimators' Gauss–Newton steps, their covariances and
+        the Cramér–Rao bound all use it.
+
+        Returns
+        -------
+        G : ndarray, shape (N, n + 1)
+        """
+        theta = self.layout.check_theta(theta)
+        n = theta.shape[0]
+        G = np.empty((self.n_samples, n + 1))
+        G[:, :n] = self.matrix(alpha)
+        G[:, n] = self.matrix_derivative(alpha) @ theta
+        return G
 
 
 def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis):

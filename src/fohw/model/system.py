@@ -16,7 +16,7 @@ import numpy as np
 from .._validation import check_alpha, check_array, check_random_state, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .basis import Basis, as_basis, polynomial_basis
-from .gl import gl_difference, gl_weights
+from .gl import causal_convolve, gl_difference, gl_weights
 from .params import ThetaLayout
 
 __all__ = ["HammersteinWiener", "simulate", "simulate_theta", "ALPHA_BOUNDS"]
@@ -236,8 +236,6 @@ def _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf
     """
     import math
 
-    import scipy.signal
-
     n = u.shape[0]
     R = Q.shape[1]
     w, beta, zfun, terms = _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v)
@@ -278,9 +276,9 @@ def _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf
             return
         mid = (lo + hi) // 2
         solve(lo, mid)
-        # dz[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi)
-        full = scipy.signal.fftconvolve(z[:, lo:mid], beta[None, : hi - lo], axes=-1)
-        dz[:, mid:hi] += full[:, mid - lo:hi - lo]
+        # dz[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi); z[mid:hi] is
+        # still zero, so this is the causal convolution of z[lo:hi].
+        dz[:, mid:hi] += causal_convolve(z[:, lo:hi], beta[:hi - lo])[:, mid - lo:]
         solve(mid, hi)
 
     with np.errstate(over="ignore", invalid="ignore"):
