@@ -29,7 +29,8 @@ print("max |y - Phi theta - v| =", np.abs(y - Phi @ model.theta - v).max())
 #    test convergence, and (docs/reproduction.md) it stays far from the truth.
 with warnings.catch_warnings():
     warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-    hybrid = fohw.identify(u, y, na=2, nb=2, f_basis=2, g_basis=3, innovation_length=5)
+    hybrid = fohw.identify(u, y, na=2, nb=2, f_basis=2, g_basis=3, method="hybrid",
+                           innovation_length=5)
 print("hybrid: alpha = %.3f, delta = %.3f" % (hybrid.alpha, hybrid.relative_error(model.theta)))
 
 # 4. Separable least squares: reaches the Cramér-Rao bound and reports its uncertainty.

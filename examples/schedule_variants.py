@@ -47,8 +47,9 @@ def run(kind, opts, data):
     else:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-            res = fohw.identify(data.u, data.y, innovation_length=opts.pop("innovation_length", 5),
-                                **STRUCT, **opts)
+            res = fohw.identify(data.u, data.y, method="hybrid",
+                                innovation_length=opts.pop("innovation_length", 5), **STRUCT,
+                                **opts)
         theta, alpha, n_iter, conv, J = res.theta, res.alpha, res.n_iter, res.converged, res.J
     delta = np.linalg.norm(theta - data.model.theta) / np.linalg.norm(data.model.theta)
     return dict(delta=delta, alpha=alpha, J=J, n_iter=n_iter, converged=conv,

@@ -44,9 +44,9 @@ API = [
      fohw.ParameterError, "`h` must be in (0, inf]"),
     ("gl_weights", "n is a float", lambda t: fohw.gl_weights(0.5, 3.0),
      fohw.ParameterError, "`n` must be an integer"),
-    ("HammersteinWiener", "alpha outside (0, 2)",
+    ("HammersteinWiener", "alpha outside [0, 2]",
      lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 2.7),
-     fohw.ParameterError, "`alpha` must be in (0, 2); got 2.7"),
+     fohw.ParameterError, "`alpha` must be in [0, 2]; got 2.7"),
     ("HammersteinWiener", "p[0] != 1", lambda t: fohw.HammersteinWiener([0.1], [1.0], [2.0], [1.0], 0.5),
      fohw.ParameterError, "`p[0]` must be exactly 1"),
     ("HammersteinWiener", "q longer than g_basis",
@@ -73,12 +73,28 @@ API = [
     ("information_matrix", "na < 1", lambda t: fohw.information_matrix(U, Y, 0.5, **{**S, "na": 0}),
      fohw.ParameterError, "`na` must be at least 1; got 0"),
     ("identify", "innovation_length longer than the record",
-     lambda t: fohw.identify(U, Y, innovation_length=51, **S),
-     fohw.DimensionError, "`innovation_length` must not exceed the record length 50"),
-    ("identify", "tol <= 0", lambda t: fohw.identify(U, Y, tol=0.0, **S),
+     lambda t: fohw.identify(U, Y, method="hybrid", innovation_length=51, **S),
+     fohw.ParameterError, "`innovation_length` must be at most 50; got 51"),
+    ("identify", "tol <= 0", lambda t: fohw.identify(U, Y, method="hybrid", tol=0.0, **S),
      fohw.ParameterError, "`tol` must be in (0, inf]; got 0.0"),
-    ("identify", "alpha0 outside alpha_bounds", lambda t: fohw.identify(U, Y, alpha0=1.5, **S),
+    ("identify", "alpha0 outside alpha_bounds",
+     lambda t: fohw.identify(U, Y, method="hybrid", alpha0=1.5, **S),
      fohw.ParameterError, "`alpha0` must be in (0, 1); got 1.5"),
+    ("identify", "an option the method does not have",
+     lambda t: fohw.identify(U, Y, method="varpro", innovation_length=3, **S),
+     fohw.ParameterError, "method 'varpro' has no option `innovation_length`"),
+    ("identify", "an option renamed since fohw 0.1",
+     lambda t: fohw.identify(U, Y, method="output_error", max_iter=3, **S),
+     fohw.ParameterError, "the option `max_iter` is now called `max_nfev`"),
+    ("identify", "an option given twice",
+     lambda t: fohw.identify(U, Y, method="hybrid", tol=1e-3, options={"tol": 1e-2}, **S),
+     fohw.ParameterError, "given both as keywords and in `options`"),
+    ("HybridIdentifier", "another method asked of it",
+     lambda t: fohw.HybridIdentifier(method="varpro", **S),
+     fohw.ParameterError, "fohw.identify(u, y, method=...)"),
+    ("MultiInnovationRLS", "a parameter renamed since fohw 0.1",
+     lambda t: fohw.MultiInnovationRLS(p0=1e3, **S),
+     fohw.ParameterError, "now called `initial_covariance`"),
     ("identify", "unknown method", lambda t: fohw.identify(U, Y, method="newton", **S),
      fohw.ParameterError, "`method` must be one of"),
     ("identify", "alpha_bounds reversed", lambda t: fohw.identify(U, Y, alpha_bounds=(0.9, 0.1), **S),
@@ -140,7 +156,8 @@ def _hybrid():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        return fohw.identify(U, Y + 0.01 * U, **S)
+        d = fohw.datasets.paper_example(300, random_state=0)
+        return fohw.identify(d.u, d.y, method="hybrid", **S)
 
 
 @pytest.mark.parametrize("where, what, call, exc, text", API, ids=[f"{w}: {x}" for w, x, *_ in API])

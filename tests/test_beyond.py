@@ -124,7 +124,7 @@ def test_standard_errors_and_summary():
         res.confidence_intervals(1.5)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        hybrid = fohw.identify(d.u[:300], d.y[:300], **STRUCT)
+        hybrid = fohw.identify(d.u[:300], d.y[:300], method="hybrid", **STRUCT)
     with pytest.raises(ValueError, match="only defined at a least-squares optimum"):
         hybrid.standard_errors()
 
@@ -153,7 +153,8 @@ def test_crb_agrees_with_the_estimated_covariance():
 
 
 def test_monte_carlo_rows_and_parallel_equals_serial(monkeypatch):
-    methods = {"varpro": {"method": "varpro"}, "hybrid P=1": {"innovation_length": 1}}
+    methods = {"varpro": {"method": "varpro"},
+               "hybrid P=1": {"method": "hybrid", "innovation_length": 1}}
     kw = dict(seeds=range(3), settings=[{"n_samples": 400}, {"n_samples": 800}], progress=False)
     serial = fohw.monte_carlo(methods, n_jobs=1, **kw)
     assert len(serial) == 2 * 3 * 2
@@ -199,11 +200,12 @@ def test_partial_fit_equals_fit(P, chunks):
 
 def test_rls_with_fixed_alpha_is_least_squares():
     d = fohw.datasets.paper_example(3000, random_state=4)
-    rls = fohw.MultiInnovationRLS(estimate_alpha=False, alpha0=0.6, p0=1e8, **STRUCT)
+    rls = fohw.MultiInnovationRLS(estimate_alpha=False, alpha0=0.6, initial_covariance=1e8,
+                                  **STRUCT)
     rls.fit(d.u, d.y)
     Phi = fohw.information_matrix(d.u, d.y, 0.6, **STRUCT)
     theta_ls, _ = profile_theta(Phi, d.y)
-    # RLS from S(0) = p0 I is ridge regression with penalty 1/p0 = 1e-8: equal to ~1e-6.
+    # RLS from S(0) = c I is ridge regression with penalty 1/c = 1e-8: equal to ~1e-6.
     np.testing.assert_allclose(rls.theta_, theta_ls, rtol=0, atol=1e-6)
 
 

@@ -67,8 +67,8 @@ def test_polynomial_basis_values():
     [
         (dict(p=[0.9, 0.5]), fohw.ParameterError, r"`p\[0\]` must be exactly 1"),
         (dict(q=[2.0, 0.7, 0.35]), fohw.ParameterError, r"`q\[0\]` must be exactly 1"),
-        (dict(alpha=2.7), fohw.ParameterError, r"`alpha` must be in \(0, 2\); got 2.7"),
-        (dict(alpha=0.0), fohw.ParameterError, r"`alpha` must be in \(0, 2\); got 0.0"),
+        (dict(alpha=2.7), fohw.ParameterError, r"`alpha` must be in \[0, 2\]; got 2.7"),
+        (dict(alpha=-0.1), fohw.ParameterError, r"`alpha` must be in \[0, 2\]; got -0.1"),
         (dict(alpha=np.nan), fohw.ParameterError, r"`alpha` must be finite"),
         (dict(a=[]), fohw.DimensionError, r"`a` must have at least 1"),
         (dict(b=[[1.0]]), fohw.DimensionError, r"`b` must be 1-D"),

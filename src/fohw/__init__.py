@@ -10,17 +10,26 @@ from . import datasets
 from .analysis import metrics
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
-from .estimators.hybrid import HybridIdentifier
+from .estimators.hybrid import (
+    HybridIdentifier,
+    HybridOptions,
+    SingleInnovationGradientOptions,
+    SingleInnovationLMOptions,
+)
 from .estimators.identify import identify
 from .estimators.migd import MultiInnovationGradient
-from .estimators.rls import MultiInnovationRLS
+from .estimators.output_error import OutputErrorOptions
+from .estimators.rls import MultiInnovationRLS, RlsOptions
+from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
     DataFileError,
     DimensionError,
+    EstimationDivergedError,
     FohwError,
     NotFittedError,
     ParameterError,
+    RankDeficiencyWarning,
     SimulationDivergedError,
 )
 from .io.jsonio import load_model, load_result, save_model
@@ -29,7 +38,7 @@ from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.system import HammersteinWiener, simulate, simulate_theta
-from .results import IdentificationResult
+from .results import IdentificationResult, Status
 
 __version__ = "0.1.0.dev0"
 
@@ -65,17 +74,26 @@ __all__ = [
     "ConvergenceWarning",
     "DataFileError",
     "DimensionError",
+    "EstimationDivergedError",
     "FohwError",
     "HammersteinWiener",
     "HybridIdentifier",
+    "HybridOptions",
     "IdentificationResult",
     "MultiInnovationGradient",
     "MultiInnovationRLS",
     "NotFittedError",
+    "OutputErrorOptions",
     "ParameterError",
+    "RankDeficiencyWarning",
     "RegressorBuilder",
+    "RlsOptions",
+    "SingleInnovationGradientOptions",
+    "SingleInnovationLMOptions",
     "SimulationDivergedError",
+    "Status",
     "ThetaLayout",
+    "VarproOptions",
     "as_basis",
     "crb",
     "datasets",

@@ -8,7 +8,22 @@ from .exceptions import NotFittedError
 
 
 class BaseEstimator:
-    """``get_params`` / ``set_params`` from the ``__init__`` signature; settings only in ``__init__``."""
+    """``get_params`` / ``set_params`` from the ``__init__`` signature; settings only in ``__init__``.
+
+    A subclass lists parameters renamed or removed since fohw 0.1 in ``_renamed = {old: what to
+    do instead}``; passing an old name raises a ``ParameterError`` that says it.
+    """
+
+    _renamed: dict = {}
+
+    def __new__(cls, *args, **kwargs):
+        for old in kwargs:
+            if old in cls._renamed:
+                from .exceptions import ParameterError
+
+                raise ParameterError(f"{cls.__name__} has no parameter `{old}`: "
+                                     f"{cls._renamed[old]}")
+        return super().__new__(cls)
 
     @classmethod
     def _param_names(cls):
@@ -24,6 +39,11 @@ class BaseEstimator:
         """Set settings by name; unknown names raise ``ValueError``. Returns ``self``."""
         valid = self._param_names()
         for key, value in params.items():
+            if key in self._renamed:
+                from .exceptions import ParameterError
+
+                raise ParameterError(f"{type(self).__name__} has no parameter `{key}`: "
+                                     f"{self._renamed[key]}")
             if key not in valid:
                 raise ValueError(f"invalid parameter {key!r} for {type(self).__name__}; valid "
                                  f"parameters are {valid}.")

@@ -102,7 +102,11 @@ def check_random_state(random_state) -> np.random.Generator:
 
 
 class AlphaBounds:
-    """Keeps alpha inside the open interval (lo, hi), a margin away from its ends."""
+    """The interval ``[lo, hi]`` for alpha; calling it keeps a recursive estimate a margin inside.
+
+    ``lo`` and ``hi`` may be any ``0 <= lo < hi <= 2``. The recursive methods hold alpha in
+    ``inner = (lo + m, hi - m)`` with ``m = 1e-3 (hi - lo)`` and record that they did (``hit``).
+    """
 
     def __init__(self, bounds):
         try:
@@ -119,7 +123,12 @@ class AlphaBounds:
         self.hit = False
 
     def __call__(self, alpha):
-        if alpha < self.inner[0] or alpha > self.inner[1] or not np.isfinite(alpha):
+        if not np.isfinite(alpha):
+            from .exceptions import EstimationDivergedError
+
+            raise EstimationDivergedError(f"the alpha estimate became {alpha!r}; there is no "
+                                          "estimate to hold inside `alpha_bounds`.")
+        if alpha < self.inner[0] or alpha > self.inner[1]:
             self.hit = True
-            return float(np.clip(np.nan_to_num(alpha, nan=self.inner[0]), *self.inner))
+            return float(np.clip(alpha, *self.inner))
         return alpha

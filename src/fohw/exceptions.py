@@ -13,7 +13,9 @@ __all__ = [
     "SimulationDivergedError",
     "DataFileError",
     "NotFittedError",
+    "EstimationDivergedError",
     "ConvergenceWarning",
+    "RankDeficiencyWarning",
 ]
 
 
@@ -62,5 +64,17 @@ class NotFittedError(FohwError, AttributeError):
     """An estimator was used before ``fit`` was called."""
 
 
+class EstimationDivergedError(FohwError, ArithmeticError):
+    """An estimator's iterates became non-finite (overflow), so no estimate exists."""
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative estimator stopped at ``max_iter`` before meeting its tolerance."""
+
+
+class RankDeficiencyWarning(UserWarning):
+    """The regressors (or the Jacobian) are rank deficient: some parameters are not identifiable.
+
+    The message names the columns (parameters) that are linear combinations of the others; the
+    result has ``status == Status.RANK_DEFICIENT`` and ``converged == False``.
+    """

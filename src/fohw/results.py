@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,7 +12,28 @@ from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.system import HammersteinWiener, simulate_theta
 
-__all__ = ["IdentificationResult"]
+__all__ = ["IdentificationResult", "Status"]
+
+
+class Status(enum.IntEnum):
+    """Why an identification run stopped: ``IdentificationResult.status``, one meaning for every method.
+
+    Modelled on :class:`scipy.optimize.OptimizeResult`'s ``status``; positive values are
+    successes, zero is "ran out of iterations", negative values are failures.
+    """
+
+    #: The regressors (or the Jacobian) are rank deficient at the estimate: some parameters
+    #: are not identifiable from this record; the message names them.
+    RANK_DEFICIENT = -2
+    #: The optimiser reported a failure (its message says which).
+    FAILED = -1
+    #: Stopped at the iteration or evaluation limit before meeting the tolerance.
+    MAX_ITER = 0
+    #: Met the method's convergence test.
+    CONVERGED = 1
+    #: A recursive estimator made its passes; its convergence was not tested (Table 1 makes
+    #: one pass, and a recursive estimate is whatever the last sample leaves).
+    NOT_TESTED = 2
 
 
 def _readonly(a):
@@ -41,10 +63,17 @@ class IdentificationResult:
         (an ``a_i`` or ``b_i`` exactly zero; see ``message``).
     J : float
         Eq. (41): mean squared one-step error over the record at (``theta``, ``alpha``).
-    n_iter : int
-        Outer iterations (passes over the record) performed.
-    converged : bool
-        Whether the stopping rule (relative change of ``J`` at most ``tol``) was met.
+    status : Status
+        Why the run stopped (an ``int``; see :class:`Status`).
+    nit : int
+        Iterations of the method's outer loop: passes over the record (``"hybrid"``, the
+        single-innovation baselines, ``"rls"``), or iterations of the optimiser (``"varpro"``:
+        the scalar alpha search plus the least-squares polish; ``"output_error"``: the
+        least-squares solver).
+    nfev : int
+        Evaluations of the model over the whole record: ``J`` (one per pass) for the recursive
+        methods, ``J(alpha)`` profiles and polish residuals for ``"varpro"``, free-run
+        simulations (finite-difference Jacobians included) for ``"output_error"``.
     message : str
         Why the run stopped, and anything the user must know about the estimates.
     alpha_at_bound : bool
@@ -83,8 +112,9 @@ class IdentificationResult:
     theta: np.ndarray
     model: HammersteinWiener | None
     J: float
-    n_iter: int
-    converged: bool
+    status: Status
+    nit: int
+    nfev: int
     message: str
     alpha_at_bound: bool
     theta_history: np.ndarray
@@ -101,9 +131,20 @@ class IdentificationResult:
     alpha_profile: np.ndarray | None = None
 
     def __post_init__(self):
+        object.__setattr__(self, "status", Status(self.status))
         for name in ("theta", "theta_history", "alpha_sample_history", "alpha_history",
                      "J_history", "covariance", "alpha_profile"):
             object.__setattr__(self, name, _readonly(getattr(self, name)))
+
+    @property
+    def converged(self) -> bool:
+        """``status == Status.CONVERGED``: the method's convergence test was met."""
+        return self.status == Status.CONVERGED
+
+    @property
+    def n_iter(self) -> int:
+        """Alias of :attr:`nit` (the name of fohw 0.1)."""
+        return self.nit
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -121,9 +162,13 @@ class IdentificationResult:
         return self.layout.nb
 
     def _require_covariance(self):
-        if self.covariance is None:
-            raise ValueError(f"method {self.method!r} gives no covariance: standard errors are "
-                             "only defined at a least-squares optimum; use method='varpro'.")
+        if self.covariance is not None:
+            return
+        if self.status == Status.RANK_DEFICIENT:
+            raise ValueError("this fit is rank deficient, so some parameters are not identifiable "
+                             "and have no standard errors; see `message` for which.")
+        raise ValueError(f"method {self.method!r} gives no covariance: standard errors are only "
+                         "defined at a least-squares optimum ('varpro', 'output_error').")
 
     def standard_errors(self) -> dict:
         """Standard errors of theta, alpha and the recovered ``a, b, p, q``.
@@ -235,7 +280,7 @@ class IdentificationResult:
                        for n, v in zip(("alpha",) + self.parameter_names,
                                        (self.alpha, *self.theta)))
         return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
-                f"N={self.n_samples}, J={self.J:.4g}, converged={self.converged}<br>"
+                f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
                 f"<small>{html.escape(self.message)}</small>"
                 f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
 
@@ -245,8 +290,8 @@ class IdentificationResult:
                  + (f", schedule={self.schedule!r}" if self.schedule else ""),
                  f"  samples N = {self.n_samples}, na = {self.na}, nb = {self.nb}, "
                  f"f_basis = {self.f_basis!r}, g_basis = {self.g_basis!r}",
-                 f"  iterations = {self.n_iter}, converged = {self.converged}, J (Eq. 41) = "
-                 f"{self.J:.6g}",
+                 f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "
+                 f"evaluations = {self.nfev}, J (Eq. 41) = {self.J:.6g}",
                  f"  {self.message}",
                  ""]
         names = ["alpha"] + list(self.parameter_names)
@@ -281,8 +326,8 @@ class IdentificationResult:
 
     def __repr__(self):
         return (f"IdentificationResult(method={self.method!r}, schedule={self.schedule!r}, "
-                f"alpha={self.alpha:.6g}, J={self.J:.6g}, n_iter={self.n_iter}, "
-                f"converged={self.converged}, n_params={self.theta.shape[0]})")
+                f"alpha={self.alpha:.6g}, J={self.J:.6g}, status={self.status.name}, "
+                f"nit={self.nit}, n_params={self.theta.shape[0]})")
 
     def plot(self, theta_true=None):
         """Histories of theta (or delta, given ``theta_true``), alpha and J.
@@ -320,20 +365,19 @@ class IdentificationResult:
         axes[1].plot(k, self.alpha_sample_history)
         axes[1].set_ylabel("alpha(k)")
         axes[1].set_xlabel("sample k (last pass)")
-        axes[2].plot(np.arange(1, self.n_iter + 1), self.J_history, marker="o")
+        axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
         axes[2].set_ylabel("J (Eq. 41)")
         axes[2].set_xlabel("iteration m")
         fig.tight_layout()
         return fig, axes
 
 
-def recover_model(builder, theta, alpha):
+def recover_model(layout, f_basis, g_basis, theta, alpha):
     """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
     from .exceptions import ParameterError
 
     try:
-        return HammersteinWiener.from_theta(theta, alpha, na=builder.layout.na,
-                                            nb=builder.layout.nb, f_basis=builder.f_basis,
-                                            g_basis=builder.g_basis), ""
+        return HammersteinWiener.from_theta(theta, alpha, na=layout.na, nb=layout.nb,
+                                            f_basis=f_basis, g_basis=g_basis), ""
     except ParameterError as exc:
         return None, f" No model: {exc}"

@@ -17,7 +17,8 @@ alternately, under one of two schedules the paper describes:
 Where the paper is ambiguous, the reading closest to the text is the default and the other is
 an option:
 
-* ``alpha0`` is not given in the paper; the default 0.5 is the middle of its ``(0, 1)``.
+* ``alpha0`` is not given in the paper; the default is the middle of ``alpha_bounds`` (0.5 for
+  the paper's ``(0, 1)``).
 * ``alpha_window`` (iterative schedule): ``"innovation"`` (default) uses Eq. (48) as printed,
   the last ``P`` samples at the current ``k`` — at ``m = 1`` that is ``k = 0`` (Step 1 sets
   ``k = 1``), afterwards the end of the record; ``"record"`` uses every sample, i.e.
@@ -32,111 +33,262 @@ an option:
 
 The baselines of Fig. 6 are named configurations of the same code:
 ``method="single_innovation_gradient"`` is ``"hybrid"`` with ``P = 1``, and
-``method="single_innovation_lm"`` applies the step of Eq. (48) with ``P = 1`` to
-``(theta, alpha)`` jointly.
+``method="single_innovation_lm"`` applies the step of Eq. (48) with ``P = 1``: to
+``(theta, alpha)`` jointly at every sample under the recursive schedule; under the iterative
+schedule, an alpha step as in the hybrid, then a pass of Eq. (48) steps on theta at that alpha
+(:func:`fohw.estimators.milm.milm_pass`, where the hybrid makes an MIGD pass).
+
+Each method's settings are a frozen dataclass (:class:`HybridOptions`,
+:class:`SingleInnovationGradientOptions`, :class:`SingleInnovationLMOptions`); an option a
+method does not have is an error (:mod:`fohw.estimators.options`).
 """
 
 from __future__ import annotations
 
-import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._base import BaseEstimator, check_is_fitted
-from ..exceptions import ConvergenceWarning, ParameterError
+from .._validation import check_int, check_scalar
+from ..exceptions import ParameterError
 from ..model.gl import _weights
-from ..results import IdentificationResult, recover_model
-from .migd import migd_pass, migd_update
-from .milm import alpha_update, milm_step, sensitivity_weights
+from ..results import Status
+from ._common import check_finite_estimate, finish
+from .migd import NORMALISATIONS, migd_pass, migd_update
+from .milm import alpha_update, check_sensitivity, milm_pass, milm_step, sensitivity_weights
+from .options import MethodOptions
 
-__all__ = ["run_alternation", "HybridIdentifier", "SCHEDULES"]
+__all__ = ["HybridOptions", "SingleInnovationGradientOptions", "SingleInnovationLMOptions",
+           "run_alternation", "HybridIdentifier", "SCHEDULES"]
 
 SCHEDULES = ("recursive", "iterative")
+ALPHA_WINDOWS = ("innovation", "record")
 _DEFAULT_MAX_ITER = {"recursive": 1, "iterative": 50}
+
+
+@dataclass(frozen=True, kw_only=True)
+class SingleInnovationLMOptions(MethodOptions):
+    """Options of ``method="single_innovation_lm"`` (and the base of the paper's methods).
+
+    Attributes
+    ----------
+    schedule : {"recursive", "iterative"}
+        Table 1 (default) or Steps 1–9 (see the module notes).
+    alpha0 : float or None
+        Initial fractional order, strictly inside ``alpha_bounds``; default (None) their middle.
+    max_iter : int or None
+        Outer iterations: passes over the record. Default 1 for ``"recursive"`` (Table 1 as
+        printed), 50 for ``"iterative"``.
+    tol : float
+        Stop when ``|J_m - J_{m-1}| / |J_{m-1}| <= tol`` (Step 9), ``tol > 0``; default 1e-4.
+    p0 : float
+        ``theta(0) = 1/p0`` in every entry (the paper's notation; default ``1e6``).
+    lm_lambda : float
+        LM damping ``lambda > 0`` (default 1, Table 1).
+    delta_alpha : float
+        Step of Eq. (44) (default ``1e-3``, Table 1).
+    sensitivity : {"finite_difference", "exact"}
+        Eq. (44) (default) or the exact derivative of the GL weights.
+    alpha_window : {"innovation", "record"}
+        Samples of the alpha step in the iterative schedule (see the module notes).
+    """
+
+    schedule: str = "recursive"
+    alpha0: float | None = None
+    max_iter: int | None = None
+    tol: float = 1e-4
+    p0: float = 1e6
+    lm_lambda: float = 1.0
+    delta_alpha: float = 1e-3
+    sensitivity: str = "finite_difference"
+    alpha_window: str = "innovation"
+
+    def check(self, n_samples, bounds):
+        """Validated copy with the defaults that depend on the schedule and bounds filled in."""
+        if self.schedule not in SCHEDULES:
+            raise ParameterError(f"`schedule` must be one of {SCHEDULES}; got {self.schedule!r}.")
+        if self.alpha_window not in ALPHA_WINDOWS:
+            raise ParameterError(f"`alpha_window` must be 'innovation' or 'record'; got "
+                                 f"{self.alpha_window!r}.")
+        if self.alpha_window == "record" and self.schedule == "recursive":
+            raise ParameterError("`alpha_window='record'` applies to the iterative schedule only; "
+                                 "the recursive schedule (Table 1) uses the last "
+                                 "`innovation_length` samples.")
+        alpha0 = 0.5 * (bounds.lo + bounds.hi) if self.alpha0 is None else check_scalar(
+            self.alpha0, "alpha0", lower=bounds.lo, upper=bounds.hi, lower_inclusive=False,
+            upper_inclusive=False)
+        max_iter = _DEFAULT_MAX_ITER[self.schedule] if self.max_iter is None else self.max_iter
+        return self.replace(
+            alpha0=alpha0, max_iter=check_int(max_iter, "max_iter", minimum=1, maximum=10**6),
+            tol=check_scalar(self.tol, "tol", lower=0.0, lower_inclusive=False),
+            p0=check_scalar(self.p0, "p0", lower=0.0, lower_inclusive=False),
+            lm_lambda=check_scalar(self.lm_lambda, "lm_lambda", lower=0.0, lower_inclusive=False),
+            delta_alpha=check_sensitivity(self.sensitivity, self.delta_alpha))
+
+    @property
+    def P(self):
+        """Innovation length (1 for the single-innovation methods)."""
+        return 1
+
+
+@dataclass(frozen=True, kw_only=True)
+class SingleInnovationGradientOptions(SingleInnovationLMOptions):
+    """Options of ``method="single_innovation_gradient"``: the hybrid with ``P = 1``.
+
+    Attributes
+    ----------
+    normalisation : {"window", "current"}
+        Growth of ``r(k)``: ``||Phi(P, k)||^2`` (default, Eq. 31) or ``||phi(k)||^2`` (MISG).
+    forgetting : float
+        Forgetting factor on ``r`` in ``(0, 1]``: ``r(k) = forgetting * r(k-1) + …``
+        (default 1, the paper).
+    restart_r : bool
+        Restart ``r`` at 1 at every pass (default False).
+
+    Also every attribute of :class:`SingleInnovationLMOptions`.
+    """
+
+    normalisation: str = "window"
+    forgetting: float = 1.0
+    restart_r: bool = False
+
+    def check(self, n_samples, bounds):
+        """Validated copy."""
+        out = SingleInnovationLMOptions.check(self, n_samples, bounds)
+        if self.normalisation not in NORMALISATIONS:
+            raise ParameterError(f"`normalisation` must be one of {NORMALISATIONS}; got "
+                                 f"{self.normalisation!r}.")
+        if not isinstance(self.restart_r, (bool, np.bool_)):
+            raise ParameterError(f"`restart_r` must be True or False; got {self.restart_r!r}.")
+        return out.replace(forgetting=check_scalar(self.forgetting, "forgetting", lower=0.0,
+                                                   upper=1.0, lower_inclusive=False),
+                           restart_r=bool(self.restart_r))
+
+
+@dataclass(frozen=True, kw_only=True)
+class HybridOptions(SingleInnovationGradientOptions):
+    """Options of ``method="hybrid"``, the paper's MIGD + MI-LM alternation.
+
+    Attributes
+    ----------
+    innovation_length : int
+        ``P``, the number of innovations per update, ``1 <= P <= N`` (default 5).
+
+    Also every attribute of :class:`SingleInnovationGradientOptions` and
+    :class:`SingleInnovationLMOptions`.
+    """
+
+    innovation_length: int = 5
+
+    def check(self, n_samples, bounds):
+        """Validated copy."""
+        out = SingleInnovationGradientOptions.check(self, n_samples, bounds)
+        return out.replace(innovation_length=check_int(
+            self.innovation_length, "innovation_length", minimum=1, maximum=n_samples))
+
+    @property
+    def P(self):
+        """Innovation length."""
+        return self.innovation_length
 
 
 def _criterion(J_prev, J):
     return abs(J - J_prev) / abs(J_prev) if J_prev != 0 else (0.0 if J == 0 else np.inf)
 
 
-def run_alternation(builder, *, method, schedule, P, alpha, alpha0, max_iter, tol, bounds, p0,
-                    normalisation, forgetting, lm_lambda, delta_alpha, sensitivity, alpha_window,
-                    restart_r):
+def run_alternation(builder, method, options, bounds):
     """The paper's alternation of MIGD (theta) and MI-LM (alpha) under one schedule.
 
-    Settings arrive validated by :func:`fohw.identify`; returns its ``IdentificationResult``.
+    Parameters
+    ----------
+    builder : RegressorBuilder
+        The record.
+    method : {"hybrid", "single_innovation_gradient", "single_innovation_lm"}
+    options : HybridOptions, SingleInnovationGradientOptions or SingleInnovationLMOptions
+        Validated (``options.check``).
+    bounds : AlphaBounds
+
+    Returns
+    -------
+    IdentificationResult
     """
     n_samples = builder.n_samples
-    cfg = dict(P=P, normalisation=normalisation, forgetting=forgetting, lm_lambda=lm_lambda,
-               delta_alpha=delta_alpha, sensitivity=sensitivity, n_samples=n_samples)
-    theta = np.full(builder.layout.n_params, 1.0 / p0)
+    o = options
+    lm = method == "single_innovation_lm"
+    normalisation = getattr(o, "normalisation", "window")
+    forgetting = getattr(o, "forgetting", 1.0)
+    theta = np.full(builder.layout.n_params, 1.0 / o.p0)
+    alpha = o.alpha0
     r = 1.0
     alpha_hist, J_hist = [], []
-    converged = False
+    status = Status.MAX_ITER
     Phi = None              # the information matrix at the current alpha, once built
-    for m in range(1, max_iter + 1):
-        if restart_r:
+    for m in range(1, o.max_iter + 1):
+        if getattr(o, "restart_r", False):
             r = 1.0
-        if schedule == "recursive":
+        if o.schedule == "recursive":
             theta, alpha, r, theta_path, alpha_path = _recursive_pass(
-                builder, theta, alpha, r, bounds, joint=(method == "single_innovation_lm"), **cfg)
+                builder, theta, alpha, r, bounds, method=method, joint=lm, P=o.P,
+                normalisation=normalisation, forgetting=forgetting, lm_lambda=o.lm_lambda,
+                delta_alpha=o.delta_alpha, sensitivity=o.sensitivity)
+            Phi = builder.matrix(alpha)
         else:
             k_now = 0 if m == 1 else n_samples - 1
-            rows = None if alpha_window == "record" else np.arange(k_now, max(k_now - P, -1), -1)
-            alpha = bounds(alpha_update(builder, theta, alpha, rows=rows, lm_lambda=lm_lambda,
-                                        sensitivity=sensitivity, delta_alpha=delta_alpha,
-                                        Phi=Phi))
+            rows = (None if o.alpha_window == "record"
+                    else np.arange(k_now, max(k_now - o.P, -1), -1))
+            step = alpha_update(builder, theta, alpha, rows=rows, lm_lambda=o.lm_lambda,
+                                sensitivity=o.sensitivity, delta_alpha=o.delta_alpha, Phi=Phi)
+            check_finite_estimate(method, theta, step, f" in iteration {m}")
+            alpha = bounds(step)
             Phi = builder.matrix(alpha)
-            theta_path, r_path, _ = migd_pass(Phi, builder.y, innovation_length=P, theta0=theta,
-                                              r0=r, normalisation=normalisation,
-                                              forgetting=forgetting)
-            theta, r = theta_path[-1].copy(), float(r_path[-1])
+            if lm:
+                theta_path = milm_pass(Phi, builder.y, theta0=theta, n_samples=n_samples,
+                                       lm_lambda=o.lm_lambda)
+            else:
+                theta_path, r_path, _ = migd_pass(Phi, builder.y, innovation_length=o.P,
+                                                  theta0=theta, r0=r, normalisation=normalisation,
+                                                  forgetting=forgetting)
+                r = float(r_path[-1])
+            theta = theta_path[-1].copy()
+            check_finite_estimate(method, theta, alpha, f" in iteration {m}")
             alpha_path = np.full(n_samples, alpha)
-        if schedule == "recursive":
-            Phi = builder.matrix(alpha)
         J = float(np.mean((builder.y - Phi @ theta) ** 2))
         alpha_hist.append(alpha)
         J_hist.append(J)
-        if m >= 2 and _criterion(J_hist[-2], J) <= tol:
-            converged = True
+        if m >= 2 and _criterion(J_hist[-2], J) <= o.tol:
+            status = Status.CONVERGED
             break
 
-    if converged:
+    if status == Status.CONVERGED:
         message = (f"converged: relative change of J {_criterion(J_hist[-2], J_hist[-1]):.3g} "
-                   f"<= tol = {tol:g} after {m} iterations.")
-    elif max_iter == 1:
+                   f"<= tol = {o.tol:g} after {m} iterations.")
+    elif o.max_iter == 1:
+        status = Status.NOT_TESTED
         message = ("one pass only (max_iter=1): convergence of J was not tested; set "
                    "max_iter >= 2 to test it.")
     else:
-        message = (f"stopped at max_iter = {max_iter}: relative change of J "
-                   f"{_criterion(J_hist[-2], J_hist[-1]):.3g} > tol = {tol:g}.")
-    if not converged:
-        warnings.warn(f"fohw.identify({method!r}, schedule={schedule!r}): {message}",
-                      ConvergenceWarning, stacklevel=3)
-    model, note = recover_model(builder, theta, alpha)
-    message += note
+        message = (f"stopped at max_iter = {o.max_iter}: relative change of J "
+                   f"{_criterion(J_hist[-2], J_hist[-1]):.3g} > tol = {o.tol:g}.")
     if bounds.hit:
         message += f" Alpha was held at a bound of {tuple(bounds.inner)} at least once."
-    options = dict(innovation_length=P, alpha0=float(alpha0), max_iter=max_iter, tol=tol,
-                   alpha_bounds=(bounds.lo, bounds.hi), p0=p0, normalisation=normalisation,
-                   forgetting=forgetting, lm_lambda=lm_lambda, delta_alpha=delta_alpha,
-                   sensitivity=sensitivity, alpha_window=alpha_window, restart_r=bool(restart_r))
-    return IdentificationResult(
-        method=method, schedule=schedule, alpha=float(alpha), theta=theta, model=model, J=J_hist[-1],
-        n_iter=len(J_hist), converged=converged, message=message, alpha_at_bound=bounds.hit,
-        theta_history=theta_path, alpha_sample_history=alpha_path,
-        alpha_history=np.array(alpha_hist), J_history=np.array(J_hist), layout=builder.layout,
-        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=n_samples, options=options)
+    return finish(builder, method=method, schedule=o.schedule, theta=theta, alpha=alpha,
+                  status=status, nit=len(J_hist), nfev=len(J_hist), message=message,
+                  alpha_at_bound=bounds.hit, Phi=Phi,
+                  options=dict(o.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
+                  theta_history=theta_path, alpha_sample_history=alpha_path,
+                  alpha_history=alpha_hist, J_history=J_hist)
 
 
-def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation, forgetting,
-                    lm_lambda, delta_alpha, sensitivity, n_samples):
+def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, normalisation,
+                    forgetting, lm_lambda, delta_alpha, sensitivity):
     """One pass of Table 1: at each k, theta by Eq. (29) then alpha by Eq. (48).
 
     With ``joint=True`` (the single-innovation LM baseline) both are updated together by the
     step of Eq. (48) applied to ``(theta, alpha)``.
     """
     y = builder.y
+    n_samples = builder.n_samples
     n = theta.shape[0]
     theta_path = np.empty((n_samples, n))
     alpha_path = np.empty(n_samples)
@@ -151,33 +303,40 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, joint, P, normalisation
             jac = np.hstack([phi_w, (dphi_w @ theta)[:, None]])
             step = milm_step(jac, y_w - phi_w @ theta, n_samples=n_samples, lm_lambda=lm_lambda)
             theta = theta + step[:n]
-            alpha = bounds(alpha + step[n])
+            alpha = alpha + step[n]
         else:
             theta, r, _ = migd_update(theta, phi_w, y_w, r, normalisation=normalisation,
                                       forgetting=forgetting)
-            alpha = bounds(alpha + milm_step(dphi_w @ theta, y_w - phi_w @ theta,
-                                             n_samples=n_samples, lm_lambda=lm_lambda))
+            alpha = alpha + milm_step(dphi_w @ theta, y_w - phi_w @ theta,
+                                      n_samples=n_samples, lm_lambda=lm_lambda)
+        check_finite_estimate(method, theta, alpha, f" at sample k = {k}")
+        alpha = bounds(alpha)
         theta_path[k] = theta
         alpha_path[k] = alpha
     return theta, alpha, r, theta_path, alpha_path
 
 
 class HybridIdentifier(BaseEstimator):
-    """Estimator interface to :func:`fohw.identify` (scikit-learn conventions, no dependency).
+    """The paper's hybrid method as an estimator (scikit-learn conventions, no dependency).
+
+    ``fit(u, y)`` runs ``fohw.identify(u, y, method="hybrid", ...)`` with these settings; for
+    the other methods call :func:`fohw.identify` with their name.
 
     Parameters
     ----------
     na, nb, f_basis, g_basis
         Model structure, as in :func:`fohw.identify`.
-    **options
-        Any keyword argument of :func:`fohw.identify` (``method``, ``innovation_length``, …),
-        stored as the attribute of the same name.
+    alpha_bounds : (float, float), optional
+        Interval for alpha (default ``(0, 1)``, the paper's).
+    innovation_length, schedule, alpha0, max_iter, tol, p0, normalisation, forgetting, \
+lm_lambda, delta_alpha, sensitivity, alpha_window, restart_r
+        The options of the hybrid method (:class:`HybridOptions`).
 
     Attributes
     ----------
     result_ : IdentificationResult
-    theta_, alpha_, model_, n_iter_
-        Shortcuts into ``result_``.
+    theta_, alpha_, model_, status_, n_iter_
+        Shortcuts into ``result_``: what was fitted.
 
     Examples
     --------
@@ -194,51 +353,51 @@ class HybridIdentifier(BaseEstimator):
     (10,)
     """
 
-    _OPTIONS = ("method", "innovation_length", "alpha0", "schedule", "max_iter", "tol",
-                "random_state", "alpha_bounds", "p0", "normalisation", "forgetting",
-                "lm_lambda", "delta_alpha", "sensitivity", "alpha_window", "restart_r", "n_grid",
-                "n_init", "start")
+    _renamed = {"method": "it runs the paper's hybrid method; for another method call "
+                          "fohw.identify(u, y, method=...), which returns the same result.",
+                "random_state": "the hybrid method draws no random numbers."}
 
-    def __init__(self, na, nb, f_basis, g_basis, **options):
+    def __init__(self, na, nb, f_basis, g_basis, alpha_bounds=(0.0, 1.0), innovation_length=5,
+                 schedule="recursive", alpha0=None, max_iter=None, tol=1e-4, p0=1e6,
+                 normalisation="window", forgetting=1.0, lm_lambda=1.0, delta_alpha=1e-3,
+                 sensitivity="finite_difference", alpha_window="innovation", restart_r=False):
         self.na = na
         self.nb = nb
         self.f_basis = f_basis
         self.g_basis = g_basis
-        unknown = set(options) - set(self._OPTIONS)
-        if unknown:
-            raise ParameterError(f"unknown option(s) {sorted(unknown)}; valid: {self._OPTIONS}.")
-        self._options = dict(options)
-        for key, value in options.items():
-            setattr(self, key, value)
-
-    def get_params(self, deep=True):
-        """Return the structure and every option that was set."""
-        params = {k: getattr(self, k) for k in ("na", "nb", "f_basis", "g_basis")}
-        params.update({k: getattr(self, k) for k in self._OPTIONS if hasattr(self, k)})
-        return params
-
-    def set_params(self, **params):
-        """Set structure or options by name; returns ``self``."""
-        for key, value in params.items():
-            if key not in ("na", "nb", "f_basis", "g_basis") + self._OPTIONS:
-                raise ValueError(f"invalid parameter {key!r} for HybridIdentifier.")
-            setattr(self, key, value)
-        return self
+        self.alpha_bounds = alpha_bounds
+        self.innovation_length = innovation_length
+        self.schedule = schedule
+        self.alpha0 = alpha0
+        self.max_iter = max_iter
+        self.tol = tol
+        self.p0 = p0
+        self.normalisation = normalisation
+        self.forgetting = forgetting
+        self.lm_lambda = lm_lambda
+        self.delta_alpha = delta_alpha
+        self.sensitivity = sensitivity
+        self.alpha_window = alpha_window
+        self.restart_r = restart_r
 
     def fit(self, u, y):
         """Identify from ``(u, y)``; return ``self``."""
         from .identify import identify
 
-        opts = {k: getattr(self, k) for k in self._OPTIONS if hasattr(self, k)}
-        self.result_ = identify(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
-                                g_basis=self.g_basis, **opts)
+        params = self.get_params()
+        structure = {k: params.pop(k) for k in ("na", "nb", "f_basis", "g_basis", "alpha_bounds")}
+        self.result_ = identify(u, y, method="hybrid", **structure, options=params)
         self.theta_ = np.array(self.result_.theta)
         self.alpha_ = self.result_.alpha
         self.model_ = self.result_.model
-        self.n_iter_ = self.result_.n_iter
+        self.status_ = self.result_.status
+        self.n_iter_ = self.result_.nit
         return self
 
     def predict(self, u, y):
-        """One-step-ahead prediction with the fitted model (Eq. 19)."""
+        """One-step-ahead prediction with the fitted model (Eq. 19).
+
+        Uses what was fitted (``result_``): settings changed after ``fit`` do not affect it.
+        """
         check_is_fitted(self, "result_")
         return self.result_.predict(u, y)

@@ -165,6 +165,8 @@ class MultiInnovationGradient(BaseEstimator):
     ----------
     theta_ : ndarray
         Final estimate ``theta(N-1)``.
+    alpha_ : float
+        The order the estimate was fitted at (``alpha`` when ``fit`` ran).
     theta_history_ : ndarray, shape (N, n)
         ``theta(k)`` at every sample.
     r_history_ : ndarray, shape (N,)
@@ -209,6 +211,8 @@ class MultiInnovationGradient(BaseEstimator):
         hist, r_hist, innov = migd_pass(Phi, y, innovation_length=P, theta0=theta0,
                                         normalisation=norm, forgetting=lam)
         self.layout_ = builder.layout
+        self._bases = (builder.f_basis, builder.g_basis)
+        self.alpha_ = alpha
         self.theta_history_ = hist
         self.r_history_ = r_hist
         self.innovation_history_ = innov
@@ -217,8 +221,13 @@ class MultiInnovationGradient(BaseEstimator):
         return self
 
     def predict(self, u, y):
-        """One-step-ahead prediction ``Phi(alpha) @ theta_`` for a record (Eq. 19)."""
+        """One-step-ahead prediction ``Phi(alpha_) @ theta_`` for a record (Eq. 19).
+
+        Uses what was fitted (structure, bases, ``alpha_``, ``theta_``): settings changed after
+        ``fit`` do not affect it.
+        """
         check_is_fitted(self, "theta_")
-        builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
-                                   g_basis=self.g_basis)
-        return builder.matrix(self.alpha) @ self.theta_
+        f_basis, g_basis = self._bases
+        builder = RegressorBuilder(u, y, na=self.layout_.na, nb=self.layout_.nb, f_basis=f_basis,
+                                   g_basis=g_basis)
+        return builder.matrix(self.alpha_) @ self.theta_

@@ -17,7 +17,7 @@ from .._validation import check_scalar
 from ..exceptions import ParameterError
 from ..model.gl import _weights, gl_weights_derivative
 
-__all__ = ["milm_step", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
+__all__ = ["milm_step", "milm_pass", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
 #: ``"finite_difference"``: Eq. (44) with step ``delta_alpha``; ``"exact"``: by the exact
 #: derivative of the GL weights (:func:`fohw.gl_weights_derivative`).
@@ -58,6 +58,49 @@ def milm_step(sensitivities, innovations, *, n_samples, lm_lambda=1.0):
         return float(c * (xi @ innovations) / (c * (xi @ xi) + lm_lambda))
     hessian = c * (xi.T @ xi) + lm_lambda * np.eye(xi.shape[1])
     return c * np.linalg.solve(hessian, xi.T @ innovations)
+
+
+def milm_pass(Phi, y, *, theta0, n_samples, lm_lambda=1.0):
+    """The step of Eq. (48) applied to theta at every sample, regressors fixed (``P = 1``).
+
+    ``theta <- theta + (2/N) [(2/N) phi phi^T + lambda I]^{-1} phi e`` with
+    ``e = y[k] - phi[k] @ theta``: the Levenberg–Marquardt analogue of one MIGD pass, used by
+    the single-innovation LM baseline under the iterative schedule. By the Sherman–Morrison
+    identity the step is ``(2/N) phi e / (lambda + (2/N) ||phi||^2)``.
+
+    Parameters
+    ----------
+    Phi : ndarray, shape (N, n)
+        Information matrix at the current alpha.
+    y : ndarray, shape (N,)
+    theta0 : ndarray, shape (n,)
+    n_samples : int
+        ``N`` in the ``2/N`` factors.
+    lm_lambda : float, optional
+        Damping ``lambda > 0``.
+
+    Returns
+    -------
+    theta_history : ndarray, shape (N, n)
+        ``theta(k)`` after the update at sample ``k``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fohw.estimators.milm import milm_pass, milm_step
+    >>> Phi, y = np.array([[1.0, 2.0]]), np.array([3.0])
+    >>> step = milm_step(Phi, y, n_samples=2, lm_lambda=1.0)    # one row: the same update
+    >>> bool(np.allclose(milm_pass(Phi, y, theta0=np.zeros(2), n_samples=2)[0], step))
+    True
+    """
+    c = 2.0 / n_samples
+    theta = np.array(theta0, dtype=np.float64)
+    history = np.empty((Phi.shape[0], theta.shape[0]))
+    for k in range(Phi.shape[0]):
+        phi = Phi[k]
+        theta = theta + (c * (y[k] - phi @ theta) / (lm_lambda + c * (phi @ phi))) * phi
+        history[k] = theta
+    return history
 
 
 def sensitivity_weights(alpha, n, *, sensitivity="finite_difference", delta_alpha=1e-3,

@@ -14,20 +14,21 @@ estimator streams: ``partial_fit`` on consecutive chunks gives exactly the estim
 
 from __future__ import annotations
 
-import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._base import BaseEstimator, check_is_fitted
 from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from ..exceptions import ConvergenceWarning
 from ..model.basis import as_basis
 from ..model.gl import _weights, gl_weights_derivative
 from ..model.params import ThetaLayout
-from ..model.regressors import WindowKernel
-from ..results import IdentificationResult, recover_model
+from ..model.regressors import RegressorBuilder, WindowKernel
+from ..results import Status
+from ._common import finish
+from .options import MethodOptions
 
-__all__ = ["MultiInnovationRLS"]
+__all__ = ["MultiInnovationRLS", "RlsOptions"]
 
 
 class MultiInnovationRLS(BaseEstimator):
@@ -50,9 +51,11 @@ class MultiInnovationRLS(BaseEstimator):
     alpha_bounds : (float, float), optional
         Open interval for alpha (default ``(0, 1)``); alpha is clipped ``1e-3`` of its width
         inside it.
-    p0 : float, optional
-        Initial covariance of theta, ``p0 * I`` (default ``1e6``); ``theta(0) = 0``.
-    alpha_p0 : float, optional
+    initial_covariance : float, optional
+        Initial covariance of theta, ``initial_covariance * I`` (default ``1e6``);
+        ``theta(0) = 0``. (Called ``p0`` in fohw 0.1, a name that means ``theta(0) = 1/p0`` in
+        the paper's MIGD.)
+    initial_alpha_variance : float, optional
         Initial variance of alpha (default 0.1: a standard deviation of about 0.3).
 
     Attributes
@@ -79,8 +82,12 @@ class MultiInnovationRLS(BaseEstimator):
     True
     """
 
+    _renamed = {"p0": "it is now called `initial_covariance`.",
+                "alpha_p0": "it is now called `initial_alpha_variance`."}
+
     def __init__(self, na, nb, f_basis, g_basis, innovation_length=1, forgetting=1.0, alpha0=0.5,
-                 estimate_alpha=True, alpha_bounds=(0.0, 1.0), p0=1e6, alpha_p0=0.1):
+                 estimate_alpha=True, alpha_bounds=(0.0, 1.0), initial_covariance=1e6,
+                 initial_alpha_variance=0.1):
         self.na = na
         self.nb = nb
         self.f_basis = f_basis
@@ -90,8 +97,8 @@ class MultiInnovationRLS(BaseEstimator):
         self.alpha0 = alpha0
         self.estimate_alpha = estimate_alpha
         self.alpha_bounds = alpha_bounds
-        self.p0 = p0
-        self.alpha_p0 = alpha_p0
+        self.initial_covariance = initial_covariance
+        self.initial_alpha_variance = initial_alpha_variance
 
     def _initialise(self):
         self._f = as_basis(self.f_basis, "f_basis")
@@ -107,11 +114,14 @@ class MultiInnovationRLS(BaseEstimator):
         self._inner = bounds.inner
         alpha = check_scalar(self.alpha0, "alpha0", lower=lo, upper=hi, lower_inclusive=False,
                              upper_inclusive=False)
-        p0 = check_scalar(self.p0, "p0", lower=0.0, lower_inclusive=False)
-        ap0 = check_scalar(self.alpha_p0, "alpha_p0", lower=0.0, lower_inclusive=False)
+        p0 = check_scalar(self.initial_covariance, "initial_covariance", lower=0.0,
+                          lower_inclusive=False)
+        ap0 = check_scalar(self.initial_alpha_variance, "initial_alpha_variance", lower=0.0,
+                           lower_inclusive=False)
         n = self._layout.n_params
         d = n + 1 if self.estimate_alpha else n
         self._kernel = WindowKernel([na] * len(self._g) + [nb] * len(self._f))
+        self.layout_ = self._layout
         self._signals = np.zeros((len(self._g) + len(self._f), 1024))
         self._y = np.zeros(1024)
         self._x = np.zeros(d)
@@ -197,33 +207,63 @@ class MultiInnovationRLS(BaseEstimator):
         self._alpha_hist.append(float(x[n]) if self.estimate_alpha else float(self.alpha0))
 
     def predict(self, u, y):
-        """One-step-ahead prediction of a record with the current estimates (Eq. 19)."""
-        check_is_fitted(self, "theta_")
-        from ..model.regressors import RegressorBuilder
+        """One-step-ahead prediction of a record with the fitted estimates (Eq. 19).
 
-        builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
-                                   g_basis=self.g_basis)
+        Uses what was fitted (structure, bases, ``theta_``, ``alpha_``), not the current
+        settings: ``set_params`` after ``fit`` does not change the predictions.
+        """
+        check_is_fitted(self, "theta_")
+        builder = RegressorBuilder(u, y, na=self._layout.na, nb=self._layout.nb,
+                                   f_basis=self._f, g_basis=self._g)
         return builder.matrix(self.alpha_) @ self.theta_
 
 
-def rls_result(builder, P, forgetting, alpha0, bounds, p0, u, y):
+@dataclass(frozen=True, kw_only=True)
+class RlsOptions(MethodOptions):
+    """Options of ``method="rls"``: the parameters of :class:`MultiInnovationRLS`.
+
+    Attributes
+    ----------
+    innovation_length : int
+        ``P`` (default 1).
+    forgetting : float
+        Forgetting factor in ``(0, 1]`` (default 1): the weight ``forgetting**(k - j)`` of
+        sample ``j`` in the running sums at ``k``.
+    alpha0 : float or None
+        Initial fractional order; default the middle of ``alpha_bounds``.
+    estimate_alpha : bool
+        Track alpha recursively (default True).
+    initial_covariance : float
+        ``S(0) = initial_covariance * I`` for theta (default ``1e6``).
+    initial_alpha_variance : float
+        Initial variance of alpha (default 0.1).
+    """
+
+    renamed = {"p0": "initial_covariance", "alpha_p0": "initial_alpha_variance"}
+
+    innovation_length: int = 1
+    forgetting: float = 1.0
+    alpha0: float | None = None
+    estimate_alpha: bool = True
+    initial_covariance: float = 1e6
+    initial_alpha_variance: float = 0.1
+
+
+def rls_result(builder, options, bounds):
     """One pass of MultiInnovationRLS wrapped as an IdentificationResult."""
+    alpha0 = 0.5 * (bounds.lo + bounds.hi) if options.alpha0 is None else options.alpha0
+    options = options.replace(alpha0=alpha0)
+    check_int(options.innovation_length, "innovation_length", minimum=1,
+              maximum=builder.n_samples)
     est = MultiInnovationRLS(builder.layout.na, builder.layout.nb, builder.f_basis,
-                             builder.g_basis, innovation_length=P, forgetting=forgetting,
-                             alpha0=alpha0, alpha_bounds=(bounds.lo, bounds.hi), p0=p0).fit(u, y)
-    J = float(np.mean((y - builder.matrix(est.alpha_) @ est.theta_) ** 2))
-    message = ("one pass only (max_iter=1): convergence of J was not tested; a recursive "
-               "estimator's final value is its estimate.")
-    warnings.warn(f"fohw.identify('rls'): {message}", ConvergenceWarning, stacklevel=3)
+                             builder.g_basis, alpha_bounds=(bounds.lo, bounds.hi),
+                             **options.as_dict()).fit(builder.u, builder.y)
+    message = ("one pass: a recursive estimator's final value is its estimate; convergence "
+               "was not tested.")
     if est.alpha_at_bound_:
         message += " Alpha was held at a bound at least once."
-    model, note = recover_model(builder, est.theta_, est.alpha_)
-    message += note
-    return IdentificationResult(
-        method="rls", schedule="recursive", alpha=est.alpha_, theta=est.theta_, model=model, J=J,
-        n_iter=1, converged=False, message=message, alpha_at_bound=est.alpha_at_bound_,
-        theta_history=est.theta_history_, alpha_sample_history=est.alpha_history_,
-        alpha_history=np.array([est.alpha_]), J_history=np.array([J]), layout=builder.layout,
-        f_basis=builder.f_basis, g_basis=builder.g_basis, n_samples=builder.n_samples,
-        options=dict(innovation_length=P, forgetting=forgetting, alpha0=alpha0,
-                     alpha_bounds=(bounds.lo, bounds.hi), p0=p0))
+    return finish(builder, method="rls", schedule="recursive", theta=est.theta_,
+                  alpha=est.alpha_, status=Status.NOT_TESTED, nit=1, nfev=1, message=message,
+                  alpha_at_bound=est.alpha_at_bound_,
+                  options=dict(options.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
+                  theta_history=est.theta_history_, alpha_sample_history=est.alpha_history_)

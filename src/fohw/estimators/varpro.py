@@ -7,32 +7,77 @@ at the best theta) is a function of one variable. The estimator
 1. scans ``J(alpha)`` on a grid inside the bounds (so a local minimum is not taken for the
    global one),
 2. refines the best grid cell by a bounded scalar search (Brent), and
-3. polishes ``(theta, alpha)`` jointly by Gauss–Newton steps (QR, backtracking) with the exact
-   alpha-sensitivity ``d Phi / d alpha`` (:meth:`fohw.RegressorBuilder.matrix_derivative`).
+3. polishes ``(theta, alpha)`` jointly with :func:`scipy.optimize.least_squares` (trust-region
+   reflective, ``x_scale="jac"``, alpha bounded) and the exact Jacobian
+   ``[Phi, dPhi/dalpha @ theta]`` (:meth:`fohw.RegressorBuilder.jacobian`).
 
-Each ``J(alpha)`` costs one inverse FFT of the stacked basis signals, whose FFTs are computed once
-per record. The result is the equation-error (prediction-error) estimate; under white Gaussian
-equation noise it is the conditional maximum-likelihood estimate and reaches the Cramér–Rao
-bound (:func:`fohw.crb`).
+Every linear solve equilibrates the columns of ``Phi`` and factors it by QR with column
+pivoting, so the estimate does not depend on the units of ``u`` and ``y`` and a rank-deficient
+information matrix is reported (it names the dependent columns) instead of giving huge,
+meaningless estimates. Each ``J(alpha)`` costs one inverse FFT of the stacked basis signals, whose
+FFTs are computed once per record. The result is the equation-error (prediction-error) estimate;
+under white Gaussian equation noise it is the conditional maximum-likelihood estimate and reaches
+the Cramér–Rao bound of the unstructured theta (:func:`fohw.crb`).
 """
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.optimize
 
-from ..exceptions import ConvergenceWarning
-from ..results import IdentificationResult, recover_model
+from .. import _linalg
+from .._validation import check_int, check_scalar
+from ..exceptions import ParameterError
+from ..results import Status
+from ._common import bound_note, finish
+from .options import MethodOptions
 
-__all__ = ["profile_theta", "separable_least_squares", "parameter_covariance"]
+__all__ = ["VarproOptions", "profile_theta", "separable_least_squares", "parameter_covariance"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class VarproOptions(MethodOptions):
+    """Options of ``method="varpro"``.
+
+    Attributes
+    ----------
+    n_grid : int
+        Points of the coarse alpha scan, equally spaced strictly inside ``alpha_bounds``
+        (default 41, at least 3).
+    xtol : float
+        Absolute tolerance on alpha of the bounded scalar search (default ``1e-10``).
+    polish : bool
+        Polish ``(theta, alpha)`` jointly by least squares with the exact Jacobian (default
+        True). Without it, alpha is the scalar search's and theta its profile solution.
+    tol : float
+        ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares` in the polish
+        (default ``1e-10``).
+    max_nfev : int or None
+        Evaluations allowed to the polish (default None: scipy's ``100 * (n + 1)``).
+    """
+
+    n_grid: int = 41
+    xtol: float = 1e-10
+    polish: bool = True
+    tol: float = 1e-10
+    max_nfev: int | None = None
+
+    def check(self):
+        """Validated copy."""
+        if not isinstance(self.polish, (bool, np.bool_)):
+            raise ParameterError(f"`polish` must be True or False; got {self.polish!r}.")
+        return self.replace(
+            n_grid=check_int(self.n_grid, "n_grid", minimum=3, maximum=100_000),
+            xtol=check_scalar(self.xtol, "xtol", lower=0.0, lower_inclusive=False),
+            tol=check_scalar(self.tol, "tol", lower=0.0, lower_inclusive=False),
+            max_nfev=None if self.max_nfev is None else check_int(self.max_nfev, "max_nfev",
+                                                                  minimum=1))
 
 
 def profile_theta(Phi, y):
-    """Least-squares ``theta`` for fixed regressors, by an orthogonal factorisation.
+    """Least-squares ``theta`` for fixed regressors (equilibrated columns, pivoted QR).
 
     Parameters
     ----------
@@ -42,6 +87,8 @@ def profile_theta(Phi, y):
     Returns
     -------
     theta : ndarray, shape (n,)
+        The solution; if ``Phi`` is rank deficient, the basic solution with the dependent
+        columns' entries at 0.
     rss : float
         Residual sum of squares ``||y - Phi theta||^2``.
 
@@ -54,12 +101,11 @@ def profile_theta(Phi, y):
     >>> theta.round(12), round(rss, 12)
     (array([1., 2.]), 0.0)
     """
-    theta, *_ = scipy.linalg.lstsq(Phi, y, lapack_driver="gelsy", check_finite=False)
-    resid = y - Phi @ theta
-    return theta, float(resid @ resid)
+    theta, rss, _ = _linalg.lstsq(Phi, y)
+    return theta, rss
 
 
-def parameter_covariance(jacobian, rss, n_samples, *, overwrite=False):
+def parameter_covariance(jacobian, rss, n_samples):
     """Asymptotic covariance ``s^2 (G^T G)^{-1}`` of least-squares estimates.
 
     Parameters
@@ -73,21 +119,20 @@ def parameter_covariance(jacobian, rss, n_samples, *, overwrite=False):
 
     Returns
     -------
-    covariance : ndarray, shape (d, d)
+    covariance : ndarray, shape (d, d), or None
+        ``None`` when ``G`` is rank deficient (the parameters are not identifiable).
     noise_variance : float
         ``s^2 = rss / (N - d)``.
 
     Notes
     -----
-    Computed from the triangular factor ``R`` of ``G = QR`` (never from the normal equations):
-    ``(G^T G)^{-1} = R^{-1} R^{-T}``. With ``overwrite=True`` the factorisation may reuse the
-    memory of ``jacobian`` (no copy of an ``N x d`` array).
+    Computed from the triangular factor of the column-equilibrated, pivoted QR of ``G`` (never
+    from the normal equations), so it does not depend on the units of the parameters.
     """
     d = jacobian.shape[1]
     s2 = rss / (n_samples - d)
-    (r,) = scipy.linalg.qr(jacobian, mode="r", overwrite_a=overwrite, check_finite=False)
-    rinv = scipy.linalg.solve_triangular(r[:d, :d], np.eye(d))
-    return s2 * (rinv @ rinv.T), s2
+    inverse, _ = _linalg.inverse_gram(jacobian)
+    return (None if inverse is None else s2 * inverse), s2
 
 
 @dataclass
@@ -99,58 +144,18 @@ class _VarproFit:
     grid_J: np.ndarray
     search_alphas: list
     search_J: list
-    converged: bool
+    status: Status
+    nit: int
+    nfev: int
     message: str
-    covariance: np.ndarray
+    at_lower: bool
+    at_upper: bool
+    covariance: np.ndarray | None
     noise_variance: float
+    rank_factor: object
 
 
-def _jacobian(builder, theta, alpha):
-    """``G = [Phi(alpha), dPhi/dalpha @ theta]``, built in one ``N x (n + 1)`` array."""
-    n = theta.shape[0]
-    G = np.empty((builder.n_samples, n + 1))
-    G[:, :n] = builder.matrix(alpha)
-    G[:, n] = builder.matrix_derivative(alpha) @ theta
-    return G
-
-
-def _gauss_newton(builder, theta, alpha, rss, lo, hi, max_iter=20):
-    """Joint Gauss–Newton polish of ``(theta, alpha)`` with backtracking.
-
-    Each step solves ``min ||G step - r||`` by an orthogonal factorisation (QR with column
-    pivoting) of the exact Jacobian; a step is accepted only if it lowers the residual sum of
-    squares, halving it up to 30 times otherwise. Memory: one ``N x (n + 1)`` array at a time.
-    Returns the new estimates, whether the step size fell below ``1e-10`` relative, and a note.
-    """
-    y = builder.y
-    n = theta.shape[0]
-    margin = 1e-9 * (hi - lo)
-    for it in range(1, max_iter + 1):
-        G = _jacobian(builder, theta, alpha)
-        r = y - G[:, :n] @ theta
-        step, *_ = scipy.linalg.lstsq(G, r, lapack_driver="gelsy", overwrite_a=True,
-                                      overwrite_b=True, check_finite=False)
-        del G
-        size = np.linalg.norm(step) / (np.linalg.norm(np.append(theta, alpha)) + 1e-300)
-        t = 1.0
-        for _ in range(30):
-            th2 = theta + t * step[:n]
-            a2 = float(np.clip(alpha + t * step[n], lo + margin, hi - margin))
-            resid = y - builder.matrix(a2) @ th2
-            rss2 = float(resid @ resid)
-            if rss2 <= rss:
-                theta, alpha, rss = th2, a2, rss2
-                break
-            t *= 0.5
-        else:
-            return theta, alpha, rss, True, (f"Gauss-Newton stopped after {it} iterations: no "
-                                             "descent along the step (at the optimum)")
-        if t * size < 1e-10:
-            return theta, alpha, rss, True, f"Gauss-Newton converged in {it} iterations"
-    return theta, alpha, rss, False, f"Gauss-Newton stopped at {max_iter} iterations"
-
-
-def separable_least_squares(builder, *, bounds, n_grid=41, xtol=1e-10, polish=True):
+def separable_least_squares(builder, *, bounds, options=None):
     """Separable least-squares estimate of ``(theta, alpha)`` for one record.
 
     Parameters
@@ -158,77 +163,113 @@ def separable_least_squares(builder, *, bounds, n_grid=41, xtol=1e-10, polish=Tr
     builder : RegressorBuilder
         The record.
     bounds : (float, float)
-        Open interval searched for alpha.
-    n_grid : int
-        Grid points of the coarse scan (default 41), equally spaced strictly inside ``bounds``.
-    xtol : float
-        Absolute tolerance on alpha of the bounded scalar search.
-    polish : bool
-        Run the joint Gauss–Newton / LM polish with the exact sensitivity (default True).
+        Interval searched for alpha (the polish may reach its ends).
+    options : VarproOptions, optional
+        Grid, tolerances and polish.
 
     Returns
     -------
     _VarproFit
         Internal record; :func:`fohw.identify` wraps it into an ``IdentificationResult``.
     """
+    opts = (options or VarproOptions()).check()
     y = builder.y
     n_samples = builder.n_samples
     lo, hi = bounds
-    grid = np.linspace(lo, hi, n_grid + 2)[1:-1]
+    grid = np.linspace(lo, hi, opts.n_grid + 2)[1:-1]
     cache = {}
 
-    def rss_of(alpha):
+    def profile(alpha):
         alpha = float(alpha)
         if alpha not in cache:
-            cache[alpha] = profile_theta(builder.matrix(alpha), y)
-        return cache[alpha][1]
+            cache[alpha] = _linalg.lstsq(builder.matrix(alpha), y)
+        return cache[alpha]
 
-    grid_J = np.array([rss_of(a) for a in grid]) / n_samples
+    grid_J = np.array([profile(a)[1] for a in grid]) / n_samples
     i = int(np.argmin(grid_J))
     left = grid[i - 1] if i > 0 else lo + 1e-6 * (hi - lo)
-    right = grid[i + 1] if i < n_grid - 1 else hi - 1e-6 * (hi - lo)
+    right = grid[i + 1] if i < opts.n_grid - 1 else hi - 1e-6 * (hi - lo)
     search_alphas, search_J = [], []
 
     def traced(alpha):
-        value = rss_of(alpha) / n_samples
+        value = profile(alpha)[1] / n_samples
         search_alphas.append(float(alpha))
         search_J.append(value)
         return value
 
     opt = scipy.optimize.minimize_scalar(traced, bounds=(left, right), method="bounded",
-                                         options={"xatol": xtol, "maxiter": 500})
+                                         options={"xatol": opts.xtol, "maxiter": 500})
     alpha = float(opt.x)
-    theta, rss = cache[alpha]
-    converged, message = bool(opt.success), f"alpha search: {opt.message}"
-    if polish:
-        theta, alpha, rss, ok, note = _gauss_newton(builder, theta, alpha, rss, lo, hi)
-        converged = converged and ok
-        message += f"; polish: {note}"
-    cov, s2 = parameter_covariance(_jacobian(builder, theta, alpha), rss, n_samples,
-                                   overwrite=True)
+    # A minimum in the first or last grid cell may lie on the bound itself (the search stays
+    # strictly inside): compare with the profile at the bound.
+    for edge_alpha, touched in ((lo, i == 0), (hi, i == opts.n_grid - 1)):
+        if touched and profile(edge_alpha)[1] < profile(alpha)[1]:
+            alpha = float(edge_alpha)
+    theta, rss, fac = profile(alpha)
+    nit, nfev = int(opt.nit), len(cache)
+    edge = 1e-5 * (hi - lo)
+    at_lower, at_upper = alpha - lo < edge, hi - alpha < edge
+    status = Status.CONVERGED if opt.success else Status.MAX_ITER
+    message = f"alpha search: {opt.message}"
+    if fac.rank < fac.n_columns:
+        message += "; no polish (the information matrix is rank deficient)."
+    elif opts.polish:
+        theta, alpha, rss, ls = _polish(builder, theta, alpha, lo, hi, opts)
+        nit += int(ls.njev)
+        nfev += int(ls.nfev)
+        at_lower, at_upper = bool(ls.active_mask[-1] < 0), bool(ls.active_mask[-1] > 0)
+        status = (Status.CONVERGED if ls.status > 0 else
+                  Status.MAX_ITER if ls.status == 0 else Status.FAILED)
+        message += f"; polish (scipy.optimize.least_squares): {ls.message}"
+        fac = None
+    cov, s2 = parameter_covariance(builder.jacobian(theta, alpha), rss, n_samples)
     return _VarproFit(theta=theta, alpha=alpha, rss=rss, grid=grid, grid_J=grid_J,
-                      search_alphas=search_alphas, search_J=search_J, converged=converged,
-                      message=message, covariance=cov, noise_variance=s2)
+                      search_alphas=search_alphas, search_J=search_J, status=status, nit=nit,
+                      nfev=nfev, message=message, at_lower=at_lower, at_upper=at_upper,
+                      covariance=cov, noise_variance=s2, rank_factor=fac)
 
 
-def varpro_result(builder, bounds, n_grid, options):
+def _polish(builder, theta, alpha, lo, hi, opts):
+    """Joint least squares over ``(theta, alpha)`` from the profile estimate.
+
+    The residual is divided by the RMS output so that the solver's absolute gradient
+    tolerance means the same whatever the units of ``y``; ``x_scale="jac"`` does the same for
+    the parameters.
+    """
+    n = theta.shape[0]
+    y = builder.y
+    y_scale = float(np.sqrt(np.mean(y * y))) or 1.0
+
+    def residual(x):
+        return (y - builder.matrix(x[n]) @ x[:n]) / y_scale
+
+    def jacobian(x):
+        return builder.jacobian(x[:n], x[n]) / -y_scale
+
+    ls = scipy.optimize.least_squares(
+        residual, np.append(theta, np.clip(alpha, lo, hi)), jac=jacobian, method="trf",
+        bounds=(np.r_[np.full(n, -np.inf), lo], np.r_[np.full(n, np.inf), hi]),
+        x_scale="jac", ftol=opts.tol, xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
+    rss = float(ls.fun @ ls.fun) * y_scale**2
+    alpha = float(_on_active_bound(ls.x[n], ls.active_mask[n], lo, hi))
+    return ls.x[:n].copy(), alpha, rss, ls
+
+
+def _on_active_bound(value, active, lo, hi):
+    """The trust-region solver stays ~1e-10 inside a bound it reports active: put it on it."""
+    return lo if active < 0 else hi if active > 0 else value
+
+
+def varpro_result(builder, options, bounds):
     """Run separable least squares and wrap it as an IdentificationResult."""
-    fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), n_grid=n_grid)
-    message = ("converged: " if fit.converged else "NOT converged: ") + fit.message
-    margin = 1e-6 * (bounds.hi - bounds.lo)
-    at_bound = not (bounds.lo + margin < fit.alpha < bounds.hi - margin)
-    if at_bound:
-        message += (f" The estimate of alpha is at the edge of alpha_bounds = "
-                    f"{(bounds.lo, bounds.hi)}: widen the bounds.")
-    if not fit.converged:
-        warnings.warn(f"fohw.identify('varpro'): {message}", ConvergenceWarning, stacklevel=3)
-    model, note = recover_model(builder, fit.theta, fit.alpha)
-    message += note
-    return IdentificationResult(
-        method="varpro", schedule="", alpha=fit.alpha, theta=fit.theta, model=model,
-        J=fit.rss / builder.n_samples, n_iter=len(fit.search_alphas), converged=fit.converged,
-        message=message, alpha_at_bound=at_bound, theta_history=None, alpha_sample_history=None,
-        alpha_history=np.array(fit.search_alphas), J_history=np.array(fit.search_J),
-        layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
-        n_samples=builder.n_samples, options=options, covariance=fit.covariance,
-        noise_variance=fit.noise_variance, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
+    fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), options=options)
+    message = fit.message
+    if fit.at_lower or fit.at_upper:
+        message += bound_note(fit.alpha, bounds.lo, bounds.hi, fit.at_lower, fit.at_upper)
+    return finish(builder, method="varpro", theta=fit.theta, alpha=fit.alpha, status=fit.status,
+                  nit=fit.nit, nfev=fit.nfev, message=message,
+                  alpha_at_bound=fit.at_lower or fit.at_upper,
+                  options=dict(options.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
+                  rank_factor=fit.rank_factor, covariance=fit.covariance,
+                  noise_variance=fit.noise_variance, alpha_history=fit.search_alphas,
+                  J_history=fit.search_J, alpha_profile=np.vstack([fit.grid, fit.grid_J]))

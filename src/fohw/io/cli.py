@@ -95,9 +95,28 @@ def _pair_arg(text):
     return lo, hi
 
 
+def _option_arg(text):
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE; got {text!r}")
+    value = value.strip()
+    lowered = value.lower()
+    if lowered in ("true", "false"):
+        return name.strip(), lowered == "true"
+    if lowered == "none":
+        return name.strip(), None
+    for kind in (int, float):
+        try:
+            return name.strip(), kind(value)
+        except ValueError:
+            pass
+    return name.strip(), value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
-    from ..estimators.identify import METHODS, SCHEDULES
+    from ..estimators.hybrid import SCHEDULES
+    from ..estimators.identify import METHODS
 
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")
@@ -112,12 +131,18 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--nb", type=int, required=True, help="input lags")
     ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
     ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
-    ide.add_argument("--method", choices=METHODS, default="varpro")
-    ide.add_argument("--schedule", choices=SCHEDULES, default="recursive")
-    ide.add_argument("--innovation-length", type=int, default=5)
+    ide.add_argument("--method", choices=METHODS, default="varpro",
+                     help="estimator (default varpro; the paper's method is 'hybrid')")
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
-                     help="open interval for alpha, 'low,high' (default 0,1)")
-    ide.add_argument("--max-iter", type=int, default=None)
+                     help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
+    ide.add_argument("--schedule", choices=SCHEDULES, default=None,
+                     help="hybrid and single-innovation methods: Table 1 or Steps 1-9")
+    ide.add_argument("--innovation-length", type=int, default=None, help="hybrid, rls: P")
+    ide.add_argument("--max-iter", type=int, default=None,
+                     help="hybrid and single-innovation methods: outer iterations")
+    ide.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                     type=_option_arg, help="any option of the method (repeatable), e.g. "
+                     "--option forgetting=0.95; see fohw.identify")
     ide.add_argument("--json", action="store_true", help="print the estimates as JSON")
     ide.add_argument("--plot", help="write the fit figure (PNG) to this file")
     ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
@@ -145,21 +170,28 @@ def _identify(args):
     import warnings
 
     from .. import identify
-    from ..exceptions import ConvergenceWarning
+    from ..exceptions import ConvergenceWarning, RankDeficiencyWarning
 
     data, names = read_table(args.data)
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    options = {name: value for name, value in (("schedule", args.schedule),
+                                               ("innovation_length", args.innovation_length),
+                                               ("max_iter", args.max_iter)) if value is not None}
+    for name, value in args.option:
+        if name in options:
+            raise UsageError(f"option {name!r} given twice.")
+        options[name] = value
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
+        warnings.simplefilter("always", RankDeficiencyWarning)
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
-                       method=args.method, schedule=args.schedule,
-                       innovation_length=args.innovation_length, alpha_bounds=args.alpha_bounds,
-                       max_iter=args.max_iter)
+                       method=args.method, alpha_bounds=args.alpha_bounds, options=options)
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)
     if args.json:
         out = {"alpha": res.alpha, "theta": dict(zip(res.parameter_names, res.theta.tolist())),
-               "J": res.J, "converged": res.converged, "method": res.method,
+               "J": res.J, "converged": res.converged, "status": res.status.name,
+               "method": res.method,
                "n_samples": res.n_samples, "message": res.message}
         if res.model is not None:
             out["model"] = {k: getattr(res.model, k).tolist() for k in "abpq"}
@@ -171,12 +203,9 @@ def _identify(args):
     if args.save:
         res.to_json(args.save)
     if args.plot:
-        import matplotlib
+        from .._plotting import subplots
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(9, 4))
+        fig, ax = subplots(figsize=(9, 4))
         ax.plot(y, "k", lw=1, label="measured y")
         ax.plot(res.predict(u, y), "C1--", lw=0.9, label="one-step prediction")
         ax.set_xlabel("sample k")
@@ -184,7 +213,6 @@ def _identify(args):
         ax.set_title(f"fohw identify ({res.method}), J = {res.J:.3g}")
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
-        plt.close(fig)
     return 0
 
 

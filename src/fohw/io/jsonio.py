@@ -18,9 +18,14 @@ from ..model.basis import Basis, as_basis, polynomial_basis
 from ..model.params import ThetaLayout
 from ..model.system import HammersteinWiener
 
-__all__ = ["save_model", "load_model", "load_result", "FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "load_result", "MODEL_FORMAT_VERSION",
+           "RESULT_FORMAT_VERSION"]
 
-FORMAT_VERSION = 1
+#: Version of the model files this fohw writes (it reads the versions in ``_READS``).
+MODEL_FORMAT_VERSION = 1
+#: Version of the result files: 2 replaced ``n_iter``/``converged`` by ``status``/``nit``/``nfev``.
+RESULT_FORMAT_VERSION = 2
+_READS = {"fohw-model": (1,), "fohw-result": (1, 2)}
 
 
 def _basis_to_dict(basis: Basis) -> dict:
@@ -52,7 +57,7 @@ def _floats(a) -> list:
 
 def model_to_dict(model: HammersteinWiener) -> dict:
     """A JSON-ready dict of a model."""
-    return {"format": "fohw-model", "version": FORMAT_VERSION,
+    return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION,
             "a": _floats(model.a), "b": _floats(model.b), "p": _floats(model.p),
             "q": _floats(model.q), "alpha": float(model.alpha),
             "f_basis": _basis_to_dict(model.f_basis), "g_basis": _basis_to_dict(model.g_basis)}
@@ -72,9 +77,12 @@ def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> Ha
 def _check_header(d, kind, path):
     if not isinstance(d, dict) or d.get("format") != kind:
         raise DataFileError(f"{path} is not a {kind} file (field 'format' must be {kind!r}).")
-    if d.get("version") != FORMAT_VERSION:
-        raise DataFileError(f"{path} has {kind} format version {d.get('version')!r}; this fohw "
-                            f"reads version {FORMAT_VERSION}.")
+    version = d.get("version")
+    if isinstance(version, bool) or not isinstance(version, int) or version not in _READS[kind]:
+        readable = " or ".join(str(v) for v in _READS[kind])
+        raise DataFileError(f"{path}: field 'version' is {version!r}; this fohw reads {kind} "
+                            f"files of version {readable} (an integer).")
+    return version
 
 
 def _read_json(path) -> dict:
@@ -121,11 +129,12 @@ _ARRAYS = ("theta", "theta_history", "alpha_sample_history", "alpha_history", "J
 
 def result_to_dict(result) -> dict:
     """A JSON-ready dict of an :class:`fohw.IdentificationResult`."""
-    d = {"format": "fohw-result", "version": FORMAT_VERSION}
-    for key in ("method", "schedule", "alpha", "J", "n_iter", "converged", "message",
+    d = {"format": "fohw-result", "version": RESULT_FORMAT_VERSION}
+    for key in ("method", "schedule", "alpha", "J", "nit", "nfev", "message",
                 "alpha_at_bound", "n_samples", "noise_variance"):
         value = getattr(result, key)
         d[key] = value.item() if isinstance(value, np.generic) else value
+    d["status"] = int(result.status)
     for key in _ARRAYS:
         value = getattr(result, key)
         d[key] = None if value is None else {"shape": list(value.shape), "data": _floats(value)}
@@ -140,31 +149,33 @@ def result_to_dict(result) -> dict:
 
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     """Inverse of :func:`result_to_dict`."""
-    from ..results import IdentificationResult
+    from ..results import IdentificationResult, Status, recover_model
 
-    _check_header(d, "fohw-result", path)
+    version = _check_header(d, "fohw-result", path)
+    for key in ("f_basis", "g_basis"):
+        if not isinstance(d.get(key), dict):
+            raise DataFileError(f"{path}: malformed fohw-result file (field {key!r} missing or "
+                                "not an object).")
+    f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
+    g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
     try:
-        f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
-        g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
         layout = ThetaLayout(na=d["layout"]["na"], nb=d["layout"]["nb"], n_g=len(g), n_f=len(f))
         arrays = {k: (None if d[k] is None else
                       np.array(d[k]["data"], dtype=np.float64).reshape(d[k]["shape"]))
                   for k in _ARRAYS}
-        model = None
-        try:
-            model = HammersteinWiener.from_theta(arrays["theta"], d["alpha"], na=layout.na,
-                                                 nb=layout.nb, f_basis=f, g_basis=g)
-        except ParameterError:
-            pass
+        if version == 1:        # n_iter and converged; no status, nfev
+            status = Status.CONVERGED if d["converged"] else Status.MAX_ITER
+            nit = nfev = d["n_iter"]
+        else:
+            status, nit, nfev = Status(d["status"]), d["nit"], d["nfev"]
+        model, _ = recover_model(layout, f, g, arrays["theta"], d["alpha"])
         opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in d["options"].items()}
         return IdentificationResult(
             method=d["method"], schedule=d["schedule"], alpha=d["alpha"], model=model, J=d["J"],
-            n_iter=d["n_iter"], converged=d["converged"], message=d["message"],
+            status=status, nit=nit, nfev=nfev, message=d["message"],
             alpha_at_bound=d["alpha_at_bound"], layout=layout, f_basis=f, g_basis=g,
             n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"], **arrays)
     except (KeyError, TypeError, ValueError) as exc:
-        if isinstance(exc, ParameterError):
-            raise
         raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
                             f"{exc}).") from None
 

@@ -21,7 +21,7 @@ from .params import ThetaLayout
 
 __all__ = ["HammersteinWiener", "simulate", "simulate_theta", "ALPHA_BOUNDS"]
 
-#: Open interval of fractional orders a model may have.
+#: Closed interval of fractional orders a model may have (0: the integer-order model).
 ALPHA_BOUNDS = (0.0, 2.0)
 
 
@@ -39,7 +39,7 @@ class HammersteinWiener:
     q : array_like, shape (n_g,)
         Weights of the output basis functions; ``q[0]`` must be exactly 1 (Eq. 17).
     alpha : float
-        Fractional order, in the open interval ``(0, 2)``.
+        Fractional order, in ``[0, 2]`` (0 gives the integer-order model).
     f_basis, g_basis : Basis, int, callables or None, optional
         Input and output basis functions; ``None`` means the polynomial basis of degree
         ``len(p)`` (``len(q)``): ``u, u**2, …``.
@@ -69,7 +69,8 @@ class HammersteinWiener:
             raise ParameterError(f"`p[0]` must be exactly 1 (normalisation of Eq. 17); got {p[0]!r}.")
         if q[0] != 1.0:
             raise ParameterError(f"`q[0]` must be exactly 1 (normalisation of Eq. 17); got {q[0]!r}.")
-        self.alpha = check_alpha(alpha, lower=ALPHA_BOUNDS[0], upper=ALPHA_BOUNDS[1])
+        self.alpha = check_alpha(alpha, lower=ALPHA_BOUNDS[0], upper=ALPHA_BOUNDS[1],
+                                 inclusive=True)
         self.f_basis = polynomial_basis(p.shape[0]) if f_basis is None else as_basis(f_basis, "f_basis")
         self.g_basis = polynomial_basis(q.shape[0]) if g_basis is None else as_basis(g_basis, "g_basis")
         if len(self.f_basis) != p.shape[0]:

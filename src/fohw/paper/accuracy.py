@@ -14,14 +14,11 @@ import sys
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-import fohw  # noqa: E402
-from fohw.analysis.montecarlo import summarise  # noqa: E402
+import fohw
+from fohw._plotting import subplots
+from fohw.analysis.montecarlo import summarise
 
 
 def cube(x):
@@ -147,7 +144,7 @@ def main(argv=None):
         for r in all_rows:
             fh.write(",".join(str(r.get(k, "")) for k in keys) + "\n")
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    fig, axes = subplots(1, 2, figsize=(11, 4))
     names = list(methods)
     axes[0].barh(names, [d_sum[(m,)]["rms"] for m in names], color="C0")
     axes[0].axvline(bound.rms_relative_error, color="k", ls="--", label="CRB")
@@ -163,9 +160,8 @@ def main(argv=None):
     fig.suptitle(f"Paper's example, N = {n_main}, {n_seeds} seeds")
     fig.tight_layout()
     fig.savefig(args.outdir / "accuracy_methods.png", dpi=120)
-    plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax = subplots(figsize=(6, 4))
     ax.loglog(sweep, [s_sum[(n,)]["rms"] for n in sweep], "o-", label="varpro, RMS delta")
     ax.loglog(sweep, [bounds_n[n].rms_relative_error for n in sweep], "k--", label="CRB")
     ax.loglog(sweep, [sa_sum[(n,)]["rms"] for n in sweep], "s-", label="varpro, RMS alpha error")
@@ -176,7 +172,6 @@ def main(argv=None):
     ax.set_title("Error against record length")
     fig.tight_layout()
     fig.savefig(args.outdir / "accuracy_vs_n.png", dpi=120)
-    plt.close(fig)
     print(text)
     return 0
 

@@ -15,8 +15,9 @@ from importlib import resources
 
 import numpy as np
 
+from .._plotting import subplots
 from ..datasets import SimulatedData, paper_example
-from ..estimators.identify import identify
+from ..estimators.identify import OPTIONS, identify
 from ..exceptions import ConvergenceWarning
 from ..results import IdentificationResult
 
@@ -86,20 +87,22 @@ def run_paper_example(n_samples=10_000, *, random_state=0, innovation_lengths=(1
     baselines : bool
         Also run the two single-innovation baselines of Fig. 6.
     **identify_options
-        Passed to :func:`fohw.identify` (default: the recursive schedule of Table 1, one pass,
-        ``alpha0 = 0.5``).
+        Options of the hybrid method (:class:`fohw.HybridOptions`; default: the recursive
+        schedule of Table 1, one pass, ``alpha0 = 0.5``); the baselines get those they have.
 
     Returns
     -------
     PaperRuns
     """
     data = paper_example(n_samples, random_state=random_state)
-    hybrid = {P: _identify_quietly(data.u, data.y, innovation_length=P, **identify_options)
+    hybrid = {P: _identify_quietly(data.u, data.y, method="hybrid", innovation_length=P,
+                                   **identify_options)
               for P in innovation_lengths}
     base = {}
     if baselines:
         for method in ("single_innovation_gradient", "single_innovation_lm"):
-            base[method] = _identify_quietly(data.u, data.y, method=method, **identify_options)
+            shared = {k: v for k, v in identify_options.items() if k in OPTIONS[method].names()}
+            base[method] = _identify_quietly(data.u, data.y, method=method, **shared)
     return PaperRuns(data=data, hybrid=hybrid, baselines=base)
 
 
@@ -227,9 +230,7 @@ def _checkpoint_lines(ax, n):
 
 def plot_figure_3(runs: PaperRuns):
     """Fig. 3: relative error ``delta(k)`` for every ``P``. Returns ``(fig, ax)``."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     theta = runs.data.model.theta
     for P, res in runs.hybrid.items():
         k = np.arange(1, res.n_samples + 1)
@@ -250,9 +251,7 @@ def plot_figure_3(runs: PaperRuns):
 
 def plot_figure_4(runs: PaperRuns):
     """Fig. 4: the fractional-order estimate ``alpha(k)`` for every ``P``. Returns ``(fig, ax)``."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     ref = paper_table2()
     for P, res in runs.hybrid.items():
         line, = ax.plot(np.arange(1, res.n_samples + 1), res.alpha_sample_history,
@@ -276,8 +275,6 @@ def plot_figure_5(runs: PaperRuns, P=5, window=200):
     Shows the one-step-ahead prediction (Eq. 19) and, where the identified model is stable
     on this input, its free-run simulation. Returns ``(fig, axes)``.
     """
-    import matplotlib.pyplot as plt
-
     from ..exceptions import SimulationDivergedError
 
     res = runs.hybrid[P]
@@ -285,7 +282,7 @@ def plot_figure_5(runs: PaperRuns, P=5, window=200):
     n = data.n_samples
     k = np.arange(n - window, n)
     pred = res.predict(data.u, data.y)
-    fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(8, 5.5), sharex=True)
     axes[0].plot(k, data.y[k], "k", lw=1.2, label="measured y")
     axes[0].plot(k, pred[k], "C1--", lw=1, label=f"one-step prediction, P = {P}")
     try:
@@ -308,9 +305,7 @@ def plot_figure_5(runs: PaperRuns, P=5, window=200):
 
 def plot_figure_6(runs: PaperRuns, P=5):
     """Fig. 6: ``delta(k)`` of the hybrid method (``P``) against the two baselines."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     theta = runs.data.model.theta
     curves = [(f"hybrid MIGD + MI-LM, P = {P}", runs.hybrid[P])]
     curves += [(name.replace("_", " "), res) for name, res in runs.baselines.items()]
@@ -347,11 +342,6 @@ def write_outputs(runs: PaperRuns, outdir, which=OUTPUTS, checkpoints=(2000, 500
     """
     from pathlib import Path
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written = {}
@@ -372,7 +362,6 @@ def write_outputs(runs: PaperRuns, outdir, which=OUTPUTS, checkpoints=(2000, 500
         else:
             fig, _ = _FIGURES[name](runs)
             fig.savefig(outdir / f"{name}.png", dpi=120)
-            plt.close(fig)
             written[name] = [outdir / f"{name}.png"]
     return written
 

@@ -24,16 +24,13 @@ import time
 import warnings
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-import fohw  # noqa: E402
-from fohw.analysis.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test  # noqa: E402
-from fohw.estimators.baselines import fit_linear_output_error  # noqa: E402
-from fohw.paper.reproduction import paper_table2  # noqa: E402
+import fohw
+from fohw._plotting import subplots
+from fohw.analysis.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test
+from fohw.estimators.baselines import fit_linear_output_error
+from fohw.paper.reproduction import paper_table2
 
 N_INIT = 20          # start-up samples excluded from every error measure
 
@@ -139,9 +136,9 @@ def main(argv=None):
     # 2. The paper's hybrid, P = 1, 3, 5 (iterative schedule: J per iteration, Fig. 7).
     max_iter = 5 if args.fast else 50
     progress("the paper's hybrid, P = 1, 3, 5")
-    hybrid = {P: quiet(fohw.identify, u, y, innovation_length=P, schedule="iterative",
-                       max_iter=max_iter, **struct) for P in (1, 3, 5)}
-    fig, ax = plt.subplots(figsize=(7, 4))
+    hybrid = {P: quiet(fohw.identify, u, y, method="hybrid", innovation_length=P,
+                       schedule="iterative", max_iter=max_iter, **struct) for P in (1, 3, 5)}
+    fig, ax = subplots(figsize=(7, 4))
     for P, r in hybrid.items():
         ax.plot(np.arange(1, r.n_iter + 1), r.J_history, marker=".", label=f"P = {P}")
     ax.set_xlabel("iteration m")
@@ -151,13 +148,12 @@ def main(argv=None):
     ax.legend()
     fig.tight_layout()
     fig.savefig(args.outdir / "figure_7.png", dpi=120)
-    plt.close(fig)
 
     varpro = best["result"]
     k = np.arange(n)
     pred5 = hybrid[5].predict(u, y)
     pred_vp = varpro.predict(u, y)
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = subplots(figsize=(9, 4))
     ax.plot(k, y, "k", lw=1, label="measured y")
     ax.plot(k, pred5, "C1--", lw=0.9, label="hybrid P = 5, one-step")
     ax.plot(k, pred_vp, "C0:", lw=0.9, label="varpro, one-step")
@@ -167,8 +163,7 @@ def main(argv=None):
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(args.outdir / "figure_8.png", dpi=120)
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(9, 3.5))
+    fig, ax = subplots(figsize=(9, 3.5))
     ax.plot(k, y - pred5, "C1", lw=0.8, label="hybrid P = 5")
     ax.plot(k, y - pred_vp, "C0", lw=0.8, label="varpro")
     ax.axvspan(0, N_INIT, color="0.9", label=f"start-up (first {N_INIT} samples)")
@@ -180,7 +175,6 @@ def main(argv=None):
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(args.outdir / "figure_9.png", dpi=120)
-    plt.close(fig)
 
     printed = paper_table2()["table3_error_range_robot_arm"]
     out += ["", f"## 2-3. The paper's hybrid method and Table 3 (structure na = {best['na']}, "
@@ -239,7 +233,7 @@ def main(argv=None):
     frac_final = fit_fractional_oe(u[first], y[first], fr_c["m"], fr_c["fb"], fr_c["gb"], lin_same)
     eq_first = quiet(fohw.identify, u[first], y[first], method="varpro", alpha_bounds=(0.0, 2.0),
                      **struct)
-    hyb_first = quiet(fohw.identify, u[first], y[first], innovation_length=5,
+    hyb_first = quiet(fohw.identify, u[first], y[first], method="hybrid", innovation_length=5,
                       schedule="iterative", max_iter=max_iter, **struct)
     models = [("linear OE (integer order), " + lin_c["desc"], lin_final.n_params,
                lin_final.simulate),
@@ -301,7 +295,7 @@ def main(argv=None):
             out.append(f"| {m} | {label} | {r.theta.size + 1} | {r.alpha:.3f} | {show(f1)} | "
                        f"{show(f2)} | {f1 - base[0]:+.1f} / {f2 - base[1]:+.1f} |")
 
-    fig, axes = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(9, 5.5), sharex=True)
     kk = np.arange(512, n)
     axes[0].plot(kk, y[second], "k", lw=1, label="measured")
     axes[0].plot(kk, lin_final.simulate(u)[second], "C2", lw=0.9, label="linear OE")
@@ -318,7 +312,6 @@ def main(argv=None):
     axes[1].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(args.outdir / "robot_arm_simulation.png", dpi=120)
-    plt.close(fig)
 
     out += ["", f"Total time {time.perf_counter() - t0:.0f} s."]
     text = "\n".join(out) + "\n"

@@ -1,0 +1,186 @@
+"""Numerical robustness and honest statuses (issue 11): each test failed on fohw 0.1.
+
+Units invariance, rank deficiency, one optimiser with one meaning of status/nit/nfev, options
+that are never silently ignored, the output-error bound flag, estimators that predict from what
+they fitted, non-finite iterates, and library code that leaves the matplotlib backend alone.
+"""
+
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+import fohw
+
+STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
+SCALES = range(-4, 5)
+
+
+def rescaled_theta(theta, s, t):
+    """theta of the equivalent model for u * 10**s, y * 10**t (paper structure).
+
+    With c = 10**s, d = 10**t: g_j(d y) = d**j g_j(y) and f_j(c u) = c**j f_j(u), so
+    d y[k] = sum a_i q_j d**-(j-1) ... gives theta[q_j a_i] / d**(j-1) and theta[p_j b_i] d / c**j.
+    """
+    c, d = 10.0**s, 10.0**t
+    factors = np.r_[[d ** (1 - j) for j in (1, 2, 3) for _ in range(2)],
+                    [d / c**j for j in (1, 2) for _ in range(2)]]
+    return theta * factors
+
+
+@pytest.fixture(scope="module")
+def noisy():
+    return fohw.datasets.paper_example(600, random_state=3)
+
+
+def _invariance(method, data, **kw):
+    ref = fohw.identify(data.u, data.y, method=method, **STRUCT, **kw)
+    assert ref.status == fohw.Status.CONVERGED
+    for s in SCALES:
+        for t in SCALES:
+            res = fohw.identify(data.u * 10.0**s, data.y * 10.0**t, method=method, **STRUCT,
+                                **kw)
+            assert res.status == ref.status, (s, t)
+            assert res.alpha == pytest.approx(ref.alpha, abs=1e-6), (s, t)
+            np.testing.assert_allclose(res.theta, rescaled_theta(ref.theta, s, t), rtol=1e-4,
+                                       err_msg=f"u*1e{s}, y*1e{t}")
+
+
+def test_varpro_is_invariant_to_units(noisy):
+    # fohw 0.1 (noise-free example): u*1e4, y*1e-4 gave alpha 0.567; u*1e-4, y*1e4 gave 0.312.
+    _invariance("varpro", noisy)
+
+
+@pytest.mark.slow
+def test_output_error_is_invariant_to_units(noisy):
+    data = fohw.datasets.paper_example(300, random_state=3)
+    _invariance("output_error", data)
+
+
+def duplicated_basis():
+    def x(v):
+        return v
+
+    def x_again(v):
+        return 1.0 * v
+
+    return fohw.Basis((x, x_again), names=("x", "x_again"))
+
+
+@pytest.mark.parametrize("method", ["varpro", "output_error", "hybrid"])
+def test_rank_deficiency_is_reported_not_converged(method, noisy):
+    # fohw 0.1: converged=True, theta of +-7e12, standard errors of 2e13, no warning.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        with pytest.warns(fohw.RankDeficiencyWarning, match=r"p2b1, p2b2"):
+            res = fohw.identify(noisy.u, noisy.y, na=2, nb=2, f_basis=duplicated_basis(),
+                                g_basis=3, method=method)
+    assert res.status == fohw.Status.RANK_DEFICIENT and not res.converged
+    assert "not identifiable" in res.message
+    assert np.all(np.abs(res.theta) < 10)        # not the +-1e12 of a minimum-norm-free solve
+    with pytest.raises(ValueError, match="rank deficient"):
+        res.standard_errors()
+
+
+def test_varpro_polish_is_least_squares_with_statuses(noisy):
+    res = fohw.identify(noisy.u, noisy.y, method="varpro", **STRUCT)
+    assert res.status == fohw.Status.CONVERGED and res.converged
+    assert "scipy.optimize.least_squares" in res.message
+    # nfev: J(alpha) profiles plus polish residuals; nit: search plus polish iterations.
+    assert res.nfev > len(res.alpha_history) >= 1 and res.nit >= 1
+    with pytest.warns(fohw.ConvergenceWarning):
+        short = fohw.identify(noisy.u, noisy.y, method="varpro", max_nfev=1, tol=1e-15,
+                              **STRUCT)
+    assert short.status == fohw.Status.MAX_ITER and not short.converged
+
+
+def test_options_are_never_silently_ignored(noisy):
+    # fohw 0.1: varpro given eight irrelevant options returned a bit-identical result.
+    for name, value in dict(innovation_length=3, schedule="iterative", p0=10.0,
+                            lm_lambda=5.0, restart_r=True, random_state=0).items():
+        with pytest.raises(fohw.ParameterError, match=f"method 'varpro' has no option `{name}`"):
+            fohw.identify(noisy.u, noisy.y, method="varpro", **{name: value}, **STRUCT)
+    # An option the method has is used, and recorded.
+    res = fohw.identify(noisy.u, noisy.y, method="varpro", n_grid=7, **STRUCT)
+    assert res.alpha_profile.shape == (2, 7) and res.options["n_grid"] == 7
+    same = fohw.identify(noisy.u, noisy.y, method="varpro", options=fohw.VarproOptions(n_grid=7),
+                         **STRUCT)
+    np.testing.assert_array_equal(same.theta, res.theta)
+
+
+def test_alpha_bounds_without_alpha0(noisy):
+    # fohw 0.1: alpha_bounds=(0, 0.4) with varpro failed on `alpha0`, which varpro does not use.
+    res = fohw.identify(noisy.u, noisy.y, method="varpro", alpha_bounds=(0.0, 0.4), **STRUCT)
+    assert res.alpha_at_bound and res.alpha == pytest.approx(0.4)
+    assert "widen that bound" in res.message
+    # The hybrid's default alpha0 is the middle of the bounds.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        hyb = fohw.identify(noisy.u, noisy.y, method="hybrid", alpha_bounds=(0.7, 0.9),
+                            **STRUCT)
+    assert hyb.options["alpha0"] == pytest.approx(0.8)
+
+
+def test_output_error_reports_alpha_at_bound():
+    # fohw 0.1 clipped alpha inside the bounds, then tested strictly: never at the bound.
+    d = fohw.datasets.paper_example(400, noise_variance=0.0, random_state=0)
+    res = fohw.identify(d.u, d.y, method="output_error", alpha_bounds=(0.0, 0.3), **STRUCT)
+    assert res.alpha == 0.3 and res.alpha_at_bound
+    assert "upper bound of alpha_bounds = (0, 0.3)" in res.message
+    free = fohw.identify(d.u, d.y, method="output_error", **STRUCT)
+    assert not free.alpha_at_bound and free.alpha == pytest.approx(0.6, abs=1e-6)
+
+
+def test_bound_advice_can_be_followed():
+    # fohw 0.1 advised "widen the bounds" at alpha = 0, which no bound allows.
+    # Data of a fractional *sum* (order -0.3): the best order in [0, 1] is on the bound 0.
+    u = np.random.default_rng(0).uniform(-1, 1, 800)
+    y = fohw.simulate_theta([0.3, 1.0], -0.3, u, na=1, nb=1, f_basis=1, g_basis=1)
+    res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="varpro")
+    assert res.alpha_at_bound and res.alpha == 0.0
+    assert "lower bound 0" in res.message and "widen" not in res.message
+
+
+def test_migd_estimator_predicts_from_what_it_fitted(noisy):
+    # fohw 0.1: predict read the `alpha` setting, so set_params changed the predictions.
+    est = fohw.MultiInnovationGradient(alpha=0.6, **STRUCT).fit(noisy.u, noisy.y)
+    before = est.predict(noisy.u, noisy.y)
+    est.set_params(alpha=0.9, na=1)
+    np.testing.assert_array_equal(est.predict(noisy.u, noisy.y), before)
+    assert est.alpha_ == 0.6
+
+
+def test_rls_predicts_from_what_it_fitted(noisy):
+    est = fohw.MultiInnovationRLS(**STRUCT).fit(noisy.u, noisy.y)
+    before = est.predict(noisy.u, noisy.y)
+    est.set_params(g_basis=1, nb=1)
+    np.testing.assert_array_equal(est.predict(noisy.u, noisy.y), before)
+
+
+def test_non_finite_iterates_raise_instead_of_clamping():
+    # fohw 0.1: data of order 1e160 gave J = nan, a1 = nan, and a NaN alpha became the lower
+    # bound; the only warning was "one pass only".
+    d = fohw.datasets.paper_example(300, random_state=0)
+    linear = dict(na=2, nb=2, f_basis=1, g_basis=1)
+    with pytest.raises(fohw.EstimationDivergedError, match="non-finite at sample k = 1"):
+        fohw.identify(d.u, 1e160 * d.y, method="hybrid", **linear)
+    with pytest.raises(fohw.EstimationDivergedError, match="rescale u and y"):
+        fohw.identify(d.u, 1e160 * d.y, method="varpro", **linear)
+
+
+@pytest.mark.parametrize("module", ["fohw.paper.robot_arm", "fohw.paper.accuracy",
+                                    "fohw.paper.reproduction", "fohw.io.cli"])
+def test_library_code_leaves_the_matplotlib_backend_alone(module, tmp_path):
+    code = ("import matplotlib; matplotlib.use('svg'); import importlib; "
+            f"importlib.import_module({module!r}); "
+            "from fohw.paper.reproduction import run_paper_example, write_outputs; "
+            "import warnings; warnings.simplefilter('ignore'); "
+            f"write_outputs(run_paper_example(300), {str(tmp_path)!r}, ['figure_3']); "
+            "print(matplotlib.get_backend())")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "svg"
+    assert (tmp_path / "figure_3.png").stat().st_size > 0
