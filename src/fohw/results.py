@@ -84,7 +84,7 @@ class IdentificationResult:
     alpha_sample_history : ndarray, shape (N,), or None
         ``alpha`` after every sample of the last pass (constant within a pass in the
         iterative schedule; ``None`` for ``"varpro"``).
-    alpha_history, J_history : ndarray, shape (n_iter,)
+    alpha_history, J_history : ndarray, shape (nit,)
         ``alpha`` and ``J`` at the end of every outer iteration (for ``"varpro"``: at every
         point of the bounded alpha search).
     layout : ThetaLayout

@@ -103,7 +103,7 @@ def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
         y = simulate(model, u, noise=v)
         b = RegressorBuilder(u, y, na=model.na, nb=model.nb, f_basis=model.f_basis,
                              g_basis=model.g_basis)
-        g = np.hstack([b.matrix(model.alpha), (b.matrix_derivative(model.alpha) @ theta)[:, None]])
+        g = b.jacobian(theta, model.alpha)
         info += g.T @ g
     info /= n_realizations * sigma2
     cov = np.linalg.inv(info)

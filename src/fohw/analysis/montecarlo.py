@@ -51,7 +51,8 @@ def _run_task(make_data, methods, seed, setting):
         rows.append(dict(seed=seed, **setting, method=name, alpha=res.alpha,
                          alpha_error=res.alpha - model.alpha,
                          delta=float(np.linalg.norm(res.theta - theta) / np.linalg.norm(theta)),
-                         J=res.J, converged=res.converged, n_iter=res.n_iter,
+                         J=res.J, status=res.status.name, converged=res.converged,
+                         nit=res.nit, nfev=res.nfev,
                          seconds=time.perf_counter() - t0, error=""))
     return rows
 
@@ -84,8 +85,8 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
     list of dict
         One row per (setting, seed, method): ``seed``, the setting's keys, ``method``,
         ``alpha``, ``alpha_error``, ``delta`` (``||theta_hat - theta|| / ||theta||``), ``J``,
-        ``converged``, ``n_iter``, ``seconds``, ``error`` (the message when the record diverged,
-        else ``""``).
+        ``status`` (the name of :class:`fohw.Status`), ``converged``, ``nit``, ``nfev``,
+        ``seconds``, ``error`` (the message when the record diverged, else ``""``).
 
     Examples
     --------

@@ -140,7 +140,7 @@ def main(argv=None):
                        schedule="iterative", max_iter=max_iter, **struct) for P in (1, 3, 5)}
     fig, ax = subplots(figsize=(7, 4))
     for P, r in hybrid.items():
-        ax.plot(np.arange(1, r.n_iter + 1), r.J_history, marker=".", label=f"P = {P}")
+        ax.plot(np.arange(1, r.nit + 1), r.J_history, marker=".", label=f"P = {P}")
     ax.set_xlabel("iteration m")
     ax.set_ylabel("J (Eq. 41)")
     ax.set_yscale("log")
@@ -182,17 +182,17 @@ def main(argv=None):
             f"One-step error ranges over samples {N_INIT}..{n - 1} (the first {N_INIT} samples are "
             "the start-up transient of the zero-initial-condition model and are excluded). "
             f"Hybrid: iterative schedule (Steps 1-9), alpha0 = 0.5, max_iter = {max_iter}.", "",
-            "| method | error range | J (Eq. 41) | alpha | iterations | converged |",
+            "| method | error range | J (Eq. 41) | alpha | iterations | status |",
             "|---|---|---:|---:|---:|---|"]
     for name, rng in printed.items():
         out.append(f"| {name} (printed) | [{rng[0]}, {rng[1]}] | | | | |")
     for P, r in hybrid.items():
         lo, hi = error_range(y, r.predict(u, y), n_init=N_INIT)
         out.append(f"| fohw: paper's hybrid, P = {P} | [{lo:.3f}, {hi:.3f}] | {r.J:.3e} | "
-                   f"{r.alpha:.3f} | {r.n_iter} | {r.converged} |")
+                   f"{r.alpha:.3f} | {r.nit} | {r.status.name} |")
     lo, hi = error_range(y, pred_vp, n_init=N_INIT)
     out.append(f"| fohw: varpro | [{lo:.3f}, {hi:.3f}] | {varpro.J:.3e} | {varpro.alpha:.3f} | "
-               f"{varpro.n_iter} | {varpro.converged} |")
+               f"{varpro.nit} | {varpro.status.name} |")
     white = whiteness_test(y - pred_vp, n_init=N_INIT)
     xcorr = cross_correlation_test(y - pred_vp, u, n_init=N_INIT)
     out += ["", f"varpro residual tests (99 %, 25 lags): whiteness p = {white.p_value:.3g} "
