@@ -49,33 +49,6 @@ def test_robot_arm_corrupted_file(robot_arm_path, tmp_path):
         fohw.datasets.robot_arm(bad, verify=False)
 
 
-def test_fit_percent_and_error_range_by_hand():
-    y = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
-    yhat = np.array([9.0, 1.0, 2.5, 3.0, 3.0])
-    # after n_init = 1: y = [1,2,3,4], error = [0, -0.5, 0, 1]; ||e|| = sqrt(1.25);
-    # ||y - mean|| = sqrt(1.25 + 0.25 + 0.25 + 2.25) = sqrt(5)
-    assert metrics.fit_percent(y, yhat, n_init=1) == pytest.approx(100 * (1 - np.sqrt(1.25 / 5)))
-    assert metrics.error_range(y, yhat, n_init=1) == (-0.5, 1.0)
-    assert metrics.rmse(y, yhat, n_init=1) == pytest.approx(np.sqrt(1.25 / 4))
-    with pytest.raises(fohw.DimensionError, match="`n_init`"):
-        metrics.fit_percent(y, yhat, n_init=4)
-    with pytest.raises(fohw.DimensionError, match="same length"):
-        metrics.rmse(y, yhat[:3])
-
-
-def test_residual_tests_reject_colored_and_accept_white():
-    rng = np.random.default_rng(1)
-    white = rng.standard_normal(4000)
-    colored = scipy.signal.lfilter([1.0], [1.0, -0.5], white)
-    assert metrics.whiteness_test(white).passed
-    assert not metrics.whiteness_test(colored).passed
-    u = rng.standard_normal(4000)
-    assert metrics.cross_correlation_test(white, u).passed
-    leak = white + 0.3 * np.r_[0.0, u[:-1]]          # residual still holds u[k-1]
-    res = metrics.cross_correlation_test(leak, u, max_lag=5)
-    assert not res.passed and res.correlation[list(res.lags).index(1)] > 5 * res.bound
-
-
 def test_simulate_theta_nests_the_model_and_reports_divergence():
     m = fohw.datasets.paper_model()
     u = np.random.default_rng(0).uniform(-1, 1, 500)
