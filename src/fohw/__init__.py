@@ -35,8 +35,10 @@ from .exceptions import (
 from .io.jsonio import load_model, load_result, save_model
 from .model.basis import Basis, as_basis, polynomial_basis
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
+from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
+from .model.structure import Structure
 from .model.system import HammersteinWiener, simulate, simulate_theta
 from .results import IdentificationResult, Status
 
@@ -83,6 +85,7 @@ __all__ = [
     "MultiInnovationGradient",
     "MultiInnovationRLS",
     "NotFittedError",
+    "Orders",
     "OutputErrorOptions",
     "ParameterError",
     "RankDeficiencyWarning",
@@ -92,6 +95,7 @@ __all__ = [
     "SingleInnovationLMOptions",
     "SimulationDivergedError",
     "Status",
+    "Structure",
     "ThetaLayout",
     "VarproOptions",
     "as_basis",

@@ -24,9 +24,12 @@ class ThetaLayout:
     Parameters
     ----------
     na, nb : int
-        Number of output and input lags (``>= 1``).
+        Number of output and input terms (``>= 1``): the lags of the paper's commensurate model,
+        or the terms of a general one (:class:`fohw.Orders`).
     n_g, n_f : int
         Number of output (``g``) and input (``f``) basis functions (``>= 1``).
+    a_names, b_names : tuple of str, optional
+        Names of the terms (default ``a1 … a{na}``, ``b1 … b{nb}``).
 
     Examples
     --------
@@ -46,10 +49,19 @@ class ThetaLayout:
     nb: int
     n_g: int
     n_f: int
+    a_names: tuple | None = None
+    b_names: tuple | None = None
 
     def __post_init__(self):
         for name in ("na", "nb", "n_g", "n_f"):
             object.__setattr__(self, name, check_int(getattr(self, name), name, minimum=1))
+        for name, size, letter in (("a_names", self.na, "a"), ("b_names", self.nb, "b")):
+            names = getattr(self, name)
+            names = tuple(f"{letter}{i}" for i in range(1, size + 1)) if names is None else \
+                tuple(str(n) for n in names)
+            if len(names) != size:
+                raise DimensionError(f"`{name}` must have {size} entries; got {len(names)}.")
+            object.__setattr__(self, name, names)
 
     @property
     def n_params(self) -> int:
@@ -66,16 +78,15 @@ class ThetaLayout:
         """Names of the entries of theta, e.g. ``a1``, ``q2a1``, ``b1``, ``p2b1``."""
         out = []
         for j in range(1, self.n_g + 1):
-            out += [(f"q{j}" if j > 1 else "") + f"a{i}" for i in range(1, self.na + 1)]
+            out += [(f"q{j}" if j > 1 else "") + a for a in self.a_names]
         for j in range(1, self.n_f + 1):
-            out += [(f"p{j}" if j > 1 else "") + f"b{i}" for i in range(1, self.nb + 1)]
+            out += [(f"p{j}" if j > 1 else "") + b for b in self.b_names]
         return tuple(out)
 
     @property
     def model_parameter_names(self) -> tuple[str, ...]:
         """Names of the free structural parameters ``a_i, b_i, q_j (j>1), p_j (j>1)``."""
-        return (tuple(f"a{i}" for i in range(1, self.na + 1))
-                + tuple(f"b{i}" for i in range(1, self.nb + 1))
+        return (self.a_names + self.b_names
                 + tuple(f"p{j}" for j in range(2, self.n_f + 1))
                 + tuple(f"q{j}" for j in range(2, self.n_g + 1)))
 

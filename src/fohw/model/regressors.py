@@ -1,12 +1,16 @@
 """The information matrix of fractional differences (paper Eqs. 19–20, 25, 34–38; SPEC §4).
 
-Row ``k`` of the information matrix is
+Row ``k`` of the information matrix of the paper's model is
 
 ``phi[k] = [psi_1[k], …, psi_nq[k], zeta_1[k], …, zeta_np[k]]`` with
 ``psi_j[k] = [(Δ^α g_j(y))[k-1], …, (Δ^α g_j(y))[k-na]]`` and
 ``zeta_j[k] = [(Δ^α f_j(u))[k-1], …, (Δ^α f_j(u))[k-nb]]``, zero before ``k = 0``,
 
-so that ``y = Phi @ theta + v`` for a simulated record.
+so that ``y = Phi @ theta + v`` for a simulated record. For a general structure
+(:class:`fohw.Structure`: an order per term, an offset, estimated past levels, a sampling time)
+the entry of basis signal ``s`` and term ``t`` is ``(Δ_h^{ν_t} s)[k - i_t]``, plus
+``L_s h^{-ν_t} (S_inf(ν_t) - S_{k-i_t}(ν_t))`` when the past level ``L_s`` of the signal is
+estimated, and the offset adds a column of ones.
 """
 
 from __future__ import annotations
@@ -14,10 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
-from ..exceptions import DimensionError
-from .basis import as_basis
+from ..exceptions import DimensionError, ParameterError
 from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative
-from .params import ThetaLayout
+from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
 
@@ -56,20 +59,31 @@ class WindowKernel:
 
 
 class RegressorBuilder:
-    """Information matrices of one record for many fractional orders.
+    """Information matrices of one record for many values of the nonlinear parameters.
 
     The basis signals ``g_j(y)``, ``f_j(u)`` and their FFTs are computed once; each
-    :meth:`matrix` call then costs one inverse FFT of the stacked signals. This is what
-    alpha searches and sensitivities use.
+    :meth:`matrix` call then costs one inverse FFT of the stacked signals per distinct order.
+    This is what order searches, sensitivities and Jacobians use.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Input and output records, same length, finite.
+        Input and output records, same length, finite (deviations from the operating point).
     na, nb : int
         Output and input lag orders (``>= 1``); ``N`` must exceed both.
     f_basis, g_basis : Basis, int or callables
         Input and output basis functions.
+    orders, offset, past, dt : optional
+        The model class (:class:`fohw.Structure`); default the paper's commensurate model.
+    structure : Structure, optional
+        Instead of ``na … dt``.
+
+    Notes
+    -----
+    The columns are the linear parameters of :class:`fohw.Structure`: theta's (``[q ⊗ a,
+    p ⊗ b]``, Eq. 20), then a column of ones for the offset. They depend on the nonlinear
+    parameters ``params`` (the free orders, then ``u_past``, ``y_past``), given as a vector, or
+    as one number when there is only one.
 
     Examples
     --------
@@ -79,45 +93,66 @@ class RegressorBuilder:
     >>> builder = fohw.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> builder.matrix(0.6).shape
     (200, 10)
+    >>> mixed = fohw.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="mixed",
+    ...                               offset=True)
+    >>> mixed.matrix(0.4).shape, mixed.structure.linear_names[-2:]
+    ((200, 7), ('b1_alpha', 'offset'))
     """
 
-    def __init__(self, u, y, *, na, nb, f_basis, g_basis):
+    def __init__(self, u, y, *, na=None, nb=None, f_basis=None, g_basis=None, orders=None,
+                 offset=False, past="rest", dt=1.0, structure=None):
         u = check_array(u, "u")
         y = check_array(y, "y")
         check_same_length(u, y, "u", "y")
-        na = check_int(na, "na", minimum=1)
-        nb = check_int(nb, "nb", minimum=1)
-        self.f_basis = as_basis(f_basis, "f_basis")
-        self.g_basis = as_basis(g_basis, "g_basis")
+        if structure is None:
+            na = check_int(na, "na", minimum=1)
+            nb = check_int(nb, "nb", minimum=1)
+            structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
+                                       orders=orders, offset=offset, past=past, dt=dt)
+        self.structure = structure
+        na, nb = structure.na, structure.nb
         n = y.shape[0]
         if n <= max(na, nb):
             raise DimensionError(f"the record must be longer than the lags: got {n} samples for "
                                  f"na={na}, nb={nb} (need at least {max(na, nb) + 1}).")
-        self.layout = ThetaLayout(na=na, nb=nb, n_g=len(self.g_basis), n_f=len(self.f_basis))
+        self.f_basis, self.g_basis = structure.f_basis, structure.g_basis
+        self.layout = structure.layout
         self.n_samples = n
         self.u, self.y = u, y
         # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
         self.signals = np.vstack([self.g_basis.evaluate(y, "y"), self.f_basis.evaluate(u, "u")])
+        self._n_g = len(self.g_basis)
         self._lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
         self._convolution = CausalConvolution(self.signals)
         self._window_kernel = WindowKernel(self._lags)
 
+    # ---- the paper's commensurate model ---------------------------------------------------------
     def differences(self, alpha, *, derivative=False):
-        """GL differences of all basis signals, shape ``(n_g + n_f, N)``.
+        """GL differences of all basis signals at one order, shape ``(n_g + n_f, N)``.
 
-        With ``derivative=True``, their exact derivative with respect to ``alpha``
-        (convolution with :func:`fohw.gl_weights_derivative`).
+        With ``derivative=True``, their exact derivative with respect to the order
+        (convolution with :func:`fohw.gl_weights_derivative`). Divided by ``dt**alpha``.
         """
         alpha = check_scalar(alpha, "alpha")
+        return self._differences(alpha, derivative)
+
+    def _differences(self, nu, derivative=False):
         n = self.n_samples
-        w = gl_weights_derivative(alpha, n) if derivative else gl_weights(alpha, n)
-        return self._convolution(w)
+        h = self.structure.dt
+        if not derivative:
+            d = self._convolution(gl_weights(nu, n))
+            return d if h == 1.0 else d * h**-nu
+        d = self._convolution(gl_weights_derivative(nu, n))
+        if h == 1.0:
+            return d
+        return (d - np.log(h) * self._convolution(gl_weights(nu, n))) * h**-nu
 
     def window(self, k, innovation_length, weights):
         """Rows ``phi[k], phi[k-1], …, phi[k-P+1]`` (those with index >= 0), for given weights.
 
         Each row is computed exactly from the full history (no FFT), so this is what a
-        recursion whose fractional order changes at every sample uses.
+        recursion whose fractional order changes at every sample uses. The paper's model
+        (:attr:`Structure.is_paper_model`) only.
 
         Parameters
         ----------
@@ -137,7 +172,7 @@ class RegressorBuilder:
         return self._window_kernel.rows(self.signals, k, innovation_length, weights)
 
     def lag(self, differences):
-        """Arrange stacked differences into the ``(N, n)`` matrix of lagged columns."""
+        """Arrange stacked differences into the ``(N, n)`` matrix of the commensurate model."""
         n = self.n_samples
         phi = np.zeros((n, self.layout.n_params))
         col = 0
@@ -147,52 +182,170 @@ class RegressorBuilder:
                 col += 1
         return phi
 
-    def matrix(self, alpha):
-        """Information matrix ``Phi(alpha)``, shape ``(N, n)``, rows ``phi[k]``."""
-        return self.lag(self.differences(alpha))
+    # ---- any structure --------------------------------------------------------------------------
+    def _params(self, params):
+        params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+        k = self.structure.n_nonlinear
+        if params.ndim != 1 or params.shape[0] != k:
+            raise DimensionError(f"the nonlinear parameters {self.structure.nonlinear_names} "
+                                 f"need {k} value(s); got {params.shape}.")
+        if not np.all(np.isfinite(params)):
+            raise ParameterError(f"the nonlinear parameters must be finite; got {params}.")
+        return params
+
+    def _term_orders(self, params):
+        values, past = self.structure.split_nonlinear(params)
+        out, inp = self.structure.orders.values(values)
+        return out, inp, past
+
+    def _past_levels(self, past):
+        """Past level of every stacked basis signal, ``g_j(y_past)`` then ``f_j(u_past)``."""
+        u_p, y_p = past
+        return np.r_[self.g_basis.evaluate(np.array([y_p]), "y_past")[:, 0],
+                     self.f_basis.evaluate(np.array([u_p]), "u_past")[:, 0]]
+
+    def _past_slopes(self, past):
+        """Derivatives ``g_j'(y_past)``, ``f_j'(u_past)`` (central differences of the basis)."""
+        u_p, y_p = past
+        out = []
+        for basis, x, scale in ((self.g_basis, y_p, self.y), (self.f_basis, u_p, self.u)):
+            step = 1e-6 * max(abs(x), float(np.sqrt(np.mean(scale * scale))), 1e-300)
+            hi = basis.evaluate(np.array([x + step]))[:, 0]
+            lo = basis.evaluate(np.array([x - step]))[:, 0]
+            out.append((hi - lo) / (2 * step))
+        return np.r_[out[0], out[1]]
+
+    def _transient(self, nu, lag, derivative=False):
+        """``h**-nu (S_inf(nu) - S_{k-lag}(nu))`` (or its nu-derivative), ``k = 0..N-1``."""
+        n, h = self.n_samples, self.structure.dt
+        s_inf = 1.0 if nu == 0.0 else 0.0
+        w = gl_weights(nu, n - lag) if n > lag else np.zeros(0)
+        partial = np.cumsum(w)
+        out = np.full(n, s_inf)
+        out[lag:] -= partial
+        if derivative:
+            dpartial = np.cumsum(gl_weights_derivative(nu, n - lag))
+            dout = np.zeros(n)
+            dout[lag:] = -dpartial
+            if h != 1.0:
+                dout = (dout - np.log(h) * out) * h**-nu
+            return dout
+        return out if h == 1.0 else out * h**-nu
+
+    def _build(self, params, which=None):
+        """``Phi(params)``, or with ``which = m`` its derivative with respect to ``params[m]``."""
+        struct = self.structure
+        out_nu, in_nu, past = self._term_orders(params)
+        n_free = len(struct.orders.free)
+        n = self.n_samples
+        phi = np.zeros((n, struct.n_linear))
+        d_order = None if which is None or which >= n_free else struct.orders.free[which]
+        d_past = None if which is None or which < n_free else which - n_free   # 0: u, 1: y
+        levels = self._past_levels(past) if struct.past == "estimate" else None
+        slopes = self._past_slopes(past) if d_past is not None else None
+        cache = {}
+
+        def diffs(nu, derivative):
+            if (nu, derivative) not in cache:
+                cache[nu, derivative] = self._differences(nu, derivative)
+            return cache[nu, derivative]
+
+        col = 0
+        branches = ((range(self._n_g), struct.orders.output, out_nu, 1),
+                    (range(self._n_g, self.signals.shape[0]), struct.orders.input, in_nu, 0))
+        for signals, terms, nus, past_index in branches:
+            for s in signals:
+                for term, nu in zip(terms, nus):
+                    i = term.lag
+                    if which is None:
+                        phi[i:, col] = diffs(nu, False)[s, : n - i]
+                        if levels is not None and levels[s] != 0.0:
+                            phi[:, col] += levels[s] * self._transient(nu, i)
+                    elif d_order is not None and term.order == d_order:
+                        phi[i:, col] = diffs(nu, True)[s, : n - i]
+                        if levels is not None and levels[s] != 0.0:
+                            phi[:, col] += levels[s] * self._transient(nu, i, derivative=True)
+                    elif d_past == past_index:
+                        phi[:, col] = slopes[s] * self._transient(nu, i)
+                    col += 1
+        if struct.offset and which is None:
+            phi[:, col] = 1.0
+        return phi
+
+    def matrix(self, params):
+        """Information matrix, shape ``(N, n_linear)``: rows ``phi[k]`` at ``params``.
+
+        ``params``: the nonlinear parameters (the order ``alpha`` for the paper's model).
+        """
+        if self.structure.is_paper_model:
+            return self.lag(self.differences(np.asarray(params, dtype=float).item()
+                                             if np.ndim(params) else params))
+        return self._build(self._params(params))
+
+    def matrix_derivatives(self, params):
+        """``[dPhi/dparams[0], …]``: one ``(N, n_linear)`` array per nonlinear parameter."""
+        params = self._params(params)
+        if self.structure.is_paper_model:
+            return [self.lag(self.differences(params[0], derivative=True))]
+        return [self._build(params, which=m) for m in range(params.shape[0])]
 
     def matrix_derivative(self, alpha):
-        """Exact ``d Phi / d alpha``, shape ``(N, n)``."""
-        return self.lag(self.differences(alpha, derivative=True))
+        """Exact ``d Phi / d alpha``, shape ``(N, n)``: a model with one nonlinear parameter."""
+        if self.structure.n_nonlinear != 1:
+            raise ParameterError(f"matrix_derivative needs one nonlinear parameter; this model "
+                                 f"has {self.structure.nonlinear_names}: use "
+                                 "matrix_derivatives.")
+        return self.matrix_derivatives(alpha)[0]
 
-    def jacobian(self, theta, alpha):
-        """Jacobian ``G = [Phi(alpha), dPhi/dalpha @ theta]`` of the one-step predictor.
+    def jacobian(self, linear, params):
+        """Jacobian of the one-step predictor ``Phi(params) @ linear``.
 
-        The derivative of ``yhat = Phi(alpha) theta`` with respect to ``(theta, alpha)``, built
-        in one ``N x (n + 1)`` array; the estimators' Gauss–Newton steps, their covariances and
-        the Cramér–Rao bound all use it.
+        The derivative with respect to ``(linear, params)``: ``[Phi, dPhi/dparams[m] @
+        linear …]``, built in one ``N x (n_linear + n_nonlinear)`` array; the estimators'
+        least-squares steps, their covariances and the Cramér–Rao bound all use it.
 
         Returns
         -------
-        G : ndarray, shape (N, n + 1)
+        G : ndarray, shape (N, n_linear + n_nonlinear)
         """
-        theta = self.layout.check_theta(theta)
-        n = theta.shape[0]
-        G = np.empty((self.n_samples, n + 1))
-        G[:, :n] = self.matrix(alpha)
-        G[:, n] = self.matrix_derivative(alpha) @ theta
+        linear = check_array(linear, "linear")
+        if linear.shape[0] != self.structure.n_linear:
+            raise DimensionError(f"`linear` must have {self.structure.n_linear} entries "
+                                 f"({self.structure.linear_names}); got {linear.shape[0]}.")
+        n = linear.shape[0]
+        derivs = self.matrix_derivatives(params)
+        G = np.empty((self.n_samples, n + len(derivs)))
+        G[:, :n] = self.matrix(params)
+        for m, d in enumerate(derivs):
+            G[:, n + m] = d @ linear
         return G
 
 
-def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis):
+def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, offset=False,
+                       past="rest", dt=1.0):
     """Information matrix of a fractional-order Hammerstein–Wiener record.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
         Input and output, same length, finite, zero before ``k = 0``.
-    alpha : float
-        Fractional order (any finite real).
+    alpha : float or sequence
+        The fractional order (paper's model), or the nonlinear parameters of the structure:
+        its free orders, then ``u_past``, ``y_past`` (:class:`fohw.Structure`).
     na, nb : int
         Output and input lag orders, ``1 <= na, nb < N``.
     f_basis, g_basis : Basis, int or callables
         Input and output basis functions (an int is a polynomial degree).
+    orders, offset, past, dt : optional
+        The model class (:class:`fohw.Orders`, :class:`fohw.Structure`); default the paper's
+        commensurate model.
 
     Returns
     -------
     Phi : ndarray, shape (N, n)
-        Row ``k`` is ``phi[k]`` of Eq. (20) in SPEC §4 order, ``n = n_g*na + n_f*nb``;
-        entries that would need samples before ``k = 0`` are zero.
+        Row ``k`` is ``phi[k]`` of Eq. (20) in SPEC §4 order (``n = n_g*na + n_f*nb`` for the
+        paper's model), then a column of ones for an offset; entries that would need samples
+        before ``k = 0`` are zero (or the transient of the past levels).
 
     Notes
     -----
@@ -210,4 +363,5 @@ def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis):
     >>> bool(np.max(np.abs(y - Phi @ model.theta)) < 1e-12)
     True
     """
-    return RegressorBuilder(u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis).matrix(alpha)
+    return RegressorBuilder(u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis, orders=orders,
+                            offset=offset, past=past, dt=dt).matrix(alpha)

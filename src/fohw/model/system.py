@@ -1,23 +1,33 @@
 """The fractional-order Hammerstein–Wiener system and its simulator (Section 2.3, Eqs. 10–18).
 
-Also Eqs. 56–57 and SPEC §3.
+Also Eqs. 7, 14 (an order per term), 56–57 and SPEC §3. The paper's model, Eq. (16):
 
 .. math:: y[k] = \\sum_{i=1}^{n_a} a_i (\\Delta^{\\alpha} \\bar g(y))[k-i]
           + \\sum_{i=1}^{n_b} b_i (\\Delta^{\\alpha} \\bar f(u))[k-i] + v[k]
 
 with ``fbar = sum_j p_j f_j``, ``gbar = sum_j q_j g_j``, ``p_1 = q_1 = 1`` and zero
-initial conditions, so ``y[0] = v[0]``.
+initial conditions, so ``y[0] = v[0]``. The general model (:class:`fohw.Structure`) gives every
+term its own lag and order (0 included), adds an offset, past levels and a sampling time, and
+acts on deviations from an operating point.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_alpha, check_array, check_random_state, check_scalar
+from .._validation import (
+    check_alpha,
+    check_array,
+    check_int,
+    check_random_state,
+    check_same_length,
+    check_scalar,
+)
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .basis import Basis, as_basis, polynomial_basis
-from .gl import causal_convolve, gl_difference, gl_weights
-from .params import ThetaLayout
+from .gl import _weights, causal_convolve, gl_weights
+from .orders import Orders
+from .structure import Structure
 
 __all__ = ["HammersteinWiener", "simulate", "simulate_theta", "ALPHA_BOUNDS"]
 
@@ -26,28 +36,51 @@ ALPHA_BOUNDS = (0.0, 2.0)
 
 
 class HammersteinWiener:
-    """A fractional-order Hammerstein–Wiener model (Eq. 16).
+    """A fractional-order Hammerstein–Wiener model (Eq. 16; Eq. 14 with an order per term).
 
     Parameters
     ----------
-    a : array_like, shape (na,)
-        Coefficients of the output (``g``) branch, ``na >= 1``.
-    b : array_like, shape (nb,)
-        Coefficients of the input (``f``) branch, ``nb >= 1``.
+    a : array_like, shape (n_a,)
+        Coefficients of the output (``g``) branch, one per output term (``na`` lags for the
+        paper's commensurate model).
+    b : array_like, shape (n_b,)
+        Coefficients of the input (``f``) branch, one per input term.
     p : array_like, shape (n_f,)
         Weights of the input basis functions; ``p[0]`` must be exactly 1 (Eq. 17).
     q : array_like, shape (n_g,)
         Weights of the output basis functions; ``q[0]`` must be exactly 1 (Eq. 17).
-    alpha : float
-        Fractional order, in ``[0, 2]`` (0 gives the integer-order model).
+    alpha : float, sequence or dict, optional
+        The fractional order in ``[0, 2]`` (the paper's model), or the values of the free orders
+        of ``orders`` (a dict by name, or a sequence in :attr:`Orders.free` order). Not needed
+        when every order is fixed.
     f_basis, g_basis : Basis, int, callables or None, optional
         Input and output basis functions; ``None`` means the polynomial basis of degree
         ``len(p)`` (``len(q)``): ``u, u**2, …``.
+    orders : str, number, dict or Orders, optional
+        Which term has which order (:class:`fohw.Orders`): ``"commensurate"`` (default, the
+        paper's Eq. 16), ``"per_lag"``, ``"mixed"`` (then ``a`` and ``b`` hold two coefficients per
+        lag: order 0, then alpha), a number, or an :class:`Orders`.
+    dt : float, optional
+        Sampling time ``h > 0`` (Eq. 4: each term is divided by ``h**nu``). Default 1.
+    offset : float, optional
+        Constant ``c`` in the equation. Default 0.
+    past : (float, float), optional
+        Levels ``(u_past, y_past)`` at which the system rested before ``k = 0``, relative to the
+        operating point. Default ``(0, 0)``: at rest at the operating point.
+    operating_point : (float, float), optional
+        ``(u0, y0)``: the model acts on ``u - u0`` and produces ``y - y0``; :func:`fohw.simulate`
+        subtracts ``u0`` and adds ``y0``. Default ``(0, 0)``.
 
     Attributes
     ----------
     theta : ndarray
         ``[q ⊗ a, p ⊗ b]`` (Eq. 20).
+    alpha : float or None
+        The first free order (the paper's alpha); ``None`` when every order is fixed.
+    orders : dict
+        ``{free order name: value}``.
+    structure : Structure
+        The model class (orders, bases, offset, past, dt).
     layout : ThetaLayout
         Maps theta to named blocks.
 
@@ -58,9 +91,14 @@ class HammersteinWiener:
     ...                                q=[1, 0.7, 0.35], alpha=0.6)
     >>> model.parameter_names[:3], model.theta[:3].round(3)
     (('a1', 'a2', 'q2a1'), array([0.1 , 0.2 , 0.07]))
+    >>> mixed = fohw.HammersteinWiener([0.5, 0.2], [1.0, 0.3], [1], [1], alpha=0.4,
+    ...                                orders="mixed")
+    >>> mixed.parameter_names, mixed.orders
+    (('a1_0', 'a1_alpha', 'b1_0', 'b1_alpha'), {'alpha': 0.4})
     """
 
-    def __init__(self, a, b, p, q, alpha, f_basis=None, g_basis=None):
+    def __init__(self, a, b, p, q, alpha=None, f_basis=None, g_basis=None, *, orders=None,
+                 dt=1.0, offset=0.0, past=(0.0, 0.0), operating_point=(0.0, 0.0)):
         a = check_array(a, "a")
         b = check_array(b, "b")
         p = check_array(p, "p")
@@ -69,29 +107,49 @@ class HammersteinWiener:
             raise ParameterError(f"`p[0]` must be exactly 1 (normalisation of Eq. 17); got {p[0]!r}.")
         if q[0] != 1.0:
             raise ParameterError(f"`q[0]` must be exactly 1 (normalisation of Eq. 17); got {q[0]!r}.")
-        self.alpha = check_alpha(alpha, lower=ALPHA_BOUNDS[0], upper=ALPHA_BOUNDS[1],
-                                 inclusive=True)
-        self.f_basis = polynomial_basis(p.shape[0]) if f_basis is None else as_basis(f_basis, "f_basis")
-        self.g_basis = polynomial_basis(q.shape[0]) if g_basis is None else as_basis(g_basis, "g_basis")
-        if len(self.f_basis) != p.shape[0]:
-            raise DimensionError(f"`p` must have one entry per f-basis function ({len(self.f_basis)});"
+        f_basis = polynomial_basis(p.shape[0]) if f_basis is None else as_basis(f_basis, "f_basis")
+        g_basis = polynomial_basis(q.shape[0]) if g_basis is None else as_basis(g_basis, "g_basis")
+        if len(f_basis) != p.shape[0]:
+            raise DimensionError(f"`p` must have one entry per f-basis function ({len(f_basis)});"
                                  f" got {p.shape[0]}.")
-        if len(self.g_basis) != q.shape[0]:
-            raise DimensionError(f"`q` must have one entry per g-basis function ({len(self.g_basis)});"
+        if len(g_basis) != q.shape[0]:
+            raise DimensionError(f"`q` must have one entry per g-basis function ({len(g_basis)});"
                                  f" got {q.shape[0]}.")
-        self.layout = ThetaLayout(na=a.shape[0], nb=b.shape[0], n_g=q.shape[0], n_f=p.shape[0])
+        terms = Orders.infer(orders, a.shape[0], b.shape[0])
+        if len(terms.free) == 1 and np.ndim(alpha) == 0 and not isinstance(alpha, dict) \
+                and alpha is not None:
+            alpha = {terms.free[0]: check_alpha(alpha, lower=ALPHA_BOUNDS[0],
+                                                upper=ALPHA_BOUNDS[1], inclusive=True)}
+        self.orders = terms.free_mapping(alpha)
+        self.offset = check_scalar(offset, "offset")
+        self.past = _pair(past, "past")
+        self.operating_point = _pair(operating_point, "operating_point")
+        self.structure = Structure(terms, f_basis, g_basis, offset=self.offset != 0.0,
+                                   past="estimate" if self.past != (0.0, 0.0) else "rest", dt=dt)
+        self.f_basis, self.g_basis = f_basis, g_basis
+        self.layout = self.structure.layout
         for name, v in (("a", a), ("b", b), ("p", p), ("q", q)):
             v.setflags(write=False)
             setattr(self, name, v)
 
     @property
+    def alpha(self):
+        """The first free order (the paper's alpha), or ``None`` when every order is fixed."""
+        return next(iter(self.orders.values()), None)
+
+    @property
+    def dt(self) -> float:
+        """Sampling time."""
+        return self.structure.dt
+
+    @property
     def na(self) -> int:
-        """Number of output lags."""
+        """Number of output terms (lags, for the paper's model)."""
         return self.layout.na
 
     @property
     def nb(self) -> int:
-        """Number of input lags."""
+        """Number of input terms (lags, for the paper's model)."""
         return self.layout.nb
 
     @property
@@ -104,20 +162,46 @@ class HammersteinWiener:
         """Names of the entries of :attr:`theta` (``a1``, ``q2a1``, ``b1``, ``p2b1``, …)."""
         return self.layout.names
 
+    def static_gain(self, u_level):
+        """The steady output for a constant input ``u_level`` (model units), or ``nan``.
+
+        A fractional term (order > 0) of a constant vanishes in steady state (``Delta^nu`` of
+        a constant decays like ``k**-nu``), so only order-0 terms carry a static gain: the
+        steady ``y`` solves ``ybar = c + sum_{nu_t = 0} (a_t gbar(ybar)) + sum_{nu_t = 0} b_t
+        fbar(ubar)`` in deviation coordinates. Returned for the linear output basis (``g =
+        y``), where it is explicit; ``nan`` when ``1 - sum a_t`` (order 0) is 0.
+        """
+        if not self.g_basis.is_polynomial or len(self.g_basis) != 1:
+            raise ParameterError("static_gain is explicit for the linear output basis "
+                                 "(g_basis=1) only.")
+        out_nu, in_nu = self.structure.orders.values(self.orders)
+        u0, y0 = self.operating_point
+        ubar = check_scalar(u_level, "u_level") - u0
+        fbar = float(self.p @ self.f_basis.evaluate(np.array([ubar]))[:, 0])
+        a0 = sum(a for a, nu in zip(self.a, out_nu) if nu == 0.0)
+        b0 = sum(b for b, nu in zip(self.b, in_nu) if nu == 0.0)
+        denom = 1.0 - a0
+        if denom == 0.0:
+            return float("nan")
+        return y0 + (self.offset + b0 * fbar) / denom
+
     @classmethod
-    def from_theta(cls, theta, alpha, *, na, nb, f_basis, g_basis):
+    def from_theta(cls, theta, alpha, *, na, nb, f_basis, g_basis, orders=None, dt=1.0,
+                   offset=0.0, past=(0.0, 0.0), operating_point=(0.0, 0.0)):
         """Build a model from a parameter vector by Eqs. (39)–(40).
 
         Parameters
         ----------
         theta : array_like, shape (n,)
             ``[q ⊗ a, p ⊗ b]``.
-        alpha : float
-            Fractional order.
+        alpha : float, sequence or dict
+            Fractional order(s), as for the constructor.
         na, nb : int
             Output and input lag orders.
         f_basis, g_basis : Basis, int or callables
             Input and output basis functions.
+        orders, dt, offset, past, operating_point
+            As for the constructor (``orders`` with the lags ``na``, ``nb``).
 
         Returns
         -------
@@ -125,10 +209,9 @@ class HammersteinWiener:
 
         Notes
         -----
-        ``a`` and ``b`` are the first ``na`` and the ``(na n_g + 1)``-th to ``(na n_g + nb)``-th
-        entries; ``q_j``, ``p_j`` are averaged ratios (Eqs. 39–40). For a theta that is not an
-        exact Kronecker product (any estimate), the model's :attr:`theta` differs from the
-        input theta.
+        ``a`` and ``b`` are the first block of each branch; ``q_j``, ``p_j`` are averaged
+        ratios (Eqs. 39–40). For a theta that is not an exact Kronecker product (any estimate),
+        the model's :attr:`theta` differs from the input theta.
 
         Examples
         --------
@@ -138,22 +221,33 @@ class HammersteinWiener:
         >>> m2.q.round(12)
         array([1.  , 0.7 , 0.35])
         """
-        f_basis = as_basis(f_basis, "f_basis")
-        g_basis = as_basis(g_basis, "g_basis")
-        layout = ThetaLayout(na=na, nb=nb, n_g=len(g_basis), n_f=len(f_basis))
-        a, b, p, q = layout.recover(theta)
-        return cls(a, b, p, q, alpha, f_basis=f_basis, g_basis=g_basis)
+        structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
+                                   orders=orders, dt=dt)
+        a, b, p, q = structure.layout.recover(theta)
+        return cls(a, b, p, q, alpha, f_basis=structure.f_basis, g_basis=structure.g_basis,
+                   orders=structure.orders, dt=dt, offset=offset, past=past,
+                   operating_point=operating_point)
 
     def __repr__(self):
         def fmt(v):
             return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+        if self.structure.orders.is_commensurate:
+            orders = f"alpha={self.alpha:.6g}"
+        else:
+            values = ", ".join(f"{k}={v:.6g}" for k, v in self.orders.items())
+            orders = f"orders={self.structure.orders!r}" + (f", {values}" if values else "")
+        extra = "".join(f", {name}={value!r}" for name, value, default in (
+            ("dt", self.dt, 1.0), ("offset", self.offset, 0.0), ("past", self.past, (0.0, 0.0)),
+            ("operating_point", self.operating_point, (0.0, 0.0))) if value != default)
         return (f"HammersteinWiener(a={fmt(self.a)}, b={fmt(self.b)}, p={fmt(self.p)}, "
-                f"q={fmt(self.q)}, alpha={self.alpha:.6g}, f_basis={self.f_basis!r}, "
-                f"g_basis={self.g_basis!r})")
+                f"q={fmt(self.q)}, {orders}, f_basis={self.f_basis!r}, "
+                f"g_basis={self.g_basis!r}{extra})")
 
     def __eq__(self, other):
-        return (isinstance(other, HammersteinWiener) and self.alpha == other.alpha
-                and self.f_basis == other.f_basis and self.g_basis == other.g_basis
+        return (isinstance(other, HammersteinWiener) and self.orders == other.orders
+                and self.structure == other.structure
+                and (self.offset, self.past, self.operating_point)
+                == (other.offset, other.past, other.operating_point)
                 and all(np.array_equal(getattr(self, n), getattr(other, n)) for n in "abpq"))
 
     __hash__ = None
@@ -204,72 +298,116 @@ def _output_terms(g_basis: Basis, Q: np.ndarray):
 
 
 #: Below this record length the simulator runs the recursion directly (one dot product per
-#: output signal and sample); above it, by divide and conquer (:func:`_simulate_recursion`).
+#: output signal and sample); above it, by divide and conquer (:func:`_recursion`).
 FAST_SIMULATION_THRESHOLD = 8192
 _LEAF = 128
 
 
-def _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v):
+def _transient(nu, lag, n, h):
+    """``h**-nu (S_inf(nu) - S_{k-lag}(nu))``: a past level's effect on a term (Structure notes)."""
+    out = np.full(n, 1.0 if nu == 0.0 else 0.0)
+    if n > lag:
+        out[lag:] -= np.cumsum(gl_weights(nu, n - lag))
+    return out if h == 1.0 else out * h**-nu
+
+
+def _forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, past):
+    """Everything in y[k] that does not feed back: noise, offset, input branch, past levels.
+
+    ``in_terms`` and ``out_terms`` are sequences of ``(lag, order)``; ``pb`` is ``(n_f, n_in)``
+    and ``qa`` is ``(n_g, n_out)``, the coefficient of basis function ``j`` in term ``t``.
+    """
     n = u.shape[0]
-    nb = pb.shape[1]
-    df = gl_difference(f_basis.evaluate(u, "u"), alpha)          # (n_f, N)
     w = v.copy()
-    for i in range(nb):
-        w[i + 1:] += pb[:, i] @ df[:, : n - i - 1]
-    # (r, i, coefficient) for every output term A[r, i] (Δ^α z_r)[k-1-i]
-    terms = [(r, i, float(A[r, i])) for r in range(A.shape[0]) for i in range(A.shape[1])]
-    return w, gl_weights(alpha, n), _output_terms(g_basis, Q), terms
+    if offset != 0.0:
+        w += offset
+    F = f_basis.evaluate(u, "u")
+    diffs = {}
+    for t, (lag, nu) in enumerate(in_terms):
+        if nu not in diffs:
+            d = F if nu == 0.0 else causal_convolve(F, _weights(nu, n))
+            diffs[nu] = d if h == 1.0 or nu == 0.0 else d * h**-nu
+        if lag < n:
+            w[lag:] += pb[:, t] @ diffs[nu][:, : n - lag]
+    u_past, y_past = past
+    if u_past != 0.0 or y_past != 0.0:
+        lf = f_basis.evaluate(np.array([u_past]), "u_past")[:, 0]
+        lg = g_basis.evaluate(np.array([y_past]), "y_past")[:, 0]
+        for coef, levels, terms in ((pb, lf, in_terms), (qa, lg, out_terms)):
+            for t, (lag, nu) in enumerate(terms):
+                w += (coef[:, t] @ levels) * _transient(nu, lag, n, h)
+    return w
 
 
-def _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf_size):
-    """The recursion of Eq. (16); O(N log^2 N) by divide and conquer over time.
+def _recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
+    """``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
 
-    The output terms are written as ``sum_r sum_i A[r, i] (Δ^α z_r(y))[k-1-i]`` with
     ``z_r(y) = sum_j Q[j, r] g_j(y)``: for a model ``Q = q``, ``A = a`` (one signal, gbar);
-    for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``.
+    for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``. ``out_terms[t]`` is the
+    ``(lag, order)`` of column ``t`` of ``A``. Every (signal, distinct order) pair has an
+    accumulator of ``Delta^nu z_r``; order-0 accumulators have no memory (``z_r`` itself).
 
-    ``solve(l, r)`` first finishes ``[l, mid)``, then adds the contribution of
-    ``z[:, l:mid]`` to the differences at ``[mid, r)`` with one FFT convolution, then
-    finishes ``[mid, r)``. On entry to ``solve(l, r)`` the differences at ``[l, r)`` already
-    hold every contribution from samples before ``l``. Leaves of at most ``leaf_size`` samples
-    run the recursion directly, one dot product per output signal and sample; with
-    ``leaf_size >= N`` that is the whole (direct, O(N^2)) simulation.
+    O(N log^2 N) by divide and conquer over time: ``solve(l, r)`` first finishes ``[l, mid)``,
+    then adds the contribution of ``z[:, l:mid]`` to the accumulators at ``[mid, r)`` with one
+    FFT convolution per accumulator, then finishes ``[mid, r)``. Leaves of at most
+    ``leaf_size`` samples run the recursion directly, one dot product per accumulator and
+    sample; with ``leaf_size >= N`` that is the whole (direct, O(N^2)) simulation. The first
+    ``len(y_fixed)`` outputs are not computed but taken from ``y_fixed`` (a measured history).
     """
     import math
 
-    n = u.shape[0]
+    n = w.shape[0]
     R = Q.shape[1]
-    w, beta, zfun, terms = _prepare(Q, A, pb, alpha, f_basis, g_basis, u, v)
+    nus = []
+    for _, nu in out_terms:
+        if nu not in nus:
+            nus.append(nu)
+    acc = [(r, nu) for r in range(R) for nu in nus]          # accumulator index -> (signal, nu)
+    index = {key: a for a, key in enumerate(acc)}
+    terms = [(index[r, nu], lag - 1, float(A[r, t]) * (1.0 if h == 1.0 else h**-nu))
+             for r in range(R) for t, (lag, nu) in enumerate(out_terms)]
+    betas = {nu: gl_weights(nu, n) for nu in nus if nu != 0.0}
+    memory = [(a, r, betas[nu]) for a, (r, nu) in enumerate(acc) if nu != 0.0]
+    memoryless = [(a, r) for a, (r, nu) in enumerate(acc) if nu == 0.0]
+    zfun = _output_terms(g_basis, Q)
     w = w.tolist()
+    n_fixed = 0 if y_fixed is None else y_fixed.shape[0]
+    fixed = [] if y_fixed is None else y_fixed.tolist()
     leaf_size = min(leaf_size, n)
-    beta_rev_leaf = beta[:leaf_size][::-1].copy()
+    rev_leaf = {id(b): b[:leaf_size][::-1].copy() for _, _, b in memory}
     y = [0.0] * n
     z = np.zeros((R, n))
-    dz = np.zeros((R, n))       # contributions gathered so far
+    dz = np.zeros((len(acc), n))      # contributions gathered so far
     dz_item = dz.item
     isfinite = math.isfinite
-    zrows = list(z)             # 1-D views, one per output signal
+    zrows = list(z)                   # 1-D views, one per output signal
     dzrows = list(dz)
     dot = np.dot
     signals = range(R)
+    leaf_memory = [(dzrows[a], r, rev_leaf[id(b)]) for a, r, b in memory]
+    leaf_memoryless = [(dzrows[a], r) for a, r in memoryless]
 
     def leaf(lo, hi):
         for k in range(lo, hi):
-            yk = w[k]
-            for r, i, c in terms:
-                if i < k:
-                    yk += c * dz_item(r, k - 1 - i)
-            if not abs(yk) <= threshold:       # also catches nan
-                raise SimulationDivergedError(k, yk, threshold)
+            if k < n_fixed:
+                yk = fixed[k]
+            else:
+                yk = w[k]
+                for a, i, c in terms:
+                    if i < k:
+                        yk += c * dz_item(a, k - 1 - i)
+                if not abs(yk) <= threshold:       # also catches nan
+                    raise SimulationDivergedError(k, yk, threshold)
             zk = zfun(yk)
             if not all(isfinite(x) for x in zk):
                 raise SimulationDivergedError(k, yk, threshold)
             y[k] = yk
-            b = beta_rev_leaf[leaf_size - (k - lo + 1):]
             for r in signals:
-                zr = zrows[r]
-                zr[k] = zk[r]
-                dzrows[r][k] += dot(zr[lo:k + 1], b)
+                zrows[r][k] = zk[r]
+            for row, r, b_rev in leaf_memory:
+                row[k] += dot(zrows[r][lo:k + 1], b_rev[leaf_size - (k - lo + 1):])
+            for row, r in leaf_memoryless:
+                row[k] = zk[r]
 
     def solve(lo, hi):
         if hi - lo <= leaf_size:
@@ -279,7 +417,8 @@ def _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf
         solve(lo, mid)
         # dz[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi); z[mid:hi] is
         # still zero, so this is the causal convolution of z[lo:hi].
-        dz[:, mid:hi] += causal_convolve(z[:, lo:hi], beta[:hi - lo])[:, mid - lo:]
+        for a, r, beta in memory:
+            dz[a, mid:hi] += causal_convolve(z[r, lo:hi], beta[:hi - lo])[mid - lo:]
         solve(mid, hi)
 
     with np.errstate(over="ignore", invalid="ignore"):
@@ -287,12 +426,37 @@ def _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf
     return np.array(y)
 
 
-def _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
-    """Run the recursion directly (one leaf) or by divide and conquer (``auto``/``direct``/``fast``)."""
+def _leaf_size(n, method):
     if method == "auto":
-        method = "fast" if u.shape[0] > FAST_SIMULATION_THRESHOLD else "direct"
-    leaf_size = _LEAF if method == "fast" else u.shape[0]
-    return _simulate_recursion(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, leaf_size)
+        method = "fast" if n > FAST_SIMULATION_THRESHOLD else "direct"
+    return _LEAF if method == "fast" else n
+
+
+def _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
+    """The paper's commensurate model in block form (``auto``/``direct``/``fast``)."""
+    out_terms = [(i, alpha) for i in range(1, A.shape[1] + 1)]
+    in_terms = [(i, alpha) for i in range(1, pb.shape[1] + 1)]
+    w = _forcing(pb, in_terms, None, out_terms, f_basis, g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
+    return _recursion(Q, A, out_terms, g_basis, w, threshold, _leaf_size(u.shape[0], method))
+
+
+def _output_representation(qa):
+    """``(Q, A)`` with the fewer output signals: ``z_j = g_j(y)`` or one signal per term."""
+    if qa.shape[0] <= qa.shape[1]:      # fewer g-signals than terms: z_j = g_j(y)
+        return np.eye(qa.shape[0]), qa
+    return qa, np.eye(qa.shape[1])     # fewer terms: z_t = sum_j qa[j, t] g_j(y)
+
+
+def _default_threshold(w, y_fixed):
+    """1e8 times the largest magnitude that drives the recursion.
+
+    The drive is the input branch, noise, offset, past levels and history: an output beyond
+    1e8 times it has been amplified by the feedback and is escaping, in any units.
+    """
+    drive = float(np.max(np.abs(w))) if w.size else 0.0
+    if y_fixed is not None and y_fixed.size:
+        drive = max(drive, float(np.max(np.abs(y_fixed))))
+    return 1e8 * max(drive, np.finfo(float).tiny)
 
 
 def _noise(n, noise, noise_std, random_state):
@@ -310,8 +474,57 @@ def _noise(n, noise, noise_std, random_state):
     return np.zeros(n)
 
 
+def _run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, operating_point,
+         threshold, history, method="auto"):
+    """Simulate any structure from its coefficient blocks (deviation coordinates inside)."""
+    u0, y0 = operating_point
+    out_nu, in_nu = structure.orders.values(order_values, check=False)
+    out_terms = [(term.lag, nu) for term, nu in zip(structure.orders.output, out_nu)]
+    in_terms = [(term.lag, nu) for term, nu in zip(structure.orders.input, in_nu)]
+    n_hist, y_fixed = 0, None
+    if history is not None:
+        u_hist, y_hist = _check_history(history)
+        n_hist = u_hist.shape[0]
+        u = np.r_[u_hist, u]
+        v = np.r_[np.zeros(n_hist), v]
+        y_fixed = y_hist - y0 if y0 != 0.0 else y_hist
+    if u0 != 0.0:
+        u = u - u0
+    w = _forcing(pb, in_terms, qa, out_terms, structure.f_basis, structure.g_basis, u, v,
+                 structure.dt, offset, past)
+    if threshold is None:
+        threshold = _default_threshold(w, y_fixed)
+    try:
+        y = _recursion(Q, A, out_terms, structure.g_basis, w, threshold,
+                       _leaf_size(u.shape[0], method), structure.dt, y_fixed)
+    except SimulationDivergedError as err:
+        raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold) \
+            from None
+    y = y[n_hist:]
+    return y + y0 if y0 != 0.0 else y
+
+
+def _check_history(history):
+    try:
+        u_hist, y_hist = history
+    except (TypeError, ValueError):
+        raise ParameterError("`history` must be a pair (u_past, y_past) of measured records; "
+                             f"got {type(history).__name__}.") from None
+    u_hist = check_array(u_hist, "history u")
+    y_hist = check_array(y_hist, "history y")
+    check_same_length(u_hist, y_hist, "history u", "history y")
+    return u_hist, y_hist
+
+
+def _threshold(divergence_threshold):
+    if divergence_threshold is None:
+        return None
+    return check_scalar(divergence_threshold, "divergence_threshold", lower=0.0,
+                        lower_inclusive=False)
+
+
 def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
-             divergence_threshold=1e8):
+             divergence_threshold=None, history=None):
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
     Parameters
@@ -319,7 +532,8 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     model : HammersteinWiener
         The system.
     u : array_like, shape (N,)
-        Input signal, finite.
+        Input signal, finite, in the model's units (its operating point is subtracted inside
+        and the output's added back).
     noise : array_like, shape (N,), optional
         The equation noise ``v[k]`` added at every sample. Mutually exclusive with
         ``noise_std > 0``.
@@ -328,8 +542,14 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     random_state : None, int or numpy.random.Generator, optional
         Source of the noise when ``noise_std > 0``.
     divergence_threshold : float, optional
-        The output is declared divergent when ``|y[k]|`` exceeds this (default ``1e8``)
-        or is not finite.
+        The output is declared divergent when ``|y[k]|`` (deviation from the operating point)
+        exceeds this or is not finite. Default: ``1e8`` times the largest magnitude that drives
+        the recursion (input branch, noise, offset, past levels, history), so the test means the
+        same in every unit.
+    history : (u_past, y_past), optional
+        Measured input and output just before ``u`` (same units): the simulation continues
+        from them, its GL memory holding that history, in free run from the first sample of
+        ``u``. The model's past levels (if any) apply before the history.
 
     Returns
     -------
@@ -339,16 +559,16 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     Raises
     ------
     SimulationDivergedError
-        The output escaped; ``err.sample`` is the first offending index.
+        The output escaped; ``err.sample`` is the first offending index of ``u``.
 
     Notes
     -----
-    The exact recursion of SPEC §3 (Eq. 16) with full memory: ``y[k]`` uses
-    ``(Δ^α gbar(y))[k-i]`` for ``i = 1..na``, each the GL sum over all of
-    ``gbar(y[0..k-i])``. The input branch is computed once by :func:`fohw.gl_difference`.
-    Up to ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``, about
-    0.04 s at ``N = 10**4``); above, finished halves of the record enter later samples through
-    FFT convolutions (``O(N log^2 N)``, about 3.5 s at ``N = 10**6``), equal to the direct
+    The exact recursion of SPEC §3 (Eq. 16; Eq. 14 for a general :class:`fohw.Orders`) with
+    full memory: ``y[k]`` uses ``(Delta^nu gbar(y))[k-i]`` for every output term, each the GL
+    sum over all of ``gbar(y[0..k-i])``. The input branch is computed once by FFT. Up to
+    ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``, about 0.04 s at
+    ``N = 10**4``); above, finished halves of the record enter later samples through FFT
+    convolutions (``O(N log^2 N)``, about 3.5 s at ``N = 10**6``), equal to the direct
     recursion to rounding.
 
     Examples
@@ -363,15 +583,16 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
         raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
     u = check_array(u, "u")
     v = _noise(u.shape[0], noise, noise_std, random_state)
-    threshold = check_scalar(divergence_threshold, "divergence_threshold", lower=0.0,
-                             lower_inclusive=False)
-    return _simulate_blocks(model.q[:, None], model.a[None, :], np.outer(model.p, model.b),
-                            model.alpha, model.f_basis, model.g_basis, u, v, threshold)
+    return _run(model.structure, model.q[:, None], model.a[None, :], np.outer(model.q, model.a),
+                np.outer(model.p, model.b), model.orders, u, v, offset=model.offset,
+                past=model.past, operating_point=model.operating_point,
+                threshold=_threshold(divergence_threshold), history=history)
 
 
-def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, noise=None, noise_std=0.0,
-                   random_state=None, divergence_threshold=1e8):
-    """Simulate the model ``y = Phi(alpha) theta + v`` for any theta (not only ``q ⊗ a, p ⊗ b``).
+def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, orders=None, dt=1.0,
+                   offset=0.0, past=(0.0, 0.0), operating_point=(0.0, 0.0), noise=None,
+                   noise_std=0.0, random_state=None, divergence_threshold=None, history=None):
+    """Simulate ``y = Phi(alpha) theta + v`` for any theta (not only ``q ⊗ a, p ⊗ b``).
 
     The same recursion as :func:`simulate`, with each entry of theta its own coefficient: the
     free-run behaviour of exactly the predictor that an estimator fitted, before the rank-one
@@ -381,13 +602,15 @@ def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, noise=None, noi
     ----------
     theta : array_like, shape (n,)
         Parameters in the layout of :class:`fohw.ThetaLayout`.
-    alpha : float
-        Fractional order (finite).
+    alpha : float, sequence or dict
+        The fractional order, or the free orders of ``orders``.
     u : array_like, shape (N,)
         Input.
-    na, nb, f_basis, g_basis
-        Model structure.
-    noise, noise_std, random_state, divergence_threshold
+    na, nb, f_basis, g_basis, orders, dt
+        Model structure (as in :func:`fohw.identify`).
+    offset, past, operating_point
+        The constant, the past levels ``(u_past, y_past)`` and ``(u0, y0)``.
+    noise, noise_std, random_state, divergence_threshold, history
         As in :func:`simulate`.
 
     Returns
@@ -404,17 +627,30 @@ def simulate_theta(theta, alpha, u, *, na, nb, f_basis, g_basis, noise=None, noi
     >>> bool(np.max(np.abs(y1 - y2)) < 1e-13)
     True
     """
-    f_basis = as_basis(f_basis, "f_basis")
-    g_basis = as_basis(g_basis, "g_basis")
-    layout = ThetaLayout(na=na, nb=nb, n_g=len(g_basis), n_f=len(f_basis))
-    qa, pb = layout.blocks(theta)
-    alpha = check_scalar(alpha, "alpha")
+    na = check_int(na, "na", minimum=1)
+    nb = check_int(nb, "nb", minimum=1)
+    structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis, orders=orders,
+                               dt=dt)
+    qa, pb = structure.layout.blocks(theta)
+    if not structure.orders.free:
+        values = {}
+    elif np.ndim(alpha) == 0 and not isinstance(alpha, dict) and len(structure.orders.free) == 1:
+        # Any finite order here (a negative one is a fractional sum), as gl_difference allows.
+        values = {structure.orders.free[0]: check_scalar(alpha, "alpha")}
+    else:
+        values = structure.orders.free_mapping(alpha)
     u = check_array(u, "u")
     v = _noise(u.shape[0], noise, noise_std, random_state)
-    threshold = check_scalar(divergence_threshold, "divergence_threshold", lower=0.0,
-                             lower_inclusive=False)
-    if qa.shape[0] <= qa.shape[1]:      # fewer g-signals than lags: z_j = g_j(y)
-        Q, A = np.eye(qa.shape[0]), qa
-    else:                               # fewer lags: z_i = sum_j qa[j, i] g_j(y)
-        Q, A = qa, np.eye(qa.shape[1])
-    return _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold)
+    Q, A = _output_representation(qa)
+    return _run(structure, Q, A, qa, pb, values, u, v, offset=check_scalar(offset, "offset"),
+                past=_pair(past, "past"), operating_point=_pair(operating_point,
+                                                                "operating_point"),
+                threshold=_threshold(divergence_threshold), history=history)
+
+
+def _pair(value, name):
+    try:
+        a, b = value
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be a pair of numbers; got {value!r}.") from None
+    return check_scalar(a, f"{name}[0]"), check_scalar(b, f"{name}[1]")

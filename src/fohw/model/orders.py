@@ -1,0 +1,343 @@
+"""Which term of the linear block has which fractional order (paper Eqs. 7, 11, 14).
+
+The paper writes the linear block with an order per term, ``A(z) = sum_i a_i z^{-alpha_i}``
+and ``B(z) = sum_i b_i z^{-gamma_i}`` (its "nonhomogeneous" case, Eq. 7), and then restricts
+itself to one order factor, ``z^{-i + alpha} x = Delta^alpha x(k - i)`` (Eqs. 8–9, 16). fohw
+implements the general class: each term of the output branch is ``a_t (Delta^{nu_t} gbar(y))
+(k - i_t)`` and each term of the input branch ``b_t (Delta^{nu_t} fbar(u))(k - i_t)``, for a lag
+``i_t >= 1`` and an order ``nu_t``. An order is a fixed number in ``[0, 2]`` (0 included: the
+memoryless term ``x(k - i)`` that carries a static gain) or the *name* of a free order to be
+estimated; terms that name the same free order share it (tied orders).
+
+Presets (``orders=`` in :func:`fohw.identify` and :class:`fohw.HammersteinWiener`):
+
+``"commensurate"`` (default)
+    The paper's model, Eq. (16): every term ``Delta^alpha x(k - i)``, one free order ``alpha``.
+``"per_lag"``
+    The paper's nonhomogeneous model, Eq. (14): a free order for every term, ``alpha_a1 …
+    alpha_a{na}`` (output branch) and ``alpha_b1 … alpha_b{nb}`` (input branch).
+``"mixed"``
+    Order 0 *and* a free order ``alpha`` at every lag of both branches: a static gain beside
+    fractional dynamics. The commensurate model has no static gain for ``alpha > 0``
+    (``Delta^alpha`` of a constant decays like ``k**-alpha``), so on records with a static
+    response its fits drive alpha to 0; the mixed model keeps both.
+a number
+    Every term fixed at that order (``orders=0``: the integer-order model).
+
+Anything else is written per lag: ``Orders.from_lags(a=[(0, "alpha"), (0, "alpha")],
+b=[(0, "alpha")])``, or the same as a dict, ``orders={"a": [...], "b": [...]}``: one entry per
+lag, each an order or a tuple of orders (one term per order).
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from .._validation import check_int, check_scalar
+from ..exceptions import ParameterError
+
+__all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE"]
+
+#: The orders a term may have (fixed or free): ``[0, 2]``.
+ORDER_RANGE = (0.0, 2.0)
+#: The named presets.
+PRESETS = ("commensurate", "per_lag", "mixed")
+
+
+@dataclass(frozen=True)
+class Term:
+    """One term of a branch: lag ``i >= 1`` and an order (a fixed number or a free order's name)."""
+
+    lag: int
+    order: float | str
+
+    @property
+    def free(self) -> bool:
+        """Whether the order is a free parameter."""
+        return isinstance(self.order, str)
+
+    def label(self) -> str:
+        """The order as text: its name, or the fixed number (``0``, ``0.5``)."""
+        return self.order if self.free else f"{self.order:g}"
+
+
+def _order(value, where):
+    if isinstance(value, str):
+        name = value.strip()
+        if not name or _is_number(name):
+            raise ParameterError(f"{where}: a free order is named by a non-empty, non-numeric "
+                                 f"string; got {value!r}.")
+        return name
+    if isinstance(value, (bool,)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{where}: an order is a number in [0, 2] or the name of a free "
+                             f"order; got {value!r}.")
+    value = float(value)
+    if not ORDER_RANGE[0] <= value <= ORDER_RANGE[1]:
+        raise ParameterError(f"{where} must be in [0, 2]; got {value!r}.")
+    return value
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+class Orders:
+    """The terms of the linear block and their orders (paper Eqs. 7, 14).
+
+    Parameters
+    ----------
+    a, b : sequence of Term or (lag, order)
+        Terms of the output branch (coefficients ``a``, acting on ``gbar(y)``) and of the input
+        branch (``b``, on ``fbar(u)``), in the order of the coefficients. Lags are ``>= 1``;
+        an order is a number in ``[0, 2]`` or a free order's name. A ``(lag, order)`` pair may
+        appear once per branch.
+
+    Attributes
+    ----------
+    output, input : tuple of Term
+    free : tuple of str
+        The free orders, in order of first appearance (output branch first): the order of
+        ``IdentificationResult.orders`` and of every vector of orders.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> fohw.Orders.preset("mixed", na=1, nb=2)
+    Orders(a=[(1, 0), (1, alpha)], b=[(1, 0), (1, alpha), (2, 0), (2, alpha)])
+    >>> o = fohw.Orders.from_lags(a=[0.5], b=[(0, "nu"), "nu"])
+    >>> o.free, o.a_names, o.b_names
+    (('nu',), ('a1',), ('b1_0', 'b1_nu', 'b2'))
+    """
+
+    def __init__(self, a, b):
+        self.output = self._terms(a, "a")
+        self.input = self._terms(b, "b")
+        free = []
+        for t in self.output + self.input:
+            if t.free and t.order not in free:
+                free.append(t.order)
+        self.free = tuple(free)
+
+    @staticmethod
+    def _terms(spec, branch):
+        if isinstance(spec, (str, bytes)) or not isinstance(spec, Sequence) or not spec:
+            raise ParameterError(f"`orders`: branch {branch!r} needs a non-empty sequence of "
+                                 f"(lag, order) terms; got {spec!r}.")
+        terms, seen = [], set()
+        for n, item in enumerate(spec):
+            if isinstance(item, Term):
+                lag, order = item.lag, item.order
+            else:
+                try:
+                    lag, order = item
+                except (TypeError, ValueError):
+                    raise ParameterError(f"`orders`: term {n} of branch {branch!r} must be a "
+                                         f"(lag, order) pair; got {item!r}.") from None
+            if isinstance(lag, bool) or not isinstance(lag, numbers.Integral) or lag < 1:
+                raise ParameterError(f"`orders`: the lag of term {n} of branch {branch!r} must "
+                                     f"be an integer >= 1; got {lag!r}.")
+            lag = int(lag)
+            order = _order(order, f"`orders`: the order of term {n} of branch {branch!r}")
+            if (lag, order) in seen:
+                raise ParameterError(f"`orders`: branch {branch!r} has the term (lag {lag}, "
+                                     f"order {order!r}) twice.")
+            seen.add((lag, order))
+            terms.append(Term(lag, order))
+        return tuple(terms)
+
+    # ---- construction -------------------------------------------------------------------------
+    @classmethod
+    def preset(cls, name, *, na, nb):
+        """One of :data:`PRESETS` for ``na`` output and ``nb`` input lags."""
+        na = check_int(na, "na", minimum=1)
+        nb = check_int(nb, "nb", minimum=1)
+        if name == "commensurate":
+            return cls([(i, "alpha") for i in range(1, na + 1)],
+                       [(i, "alpha") for i in range(1, nb + 1)])
+        if name == "per_lag":
+            return cls([(i, f"alpha_a{i}") for i in range(1, na + 1)],
+                       [(i, f"alpha_b{i}") for i in range(1, nb + 1)])
+        if name == "mixed":
+            return cls([(i, o) for i in range(1, na + 1) for o in (0.0, "alpha")],
+                       [(i, o) for i in range(1, nb + 1) for o in (0.0, "alpha")])
+        raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
+                             f"dict of per-lag orders; got {name!r}.")
+
+    @classmethod
+    def fixed(cls, value, *, na, nb):
+        """Every term ``Delta^value x(k - i)``, no free order (``value = 0``: integer order)."""
+        na = check_int(na, "na", minimum=1)
+        nb = check_int(nb, "nb", minimum=1)
+        return cls([(i, value) for i in range(1, na + 1)], [(i, value) for i in range(1, nb + 1)])
+
+    @classmethod
+    def from_lags(cls, a, b):
+        """Terms written per lag: entry ``i - 1`` holds the order(s) of lag ``i``.
+
+        Each entry is an order (one term) or a tuple/list of orders (a term per order).
+        """
+        def expand(spec, branch):
+            if isinstance(spec, (str, bytes)) or not isinstance(spec, Sequence) or not spec:
+                raise ParameterError(f"`orders`: {branch!r} needs one entry per lag; got "
+                                     f"{spec!r}.")
+            out = []
+            for i, entry in enumerate(spec, start=1):
+                group = entry if isinstance(entry, (tuple, list)) else (entry,)
+                if not group:
+                    raise ParameterError(f"`orders`: lag {i} of {branch!r} has no order.")
+                out += [(i, o) for o in group]
+            return out
+        return cls(expand(a, "a"), expand(b, "b"))
+
+    @classmethod
+    def resolve(cls, spec, *, na, nb):
+        """An :class:`Orders` from what a user passed as ``orders`` (with the lag orders).
+
+        ``na`` and ``nb`` are the numbers of lags; a resolved :class:`Orders` or dict must use
+        exactly lags ``1..na`` and ``1..nb``.
+        """
+        if spec is None:
+            spec = "commensurate"
+        if isinstance(spec, str):
+            return cls.preset(spec, na=na, nb=nb)
+        if isinstance(spec, numbers.Real) and not isinstance(spec, bool):
+            return cls.fixed(spec, na=na, nb=nb)
+        if isinstance(spec, Mapping):
+            extra = set(spec) - {"a", "b"}
+            if extra or not {"a", "b"} <= set(spec):
+                raise ParameterError(f"`orders` as a dict needs exactly the keys 'a' and 'b' "
+                                     f"(per-lag orders of each branch); got {sorted(spec)}.")
+            spec = cls.from_lags(spec["a"], spec["b"])
+        if not isinstance(spec, Orders):
+            raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
+                                 f"dict of per-lag orders; got {spec!r}.")
+        if spec.na != na or spec.nb != nb:
+            raise ParameterError(f"`orders` uses lags up to {spec.na} (output) and {spec.nb} "
+                                 f"(input), but na = {na} and nb = {nb}.")
+        return spec
+
+    @classmethod
+    def infer(cls, spec, n_a, n_b):
+        """An :class:`Orders` for a model with ``n_a`` and ``n_b`` coefficients (terms)."""
+        if spec is None or spec in ("commensurate", "per_lag") or (
+                isinstance(spec, numbers.Real) and not isinstance(spec, bool)):
+            return cls.resolve(spec, na=n_a, nb=n_b)
+        if spec == "mixed":
+            if n_a % 2 or n_b % 2:
+                raise ParameterError("`orders='mixed'` has two terms per lag (orders 0 and "
+                                     f"alpha), so `a` and `b` need even lengths; got {n_a} and "
+                                     f"{n_b}.")
+            return cls.preset("mixed", na=n_a // 2, nb=n_b // 2)
+        if isinstance(spec, Mapping):
+            spec = cls.from_lags(spec["a"], spec["b"]) if {"a", "b"} == set(spec) else spec
+        orders = cls.resolve(spec, na=getattr(spec, "na", 1), nb=getattr(spec, "nb", 1))
+        if (len(orders.output), len(orders.input)) != (n_a, n_b):
+            raise ParameterError(f"`orders` has {len(orders.output)} output and "
+                                 f"{len(orders.input)} input terms, but `a` and `b` have {n_a} "
+                                 f"and {n_b} coefficients.")
+        return orders
+
+    # ---- reading --------------------------------------------------------------------------------
+    @property
+    def na(self) -> int:
+        """Largest output lag."""
+        return max(t.lag for t in self.output)
+
+    @property
+    def nb(self) -> int:
+        """Largest input lag."""
+        return max(t.lag for t in self.input)
+
+    @property
+    def is_commensurate(self) -> bool:
+        """The paper's Eq. (16): lags ``1..na`` and ``1..nb`` once each, one shared free order."""
+        return (len(self.free) == 1
+                and [t.lag for t in self.output] == list(range(1, len(self.output) + 1))
+                and [t.lag for t in self.input] == list(range(1, len(self.input) + 1))
+                and all(t.order == self.free[0] for t in self.output + self.input))
+
+    def _names(self, terms, letter):
+        count = {}
+        for t in terms:
+            count[t.lag] = count.get(t.lag, 0) + 1
+        return tuple(f"{letter}{t.lag}" if count[t.lag] == 1 else f"{letter}{t.lag}_{t.label()}"
+                     for t in terms)
+
+    @property
+    def a_names(self) -> tuple[str, ...]:
+        """Names of the output-branch coefficients.
+
+        ``a1`` when lag 1 has one term; ``a1_0``, ``a1_alpha`` when it has several.
+        """
+        return self._names(self.output, "a")
+
+    @property
+    def b_names(self) -> tuple[str, ...]:
+        """Names of the input-branch coefficients (as :attr:`a_names`)."""
+        return self._names(self.input, "b")
+
+    def values(self, free_values, *, check=True):
+        """``(output orders, input orders)``: a number per term, given the free orders' values.
+
+        ``free_values`` is a mapping by name or a sequence in :attr:`free` order; with
+        ``check=False`` a mapping is used as given (already validated, any finite order).
+        """
+        mapping = (free_values if not check and isinstance(free_values, Mapping)
+                   else self.free_mapping(free_values))
+        get = (lambda t: mapping[t.order] if t.free else t.order)  # noqa: E731
+        return tuple(get(t) for t in self.output), tuple(get(t) for t in self.input)
+
+    def free_mapping(self, free_values, name="alpha"):
+        """``{free order: value}`` from a mapping, a sequence, or (one free order) a number."""
+        if isinstance(free_values, Mapping):
+            missing = [n for n in self.free if n not in free_values]
+            extra = [n for n in free_values if n not in self.free]
+            if missing or extra:
+                raise ParameterError(f"`{name}` must give the free orders {list(self.free)}; "
+                                     f"missing {missing}, unknown {extra}.")
+            values = [free_values[n] for n in self.free]
+        elif isinstance(free_values, numbers.Real) and not isinstance(free_values, bool):
+            values = [free_values] * len(self.free) if len(self.free) == 1 else None
+            if values is None:
+                raise ParameterError(f"`{name}` is one number, but there are "
+                                     f"{len(self.free)} free orders {list(self.free)}; pass a "
+                                     "sequence or a dict.")
+        elif free_values is None:
+            values = []
+            if self.free:
+                raise ParameterError(f"`{name}` must give the free orders {list(self.free)}.")
+        else:
+            values = list(free_values)
+            if len(values) != len(self.free):
+                raise ParameterError(f"`{name}` must have {len(self.free)} entries (the free "
+                                     f"orders {list(self.free)}); got {len(values)}.")
+        return {n: check_scalar(v, f"{name}[{n!r}]", lower=ORDER_RANGE[0], upper=ORDER_RANGE[1])
+                for n, v in zip(self.free, values)}
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``{"a": [[lag, order], …], "b": […]}``."""
+        return {"a": [[t.lag, t.order] for t in self.output],
+                "b": [[t.lag, t.order] for t in self.input]}
+
+    @classmethod
+    def from_dict(cls, d):
+        """Inverse of :meth:`to_dict`."""
+        return cls(d["a"], d["b"])
+
+    def __eq__(self, other):
+        return (isinstance(other, Orders) and self.output == other.output
+                and self.input == other.input)
+
+    def __hash__(self):
+        return hash((self.output, self.input))
+
+    def __repr__(self):
+        def fmt(terms):
+            return "[" + ", ".join(f"({t.lag}, {t.label()})" for t in terms) + "]"
+        return f"Orders(a={fmt(self.output)}, b={fmt(self.input)})"

@@ -1,0 +1,168 @@
+"""The model class: everything about a fractional-order HW model except its parameter values.
+
+A :class:`Structure` fixes the terms of the linear block and their orders (:class:`fohw.Orders`),
+the basis functions, whether the equation has a constant (``offset``), what the signals did
+before ``k = 0`` (``past``) and the sampling time ``dt``. Its parameters fall in two groups,
+the split that separable least squares exploits:
+
+* **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by :class:`fohw.ThetaLayout`), then the
+  offset ``c`` if there is one;
+* **nonlinear**: the free orders (in :attr:`Orders.free` order), then the levels ``u_past`` and
+  ``y_past`` of the unseen past if ``past="estimate"``.
+
+The equation (SPEC §3 generalised; deviations from the operating point, see
+:class:`fohw.HammersteinWiener`) is
+
+.. math:: y[k] = \\sum_t a_t (\\Delta_h^{\\nu_t} \\bar g(y))[k - i_t]
+          + \\sum_t b_t (\\Delta_h^{\\nu_t} \\bar f(u))[k - i_t] + c + v[k],
+
+with ``Delta_h^nu = h**-nu Delta^nu`` (Eq. 4). ``past="rest"`` (default) is the usual assumption
+for GL models of measured data: the signals were zero (at the operating point) before ``k = 0``.
+``past="estimate"`` assumes the system rested at constant levels ``u(t) = u_past`` and
+``y(t) = y_past`` for all ``t < 0`` and estimates them: a basis signal ``s`` with past level
+``L`` then has ``(Delta^nu s)[t] = sum_{j<=t} beta_j (s[t-j] - L) + L * S_inf(nu)``, where
+``S_inf(0) = 1`` and ``S_inf(nu) = 0`` for ``nu > 0`` (the GL sum of a constant over an infinite
+past vanishes), i.e. the zero-past difference plus ``L (S_inf - S_t)`` with ``S_t`` the partial
+sums of the weights.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+from .._validation import check_scalar
+from ..exceptions import ParameterError
+from .basis import Basis, as_basis
+from .orders import Orders
+from .params import ThetaLayout
+
+__all__ = ["Structure", "PAST_MODES"]
+
+#: ``"rest"``: zero (the operating point) before ``k = 0``; ``"estimate"``: constant levels
+#: ``u_past``, ``y_past`` before ``k = 0``, estimated.
+PAST_MODES = ("rest", "estimate")
+PAST_NAMES = ("u_past", "y_past")
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """The model class (orders, bases, offset, past, sampling time) without parameter values.
+
+    Parameters
+    ----------
+    orders : Orders
+    f_basis, g_basis : Basis
+    offset : bool
+        A constant ``c`` in the equation.
+    past : {"rest", "estimate"}
+        What the signals did before ``k = 0`` (see the module notes).
+    dt : float
+        Sampling time ``h > 0``; every term is divided by ``h**nu`` (Eq. 4).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, orders="mixed", offset=True)
+    >>> s.linear_names, s.nonlinear_names
+    (('a1_0', 'a1_alpha', 'b1_0', 'b1_alpha', 'offset'), ('alpha',))
+    """
+
+    orders: Orders
+    f_basis: Basis
+    g_basis: Basis
+    offset: bool = False
+    past: str = "rest"
+    dt: float = 1.0
+
+    def __post_init__(self):
+        if not isinstance(self.orders, Orders):
+            raise ParameterError(f"`orders` must be an Orders; got {type(self.orders).__name__}.")
+        object.__setattr__(self, "f_basis", as_basis(self.f_basis, "f_basis"))
+        object.__setattr__(self, "g_basis", as_basis(self.g_basis, "g_basis"))
+        if not isinstance(self.offset, bool):
+            raise ParameterError(f"`offset` must be True or False; got {self.offset!r}.")
+        if self.past not in PAST_MODES:
+            raise ParameterError(f"`past` must be one of {PAST_MODES}; got {self.past!r}.")
+        object.__setattr__(self, "dt", check_scalar(self.dt, "dt", lower=0.0,
+                                                    lower_inclusive=False))
+
+    @classmethod
+    def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0):
+        """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …)."""
+        return cls(Orders.resolve(orders, na=na, nb=nb), f_basis, g_basis, offset, past, dt)
+
+    @cached_property
+    def layout(self) -> ThetaLayout:
+        """The theta layout, with the term names of :attr:`orders`."""
+        return ThetaLayout(na=len(self.orders.output), nb=len(self.orders.input),
+                           n_g=len(self.g_basis), n_f=len(self.f_basis),
+                           a_names=self.orders.a_names, b_names=self.orders.b_names)
+
+    @property
+    def na(self) -> int:
+        """Largest output lag."""
+        return self.orders.na
+
+    @property
+    def nb(self) -> int:
+        """Largest input lag."""
+        return self.orders.nb
+
+    @property
+    def is_paper_model(self) -> bool:
+        """The paper's Eq. (16): commensurate orders, no offset, rest before 0, ``dt = 1``."""
+        return (self.orders.is_commensurate and not self.offset and self.past == "rest"
+                and self.dt == 1.0)
+
+    @property
+    def linear_names(self) -> tuple[str, ...]:
+        """Names of the linear parameters: theta's, then ``"offset"``."""
+        return self.layout.names + (("offset",) if self.offset else ())
+
+    @property
+    def nonlinear_names(self) -> tuple[str, ...]:
+        """Names of the nonlinear parameters: the free orders, then ``u_past``, ``y_past``."""
+        return self.orders.free + (PAST_NAMES if self.past == "estimate" else ())
+
+    @property
+    def n_linear(self) -> int:
+        """Number of linear parameters."""
+        return self.layout.n_params + int(self.offset)
+
+    @property
+    def n_nonlinear(self) -> int:
+        """Number of nonlinear parameters."""
+        return len(self.nonlinear_names)
+
+    def split_nonlinear(self, params):
+        """``({free order: value}, (u_past, y_past))`` from a vector of nonlinear parameters."""
+        n_free = len(self.orders.free)
+        values = dict(zip(self.orders.free, (float(v) for v in params[:n_free])))
+        past = (float(params[n_free]), float(params[n_free + 1])) if self.past == "estimate" \
+            else (0.0, 0.0)
+        return values, past
+
+    def to_dict(self) -> dict:
+        """JSON-ready description (bases by the caller: code is never serialised)."""
+        return {"orders": self.orders.to_dict(), "offset": self.offset, "past": self.past,
+                "dt": self.dt}
+
+    def __eq__(self, other):
+        return (isinstance(other, Structure) and self.orders == other.orders
+                and self.f_basis == other.f_basis and self.g_basis == other.g_basis
+                and (self.offset, self.past, self.dt) == (other.offset, other.past, other.dt))
+
+    def __hash__(self):
+        return hash((self.orders, self.f_basis, self.g_basis, self.offset, self.past, self.dt))
+
+    def describe(self) -> str:
+        """One line: the terms and their orders, offset, past and dt."""
+        parts = [repr(self.orders)]
+        if self.offset:
+            parts.append("offset")
+        if self.past != "rest":
+            parts.append(f"past={self.past!r}")
+        if self.dt != 1.0:
+            parts.append(f"dt={self.dt:g}")
+        return ", ".join(parts)
