@@ -57,6 +57,11 @@ API = [
     ("simulate_theta", "theta of the wrong length",
      lambda t: fohw.simulate_theta(np.ones(3), 0.5, U, **S),
      fohw.DimensionError, "`theta` must have 10 entries"),
+    ("simulate_parameters", "linear parameters of the wrong length",
+     lambda t: fohw.simulate_parameters(
+         fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, orders="mixed"), np.ones(3),
+         [0.5], U),
+     fohw.DimensionError, "`linear` must have 4 entries ('a1_0', 'a1_alpha', 'b1_0', 'b1_alpha')"),
     ("monte_carlo", "an option the method does not have",
      lambda t: fohw.monte_carlo({"v": {"method": "varpro", "innovation_length": 2}},
                                 seeds=range(1), settings=[{"n_samples": 200}]),

@@ -109,7 +109,7 @@ def test_output_error_start_option():
     m = d.model
     res = fohw.identify(d.u, d.y, method="output_error", start=(m.theta, 0.6), **STRUCT)
     assert "given start" in res.message
-    with pytest.raises(fohw.DimensionError, match="`start theta` must have 10 entries"):
+    with pytest.raises(fohw.DimensionError, match="`start` linear parameters must have 10 entries"):
         fohw.identify(d.u, d.y, method="output_error", start=(m.theta[:3], 0.6), **STRUCT)
     with pytest.raises(fohw.ParameterError, match="`start`"):
         fohw.identify(d.u, d.y, method="output_error", start=0.5, **STRUCT)

@@ -39,7 +39,7 @@ from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.structure import Structure
-from .model.system import HammersteinWiener, simulate, simulate_theta
+from .model.system import HammersteinWiener, simulate, simulate_parameters, simulate_theta
 from .results import IdentificationResult, Status
 
 __version__ = "0.1.0.dev0"
@@ -114,4 +114,5 @@ __all__ = [
     "polynomial_basis",
     "simulate",
     "simulate_theta",
+    "simulate_parameters",
 ]

@@ -108,14 +108,14 @@ class AlphaBounds:
     ``inner = (lo + m, hi - m)`` with ``m = 1e-3 (hi - lo)`` and record that they did (``hit``).
     """
 
-    def __init__(self, bounds):
+    def __init__(self, bounds, name="alpha_bounds"):
         try:
             lo, hi = (float(b) for b in bounds)
         except (TypeError, ValueError):
-            raise ParameterError(f"`alpha_bounds` must be a pair (low, high); got {bounds!r}.") \
+            raise ParameterError(f"`{name}` must be a pair (low, high); got {bounds!r}.") \
                 from None
         if not (0.0 <= lo < hi <= 2.0):
-            raise ParameterError(f"`alpha_bounds` must satisfy {0.0:g} <= low < high "
+            raise ParameterError(f"`{name}` must satisfy {0.0:g} <= low < high "
                                  f"<= {2.0:g}; got {bounds!r}.")
         self.lo, self.hi = lo, hi
         margin = 1e-3 * (hi - lo)

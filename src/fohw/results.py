@@ -8,9 +8,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .model.basis import Basis
+from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
-from .model.system import HammersteinWiener, simulate_theta
+from .model.structure import Structure
+from .model.system import HammersteinWiener, simulate_parameters
 
 __all__ = ["IdentificationResult", "Status"]
 
@@ -54,8 +56,8 @@ class IdentificationResult:
         ``"hybrid"``, ``"single_innovation_gradient"``, ``"single_innovation_lm"``, ….
     schedule : str
         ``"recursive"`` (Table 1) or ``"iterative"`` (Steps 1–9); ``""`` where not applicable.
-    alpha : float
-        Estimated fractional order.
+    alpha : float or None
+        The first estimated free order (the paper's alpha); ``None`` when every order was fixed.
     theta : ndarray, shape (n,)
         Estimated ``[q ⊗ a, p ⊗ b]``.
     model : HammersteinWiener or None
@@ -103,7 +105,26 @@ class IdentificationResult:
     noise_variance : float or None
         ``s^2 = RSS / (N - n - 1)``, with ``covariance``.
     alpha_profile : ndarray, shape (2, n_grid), or None
-        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1.
+        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1 (for several
+        free orders: all tied to the same value).
+    structure : Structure
+        The model class that was fitted (orders, bases, offset, past, dt).
+    orders : dict
+        The estimated free orders, ``{name: value}`` in :attr:`Orders.free` order (the
+        commensurate model: ``{"alpha": alpha}``).
+    offset : float or None
+        The estimated constant (``None`` without ``offset=True``).
+    past : (float, float)
+        The estimated levels ``(u_past, y_past)`` of the unseen past (deviations from the
+        operating point; ``(0, 0)`` under ``past="rest"``).
+    operating_point : (float, float)
+        ``(u0, y0)`` removed before fitting; :meth:`predict` and :meth:`simulate` add it back.
+
+    Notes
+    -----
+    ``covariance`` and :meth:`standard_errors` are ordered as :attr:`estimate_names`: the
+    linear parameters (theta's, then ``offset``) and the nonlinear ones (the free orders, then
+    ``u_past``, ``y_past``).
     """
 
     method: str
@@ -129,12 +150,51 @@ class IdentificationResult:
     covariance: np.ndarray | None = None
     noise_variance: float | None = None
     alpha_profile: np.ndarray | None = None
+    structure: Structure | None = None
+    orders: dict | None = None
+    offset: float | None = None
+    past: tuple = (0.0, 0.0)
+    operating_point: tuple = (0.0, 0.0)
 
     def __post_init__(self):
         object.__setattr__(self, "status", Status(self.status))
+        if self.structure is None:          # the paper's commensurate model
+            object.__setattr__(self, "structure", Structure(
+                Orders.preset("commensurate", na=self.layout.na, nb=self.layout.nb),
+                self.f_basis, self.g_basis))
+        if self.orders is None:
+            object.__setattr__(self, "orders", {} if self.alpha is None else
+                               dict.fromkeys(self.structure.orders.free, float(self.alpha)))
+        object.__setattr__(self, "orders", {k: float(v) for k, v in self.orders.items()})
+        object.__setattr__(self, "past", tuple(float(v) for v in self.past))
+        object.__setattr__(self, "operating_point",
+                           tuple(float(v) for v in self.operating_point))
         for name in ("theta", "theta_history", "alpha_sample_history", "alpha_history",
                      "J_history", "covariance", "alpha_profile"):
             object.__setattr__(self, name, _readonly(getattr(self, name)))
+
+    @property
+    def linear(self) -> np.ndarray:
+        """The linear parameters: theta, then the offset if there is one."""
+        return np.r_[self.theta, self.offset] if self.structure.offset else np.array(self.theta)
+
+    @property
+    def nonlinear(self) -> np.ndarray:
+        """The nonlinear parameters: the free orders, then ``u_past``, ``y_past`` if estimated."""
+        values = list(self.orders.values())
+        if self.structure.past == "estimate":
+            values += list(self.past)
+        return np.array(values, dtype=np.float64)
+
+    @property
+    def estimate_names(self) -> tuple[str, ...]:
+        """Names of the linear then the nonlinear parameters (the order of ``covariance``)."""
+        return self.structure.linear_names + self.structure.nonlinear_names
+
+    @property
+    def dt(self) -> float:
+        """Sampling time of the model."""
+        return self.structure.dt
 
     @property
     def converged(self) -> bool:
@@ -186,8 +246,7 @@ class IdentificationResult:
         """
         self._require_covariance()
         se = np.sqrt(np.diag(self.covariance))
-        out = dict(zip(self.parameter_names, se[:-1]))
-        out["alpha"] = float(se[-1])
+        out = dict(zip(self.estimate_names, se))
         out.update(zip(self.layout.model_parameter_names, np.sqrt(np.diag(self._model_covariance()))))
         return {k: float(v) for k, v in out.items()}
 
@@ -221,8 +280,7 @@ class IdentificationResult:
         return {k: (est[k] - z * se[k], est[k] + z * se[k]) for k in se}
 
     def _estimates(self) -> dict:
-        est = dict(zip(self.parameter_names, self.theta))
-        est["alpha"] = self.alpha
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
         est.update(zip(self.layout.model_parameter_names, self.layout.recover_vector(self.theta)))
         return {k: float(v) for k, v in est.items()}
 
@@ -238,25 +296,45 @@ class IdentificationResult:
         return np.linalg.norm(est - theta_true, axis=-1) / np.linalg.norm(theta_true)
 
     def predict(self, u, y):
-        """One-step-ahead prediction ``yhat[k] = phi[k](alpha) @ theta`` (Eq. 19)."""
-        builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
-                                   g_basis=self.g_basis)
-        return builder.matrix(self.alpha) @ self.theta
+        """One-step-ahead prediction ``yhat[k] = phi[k] @ [theta, c] + y0`` (Eq. 19).
 
-    def simulate(self, u, **kwargs):
-        """Free-run simulation of the identified predictor (:func:`fohw.simulate_theta`).
+        ``u`` and ``y`` in the data's units; the operating point is removed and added back.
+        """
+        u0, y0 = self.operating_point
+        u = np.asarray(u, dtype=np.float64)
+        y = np.asarray(y, dtype=np.float64)
+        builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
+                                   structure=self.structure)
+        params = self.nonlinear
+        yhat = builder.matrix(params[0] if self.structure.is_paper_model else params) \
+            @ self.linear
+        return yhat + y0 if y0 else yhat
 
-        Uses ``theta`` itself, i.e. exactly the model that was fitted; for the rank-one
-        ``a, b, p, q`` of Eqs. (39)–(40) use ``fohw.simulate(result.model, u)``. Keyword
-        arguments go to :func:`fohw.simulate_theta` (``noise``, ``divergence_threshold``).
+    def simulate(self, u, *, history=None, **kwargs):
+        """Free-run simulation of the identified predictor, in the data's units.
+
+        Uses ``theta`` itself (and the offset, orders and past levels), i.e. exactly the model
+        that was fitted; for the rank-one ``a, b, p, q`` of Eqs. (39)–(40) use
+        ``fohw.simulate(result.model, u)``.
+
+        Parameters
+        ----------
+        u : array_like
+            Input.
+        history : (u_past, y_past), optional
+            Measured data just before ``u`` (e.g. the estimation record, to simulate the
+            validation record that follows it): the GL memory starts from them.
+        **kwargs
+            ``noise``, ``divergence_threshold`` (:func:`fohw.simulate`).
 
         Raises
         ------
         SimulationDivergedError
             The identified model is unstable on this input.
         """
-        return simulate_theta(self.theta, self.alpha, u, na=self.na, nb=self.nb,
-                              f_basis=self.f_basis, g_basis=self.g_basis, **kwargs)
+        return simulate_parameters(self.structure, self.linear, self.nonlinear, u,
+                                   operating_point=self.operating_point, history=history,
+                                   **kwargs)
 
     def to_dict(self) -> dict:
         """A JSON-ready dict (see :mod:`fohw.io.jsonio`)."""
@@ -273,12 +351,16 @@ class IdentificationResult:
 
         _write_json(self.to_dict(), path)
 
+    def _display_names(self):
+        """The free orders and past levels first (alpha, as the paper lists it), then theta."""
+        return list(self.structure.nonlinear_names) + list(self.structure.linear_names)
+
     def _repr_html_(self):
         import html
 
-        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{v:.6g}</td></tr>"
-                       for n, v in zip(("alpha",) + self.parameter_names,
-                                       (self.alpha, *self.theta)))
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{est[n]:.6g}</td></tr>"
+                       for n in self._display_names())
         return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
                 f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
                 f"<small>{html.escape(self.message)}</small>"
@@ -288,23 +370,31 @@ class IdentificationResult:
         """A text table of the estimates and the run's diagnostics."""
         lines = [f"fohw identification: method={self.method!r}"
                  + (f", schedule={self.schedule!r}" if self.schedule else ""),
-                 f"  samples N = {self.n_samples}, na = {self.na}, nb = {self.nb}, "
-                 f"f_basis = {self.f_basis!r}, g_basis = {self.g_basis!r}",
-                 f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "
-                 f"evaluations = {self.nfev}, J (Eq. 41) = {self.J:.6g}",
-                 f"  {self.message}",
-                 ""]
-        names = ["alpha"] + list(self.parameter_names)
-        est = self._estimates() if self.model is not None else dict(
-            zip(names, [self.alpha, *self.theta]))
+                 f"  samples N = {self.n_samples}, na = {self.structure.na}, "
+                 f"nb = {self.structure.nb}, f_basis = {self.f_basis!r}, "
+                 f"g_basis = {self.g_basis!r}"]
+        if not self.structure.is_paper_model:
+            lines.append(f"  model: {self.structure.describe()}")
+        if self.operating_point != (0.0, 0.0):
+            lines.append(f"  operating point (u0, y0) = ({self.operating_point[0]:.6g}, "
+                         f"{self.operating_point[1]:.6g}), removed before fitting")
+        lines += [f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "
+                  f"evaluations = {self.nfev}, J (Eq. 41) = {self.J:.6g}",
+                  f"  {self.message}",
+                  ""]
+        names = self._display_names()
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        if self.model is not None:
+            est = self._estimates()
         if self.covariance is not None:
             se = self.standard_errors()
             ci = self.confidence_intervals()
-            lines.append(f"  {'parameter':<12}{'estimate':>14}{'std err':>12}"
+            width = max(12, max(len(n) for n in names) + 2)
+            lines.append(f"  {'parameter':<{width}}{'estimate':>14}{'std err':>12}"
                          f"{'95% CI low':>14}{'95% CI high':>14}")
 
             def row(n):
-                return (f"  {n:<12}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
+                return (f"  {n:<{width}}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
                         f"{ci[n][1]:>14.6g}")
             lines += [row(n) for n in names]
             if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
@@ -313,8 +403,9 @@ class IdentificationResult:
                           if n[0] in "pq"]
             lines += ["", f"  noise variance estimate s^2 = {self.noise_variance:.6g}"]
         else:
-            lines.append(f"  {'parameter':<12}{'estimate':>14}")
-            lines += [f"  {n:<12}{est[n]:>14.6g}" for n in names]
+            width = max(12, max(len(n) for n in names) + 2)
+            lines.append(f"  {'parameter':<{width}}{'estimate':>14}")
+            lines += [f"  {n:<{width}}{est[n]:>14.6g}" for n in names]
             if self.model is not None:
                 lines += ["", "  recovered by Eqs. (39)-(40):"]
                 for name in "abpq":
@@ -325,8 +416,9 @@ class IdentificationResult:
         return "\n".join(lines)
 
     def __repr__(self):
+        orders = ", ".join(f"{k}={v:.6g}" for k, v in self.orders.items())
         return (f"IdentificationResult(method={self.method!r}, schedule={self.schedule!r}, "
-                f"alpha={self.alpha:.6g}, J={self.J:.6g}, status={self.status.name}, "
+                f"{orders + ', ' if orders else ''}J={self.J:.6g}, status={self.status.name}, "
                 f"nit={self.nit}, n_params={self.theta.shape[0]})")
 
     def plot(self, theta_true=None):
@@ -372,12 +464,16 @@ class IdentificationResult:
         return fig, axes
 
 
-def recover_model(layout, f_basis, g_basis, theta, alpha):
+def recover_model(structure, theta, orders, *, offset=None, past=(0.0, 0.0),
+                  operating_point=(0.0, 0.0)):
     """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
     from .exceptions import ParameterError
 
     try:
-        return HammersteinWiener.from_theta(theta, alpha, na=layout.na, nb=layout.nb,
-                                            f_basis=f_basis, g_basis=g_basis), ""
+        return HammersteinWiener.from_theta(
+            theta, orders, na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
+            g_basis=structure.g_basis, orders=structure.orders, dt=structure.dt,
+            offset=0.0 if offset is None else offset, past=past,
+            operating_point=operating_point), ""
     except ParameterError as exc:
         return None, f" No model: {exc}"

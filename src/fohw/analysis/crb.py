@@ -1,4 +1,4 @@
-"""Cramér–Rao bound for (theta, alpha) of the equation-error model — beyond the paper.
+"""Cramér–Rao bound for the parameters of the equation-error model — beyond the paper.
 
 With white Gaussian equation noise of variance ``sigma^2``, the output given its past is
 Gaussian with mean ``phi[k](alpha) @ theta`` (Eq. 19), so the log-likelihood of a record is
@@ -6,6 +6,11 @@ Gaussian with mean ``phi[k](alpha) @ theta`` (Eq. 19), so the log-likelihood of 
 ``(theta, alpha)`` is ``E[G^T G] / sigma^2``, with ``G = [Phi(alpha), dPhi/dalpha @ theta]`` the
 Jacobian of the one-step predictor. Because ``Phi`` depends on the noisy output, the expectation
 is estimated by averaging ``G^T G`` over simulated noise realisations.
+
+For the general model class (:class:`fohw.Structure`: an order per term, an offset, past
+levels) the parameters are the structure's linear ones (theta, then ``offset``) and its
+nonlinear ones (the free orders, then ``u_past``, ``y_past``), and ``G`` is the same
+one-step-predictor Jacobian with a column per nonlinear parameter.
 """
 
 from __future__ import annotations
@@ -28,13 +33,13 @@ class CRBResult:
 
     Attributes
     ----------
-    covariance : ndarray, shape (n + 1, n + 1)
-        Lower bound on the covariance of any unbiased estimator of ``(theta, alpha)``
-        (``alpha`` last).
+    covariance : ndarray, shape (n_linear + n_nonlinear,) * 2
+        Lower bound on the covariance of any unbiased estimator of the structure's linear
+        then nonlinear parameters (for the paper's model ``(theta, alpha)``, ``alpha`` last).
     theta_std : ndarray, shape (n,)
         Square roots of the theta diagonal.
     alpha_std : float
-        Square root of the alpha entry.
+        Square root of the entry of the first free order (``nan`` when every order is fixed).
     rms_relative_error : float
         ``sqrt(trace(cov_theta)) / ||theta||``: the smallest root-mean-square of
         ``delta = ||theta_hat - theta|| / ||theta||`` an unbiased estimator can have.
@@ -42,6 +47,8 @@ class CRBResult:
         Names of theta's entries.
     n_realizations : int
         Noise realisations averaged in the Fisher information.
+    estimate_names : tuple of str
+        Names of the rows of :attr:`covariance` (linear, then nonlinear parameters).
     """
 
     covariance: np.ndarray
@@ -50,6 +57,12 @@ class CRBResult:
     rms_relative_error: float
     parameter_names: tuple
     n_realizations: int
+    estimate_names: tuple = ()
+
+    @property
+    def std(self) -> dict:
+        """Square roots of the diagonal by parameter name."""
+        return dict(zip(self.estimate_names, np.sqrt(np.diag(self.covariance))))
 
     def __repr__(self):
         return (f"CRBResult(rms_relative_error={self.rms_relative_error:.4g}, "
@@ -95,20 +108,26 @@ def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
     sigma2 = check_scalar(noise_variance, "noise_variance", lower=0.0, lower_inclusive=False)
     n_realizations = check_int(n_realizations, "n_realizations", minimum=1)
     rng = check_random_state(random_state)
-    theta = model.theta
-    n = theta.shape[0]
-    info = np.zeros((n + 1, n + 1))
+    structure = model.structure
+    linear, nonlinear = model.linear, model.nonlinear
+    u0, y0 = model.operating_point
+    n_theta = model.theta.shape[0]
+    n = linear.shape[0] + nonlinear.shape[0]
+    info = np.zeros((n, n))
     for _ in range(n_realizations):
         v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
         y = simulate(model, u, noise=v)
-        b = RegressorBuilder(u, y, na=model.na, nb=model.nb, f_basis=model.f_basis,
-                             g_basis=model.g_basis)
-        g = b.jacobian(theta, model.alpha)
+        b = RegressorBuilder(u - u0, y - y0, structure=structure)
+        g = b.jacobian(linear, nonlinear)
         info += g.T @ g
     info /= n_realizations * sigma2
     cov = np.linalg.inv(info)
     cov = 0.5 * (cov + cov.T)
     std = np.sqrt(np.diag(cov))
-    return CRBResult(covariance=cov, theta_std=std[:n], alpha_std=float(std[n]),
-                     rms_relative_error=float(np.sqrt(np.trace(cov[:n, :n])) / np.linalg.norm(theta)),
-                     parameter_names=model.parameter_names, n_realizations=n_realizations)
+    n_lin = linear.shape[0]
+    alpha_std = float(std[n_lin]) if structure.orders.free else float("nan")
+    return CRBResult(covariance=cov, theta_std=std[:n_theta], alpha_std=alpha_std,
+                     rms_relative_error=float(np.sqrt(np.trace(cov[:n_theta, :n_theta]))
+                                              / np.linalg.norm(model.theta)),
+                     parameter_names=model.parameter_names, n_realizations=n_realizations,
+                     estimate_names=structure.linear_names + structure.nonlinear_names)

@@ -24,7 +24,7 @@ def dependent_columns_note(fac, names):
 
 def check_finite_estimate(method, theta, alpha, where=""):
     """Raise :class:`EstimationDivergedError` unless the estimates are finite."""
-    if not (np.all(np.isfinite(theta)) and np.isfinite(alpha)):
+    if not (np.all(np.isfinite(theta)) and np.all(np.isfinite(alpha))):
         raise EstimationDivergedError(
             f"fohw.identify({method!r}): the estimates became non-finite{where} (theta or alpha "
             "overflowed), so there is no estimate. The data may be badly scaled (max |y| is "
@@ -32,21 +32,27 @@ def check_finite_estimate(method, theta, alpha, where=""):
             "large; rescale the data or use method='varpro'.")
 
 
-def finish(builder, *, method, theta, alpha, status, nit, nfev, message, alpha_at_bound=False,
+def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha_at_bound=False,
            schedule="", options=None, Phi=None, rank_factor=None, covariance=None,
            noise_variance=None, theta_history=None, alpha_sample_history=None,
-           alpha_history=None, J_history=None, alpha_profile=None, stacklevel=4):
+           alpha_history=None, J_history=None, alpha_profile=None, operating_point=(0.0, 0.0),
+           stacklevel=5):
     """Check an estimate, say what the user must know, and wrap it as an IdentificationResult.
 
-    The one-step criterion ``J`` (Eq. 41) is computed here at the final estimate; a
-    rank-deficient information matrix (``rank_factor``, or a factorisation of ``Phi`` made
-    here) turns the status into ``RANK_DEFICIENT`` with a :class:`RankDeficiencyWarning` naming
-    the dependent columns; a run that did not converge warns :class:`ConvergenceWarning`.
+    ``linear`` are the linear parameters of the builder's structure (theta, then the offset)
+    and ``params`` its nonlinear ones (the free orders, then the past levels). The one-step
+    criterion ``J`` (Eq. 41) is computed here at the final estimate; a rank-deficient
+    information matrix (``rank_factor``, or a factorisation of ``Phi`` made here) turns the
+    status into ``RANK_DEFICIENT`` with a :class:`RankDeficiencyWarning` naming the dependent
+    columns; a run that did not converge warns :class:`ConvergenceWarning`.
     """
-    check_finite_estimate(method, theta, alpha)
+    structure = builder.structure
+    linear = np.asarray(linear, dtype=np.float64)
+    params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+    check_finite_estimate(method, linear, params)
     if Phi is None:
-        Phi = builder.matrix(alpha)
-    J = float(np.mean((builder.y - Phi @ theta) ** 2))
+        Phi = builder.matrix(params)
+    J = float(np.mean((builder.y - Phi @ linear) ** 2))
     if not np.isfinite(J):
         raise EstimationDivergedError(
             f"fohw.identify({method!r}): the mean squared one-step error J overflows (max |y| = "
@@ -57,9 +63,9 @@ def finish(builder, *, method, theta, alpha, status, nit, nfev, message, alpha_a
         rank_factor = _linalg.factor(Phi, with_q=False)
     if rank_factor.rank < rank_factor.n_columns:
         status = Status.RANK_DEFICIENT
-        names = builder.layout.names
-        if rank_factor.n_columns == len(names) + 1:      # a Jacobian: theta, then alpha
-            names = names + ("alpha",)
+        names = structure.linear_names
+        if rank_factor.n_columns > len(names):          # a Jacobian: then the nonlinear ones
+            names = names + structure.nonlinear_names
         note = dependent_columns_note(rank_factor, names)
         message = f"{message} {note[0].upper()}{note[1:]}"
         covariance = noise_variance = None
@@ -68,29 +74,37 @@ def finish(builder, *, method, theta, alpha, status, nit, nfev, message, alpha_a
     elif status in (Status.MAX_ITER, Status.NOT_TESTED, Status.FAILED):
         warnings.warn(f"fohw.identify({method!r}" + (f", schedule={schedule!r}" if schedule else "")
                       + f"): {message}", ConvergenceWarning, stacklevel=stacklevel)
-    model, note = recover_model(builder.layout, builder.f_basis, builder.g_basis, theta, alpha)
+    n_theta = structure.layout.n_params
+    theta, offset = linear[:n_theta], (float(linear[n_theta]) if structure.offset else None)
+    orders, past = structure.split_nonlinear(params)
+    alpha = next(iter(orders.values()), None)
+    model, note = recover_model(structure, theta, orders, offset=offset, past=past,
+                                operating_point=operating_point)
     return IdentificationResult(
-        method=method, schedule=schedule, alpha=float(alpha), theta=theta, model=model, J=J,
+        method=method, schedule=schedule, alpha=alpha, theta=theta, model=model, J=J,
         status=status, nit=int(nit), nfev=int(nfev), message=message + note,
         alpha_at_bound=bool(alpha_at_bound), theta_history=theta_history,
         alpha_sample_history=alpha_sample_history,
-        alpha_history=np.array([alpha] if alpha_history is None else alpha_history, dtype=float),
+        alpha_history=np.array([] if alpha_history is None and alpha is None
+                               else [alpha] if alpha_history is None else alpha_history,
+                               dtype=float),
         J_history=np.array([J] if J_history is None else J_history, dtype=float),
-        layout=builder.layout, f_basis=builder.f_basis, g_basis=builder.g_basis,
+        layout=structure.layout, f_basis=structure.f_basis, g_basis=structure.g_basis,
         n_samples=builder.n_samples, options=dict(options or {}), covariance=covariance,
-        noise_variance=noise_variance, alpha_profile=alpha_profile)
+        noise_variance=noise_variance, alpha_profile=alpha_profile, structure=structure,
+        orders=orders, offset=offset, past=past, operating_point=operating_point)
 
 
-def bound_note(alpha, lo, hi, at_lower, at_upper):
-    """Advice when an order ends at the edge of its bounds, advice that can be followed."""
+def bound_note(name, lo, hi, at_lower, at_upper):
+    """Advice when a free order ends at the edge of its bounds, advice that can be followed."""
     if at_lower and lo == 0.0:
-        return (" alpha ended at the lower bound 0: the data favour integer-order (memoryless) "
-                "terms. The commensurate model has no static gain for alpha > 0, so records with "
-                "a static response drive alpha to 0; a model with order-0 terms beside the "
-                "fractional ones keeps both.")
+        return (f" {name} ended at the lower bound 0: the data favour integer-order (memoryless) "
+                "terms. The commensurate model has no static gain for an order > 0, so records "
+                "with a static response drive it to 0; orders='mixed' keeps order-0 terms "
+                "beside the fractional ones.")
     if at_upper and hi == 2.0:
-        return " alpha ended at the upper bound 2, the largest order fohw's models allow."
+        return f" {name} ended at the upper bound 2, the largest order fohw's models allow."
     side = "lower" if at_lower else "upper"
     limit = "0" if at_lower else "2"
-    return (f" alpha ended at the {side} bound of alpha_bounds = ({lo:g}, {hi:g}); widen that "
+    return (f" {name} ended at the {side} bound of alpha_bounds = ({lo:g}, {hi:g}); widen that "
             f"bound (towards {limit}, the widest fohw allows) if the order may lie beyond it.")

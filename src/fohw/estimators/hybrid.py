@@ -197,7 +197,7 @@ def _criterion(J_prev, J):
     return abs(J - J_prev) / abs(J_prev) if J_prev != 0 else (0.0 if J == 0 else np.inf)
 
 
-def run_alternation(builder, method, options, bounds):
+def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0.0)):
     """The paper's alternation of MIGD (theta) and MI-LM (alpha) under one schedule.
 
     Parameters
@@ -208,6 +208,8 @@ def run_alternation(builder, method, options, bounds):
     options : HybridOptions, SingleInnovationGradientOptions or SingleInnovationLMOptions
         Validated (``options.check``).
     bounds : AlphaBounds
+    operating_point : (float, float)
+        Removed from the data before; recorded in the result.
 
     Returns
     -------
@@ -272,9 +274,9 @@ def run_alternation(builder, method, options, bounds):
                    f"{_criterion(J_hist[-2], J_hist[-1]):.3g} > tol = {o.tol:g}.")
     if bounds.hit:
         message += f" Alpha was held at a bound of {tuple(bounds.inner)} at least once."
-    return finish(builder, method=method, schedule=o.schedule, theta=theta, alpha=alpha,
+    return finish(builder, method=method, schedule=o.schedule, linear=theta, params=[alpha],
                   status=status, nit=len(J_hist), nfev=len(J_hist), message=message,
-                  alpha_at_bound=bounds.hit, Phi=Phi,
+                  alpha_at_bound=bounds.hit, Phi=Phi, operating_point=operating_point,
                   options=dict(o.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
                   theta_history=theta_path, alpha_sample_history=alpha_path,
                   alpha_history=alpha_hist, J_history=J_hist)

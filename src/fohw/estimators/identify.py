@@ -12,9 +12,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .._validation import AlphaBounds, check_array, check_same_length
+from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
+from ..model.structure import Structure
 from .hybrid import (
     HybridOptions,
     SingleInnovationGradientOptions,
@@ -29,29 +30,58 @@ __all__ = ["identify", "METHODS", "OPTIONS"]
 
 
 def _alternation(method):
-    def run(builder, options, bounds):
-        return run_alternation(builder, method, options.check(builder.n_samples, bounds), bounds)
+    def run(builder, options, bounds, operating_point):
+        bounds = _paper_bounds(method, builder, bounds)
+        return run_alternation(builder, method, options.check(builder.n_samples, bounds), bounds,
+                               operating_point=operating_point)
     return run
+
+
+def _paper_bounds(method, builder, bounds):
+    """The recursive methods implement the paper's commensurate model: its one order's bounds."""
+    s = builder.structure
+    if not (s.orders.is_commensurate and not s.offset and s.past == "rest" and s.dt == 1.0):
+        raise ParameterError(
+            f"method {method!r} implements the paper's commensurate model (Eq. 16: one order for "
+            "every term, no offset, rest before k = 0, dt = 1); this structure is "
+            f"{s.describe()}. Use method='varpro' or 'output_error' for it.")
+    lo, hi = bounds
+    return AlphaBounds((float(lo[0]), float(hi[0])))
+
+
+def _varpro(builder, options, bounds, operating_point):
+    return varpro_result(builder, options.check(), bounds, operating_point=operating_point)
+
+
+def _output_error(builder, options, bounds, operating_point):
+    return output_error_result(builder, options, bounds, operating_point=operating_point)
+
+
+def _rls(builder, options, bounds, operating_point):
+    return rls_result(builder, options, _paper_bounds("rls", builder, bounds),
+                      operating_point=operating_point)
 
 
 #: Every method: its options class and the function that runs it.
 _TABLE = {
-    "varpro": (VarproOptions, lambda builder, options, bounds: varpro_result(
-        builder, options.check(), bounds)),
-    "output_error": (OutputErrorOptions, output_error_result),
+    "varpro": (VarproOptions, _varpro),
+    "output_error": (OutputErrorOptions, _output_error),
     "hybrid": (HybridOptions, _alternation("hybrid")),
     "single_innovation_gradient": (SingleInnovationGradientOptions,
                                    _alternation("single_innovation_gradient")),
     "single_innovation_lm": (SingleInnovationLMOptions, _alternation("single_innovation_lm")),
-    "rls": (RlsOptions, rls_result),
+    "rls": (RlsOptions, _rls),
 }
+#: ``operating_point`` spellings besides an explicit ``(u0, y0)``.
+OPERATING_POINTS = ("initial", "mean")
 #: The method names, the recommended one first.
 METHODS = tuple(_TABLE)
 #: ``{method: options class}``.
 OPTIONS = {name: cls for name, (cls, _) in _TABLE.items()}
 
 
-def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", alpha_bounds=(0.0, 1.0),
+def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commensurate",
+             offset=False, operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
              options=None, **method_options):
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
@@ -88,10 +118,30 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", alpha_bounds=(0
         ``"rls"``
             Beyond the paper: one pass of :class:`fohw.MultiInnovationRLS` (recursive least
             squares with recursive alpha). Options: :class:`~fohw.estimators.rls.RlsOptions`.
-    alpha_bounds : (float, float), optional
-        Interval for alpha, ``0 <= low < high <= 2``; default ``(0, 1)`` as in the paper. The
-        batch methods may end on a bound (the result says so); the recursive ones hold alpha
-        ``1e-3 * (high - low)`` inside it.
+    orders : str, number, dict or Orders, optional
+        Which term of the linear block has which order (:class:`fohw.Orders`):
+        ``"commensurate"`` (default, the paper's Eq. 16), ``"per_lag"`` (Eq. 14: a free order per
+        term), ``"mixed"`` (order 0 and a free order at every lag: a static gain beside
+        fractional dynamics), a number (every order fixed), or per-lag orders.
+    offset : bool, optional
+        Estimate a constant ``c`` in the equation (default False).
+    operating_point : None, "initial", "mean" or (u0, y0), optional
+        Levels subtracted from ``u`` and ``y`` before fitting and added back by
+        ``result.predict`` and ``result.simulate``: None (default) subtracts nothing;
+        ``"initial"`` the first samples, ``"mean"`` the means. With ``past="rest"`` the model
+        assumes the system rested at this point before ``k = 0``.
+    past : {"rest", "estimate"}, optional
+        ``"rest"`` (default): the signals were at the operating point before ``k = 0`` (zero
+        GL memory of the unseen past). ``"estimate"``: the system rested at constant levels
+        ``u_past``, ``y_past`` (relative to the operating point) before ``k = 0``, estimated
+        with the other parameters (``"varpro"``, ``"output_error"``).
+    dt : float, optional
+        Sampling time ``h > 0`` (Eq. 4): coefficients and orders then have a continuous-time
+        reading. Default 1.
+    alpha_bounds : (float, float) or dict, optional
+        Interval for every free order, ``0 <= low < high <= 2`` (default ``(0, 1)``, as in the
+        paper), or ``{name: (low, high)}`` per free order. The batch methods may end on a bound
+        (the result says so); the recursive ones hold alpha ``1e-3 * (high - low)`` inside it.
     options : mapping or MethodOptions, optional
         The method's options, as a mapping (``options={"innovation_length": 3}``) or an instance
         of its options class.
@@ -157,10 +207,66 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", alpha_bounds=(0
     u = check_array(u, "u")
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
-    bounds = AlphaBounds(alpha_bounds)
-    builder = RegressorBuilder(u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis)
+    point = _operating_point(operating_point, u, y)
+    if not isinstance(offset, (bool, np.bool_)):
+        raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
+    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
+                               f_basis=f_basis, g_basis=g_basis, orders=orders,
+                               offset=bool(offset), past=past, dt=dt)
+    bounds = _order_bounds(structure, alpha_bounds)
+    u_dev = u - point[0] if point[0] else u
+    y_dev = y - point[1] if point[1] else y
+    _check_offset(structure, u_dev)
+    builder = RegressorBuilder(u_dev, y_dev, structure=structure)
     # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
     # and criterion for finiteness and raises EstimationDivergedError with the reason.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return run(builder, opts, bounds)
+        return run(builder, opts, bounds, point)
+
+
+def _operating_point(spec, u, y):
+    if spec is None:
+        return (0.0, 0.0)
+    if isinstance(spec, str):
+        if spec == "initial":
+            return (float(u[0]), float(y[0]))
+        if spec == "mean":
+            return (float(np.mean(u)), float(np.mean(y)))
+        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
+                             f"pair (u0, y0); got {spec!r}.")
+    try:
+        u0, y0 = spec
+    except (TypeError, ValueError):
+        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
+                             f"pair (u0, y0); got {spec!r}.") from None
+    return (check_scalar(u0, "operating_point[0]"), check_scalar(y0, "operating_point[1]"))
+
+
+def _order_bounds(structure, alpha_bounds):
+    """``(lower, upper)`` arrays over the free orders from a pair or a dict by name."""
+    free = structure.orders.free
+    if isinstance(alpha_bounds, Mapping):
+        unknown = sorted(set(alpha_bounds) - set(free))
+        missing = [n for n in free if n not in alpha_bounds]
+        if unknown or missing:
+            raise ParameterError(f"`alpha_bounds` by name must give exactly the free orders "
+                                 f"{list(free)}; unknown {unknown}, missing {missing}.")
+        pairs = [AlphaBounds(alpha_bounds[n], name=f"alpha_bounds[{n!r}]") for n in free]
+    else:
+        pairs = [AlphaBounds(alpha_bounds)] * max(len(free), 1)
+    lower = np.array([b.lo for b in pairs])[:len(free)]
+    upper = np.array([b.hi for b in pairs])[:len(free)]
+    if not free:            # a pair is still checked, so a bad value is not silently ignored
+        return np.zeros(0), np.zeros(0)
+    return lower, upper
+
+
+def _check_offset(structure, u):
+    """An offset beside order-0 input terms needs an input that is not constant."""
+    if not structure.offset:
+        return
+    if any(t.order == 0.0 for t in structure.orders.input) and np.ptp(u) == 0.0:
+        raise ParameterError("`offset=True` cannot be estimated from this record: the input is "
+                             "constant, so the offset cannot be told apart from the order-0 "
+                             "input terms. Use a record where the input moves, or offset=False.")
 

@@ -22,14 +22,15 @@ import numpy as np
 import scipy.optimize
 
 from .. import _linalg
-from .._validation import check_int, check_scalar
-from ..exceptions import ParameterError, SimulationDivergedError
-from ..model.system import simulate_theta
+from .._validation import check_array, check_int, check_scalar
+from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
 from ._common import bound_note, finish
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
+    _bounds_record,
     _on_active_bound,
     parameter_covariance,
     separable_least_squares,
@@ -47,8 +48,10 @@ class OutputErrorOptions(MethodOptions):
     n_init : int
         Leading samples left out of the simulation-error criterion (the start-up transient of
         a zero-initial-condition model on data that did not start at rest; default 0).
-    start : IdentificationResult, (theta, alpha) or None
-        Starting point; default (None) the ``"varpro"`` estimate.
+    start : IdentificationResult, (linear, nonlinear) or None
+        Starting point: a result for the same structure, or the linear parameters (theta, then
+        the offset) and the nonlinear ones (free orders, then past levels); for the paper's
+        model ``(theta, alpha)``. Default (None): the ``"varpro"`` estimate.
     n_grid : int
         Points of the coarse alpha scan of the ``"varpro"`` start (default 41).
     max_nfev : int
@@ -73,8 +76,8 @@ class OutputErrorOptions(MethodOptions):
 
 @dataclass
 class _OEFit:
-    theta: np.ndarray
-    alpha: float
+    linear: np.ndarray
+    params: np.ndarray
     sse: float
     start_shrink: float
     status: Status
@@ -83,26 +86,21 @@ class _OEFit:
     noise_variance: float
     nit: int
     nfev: int
-    at_lower: bool
-    at_upper: bool
+    at_lower: np.ndarray
+    at_upper: np.ndarray
 
 
-def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, n_init=0,
-                     max_nfev=None):
-    """Fit ``(theta, alpha)`` to minimise the free-run simulation error.
+def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None):
+    """Fit the linear and nonlinear parameters to minimise the free-run simulation error.
 
     Parameters
     ----------
-    u, y : ndarray, shape (N,)
-        Input and measured output.
-    layout : ThetaLayout
-        Structure of theta.
-    f_basis, g_basis : Basis
-        Basis functions.
-    theta0, alpha0 : ndarray, float
+    builder : RegressorBuilder
+        The record (deviations from the operating point) and the model class.
+    linear0, params0 : ndarray
         Starting point (usually the equation-error estimate).
-    bounds : (float, float)
-        Interval for alpha.
+    lower, upper : ndarray
+        Bounds of the free orders.
     n_init : int
         Leading samples left out of the criterion (start-up transient of a zero-initial-
         condition model on data that did not start at rest).
@@ -113,7 +111,10 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
     -------
     _OEFit
     """
-    n = layout.n_params
+    s = builder.structure
+    u, y = builder.u, builder.y
+    n_lin, n_free = s.n_linear, len(s.orders.free)
+    n_past = s.n_nonlinear - n_free
     guard = 10.0 * float(np.max(np.abs(y)))
     window = slice(n_init, None)
     m = y.shape[0] - n_init
@@ -122,8 +123,7 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
 
     def simulate(x):
         count[0] += 1
-        return simulate_theta(x[:n], x[n], u, na=layout.na, nb=layout.nb, f_basis=f_basis,
-                              g_basis=g_basis, divergence_threshold=guard)
+        return simulate_parameters(s, x[:n_lin], x[n_lin:], u, divergence_threshold=guard)
 
     def residual(x):
         try:
@@ -131,8 +131,8 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
         except SimulationDivergedError:
             return penalty
 
-    x0 = np.append(np.asarray(theta0, dtype=np.float64), float(alpha0))
-    k = layout.n_output_params
+    x0 = np.r_[np.asarray(linear0, dtype=np.float64), np.asarray(params0, dtype=np.float64)]
+    k = s.layout.n_output_params
     shrink = 1.0
     for _ in range(60):
         try:
@@ -141,31 +141,31 @@ def fit_output_error(u, y, *, layout, f_basis, g_basis, theta0, alpha0, bounds, 
         except SimulationDivergedError:
             shrink *= 0.8
             x0[:k] *= 0.8
-    lo, hi = bounds
-    x0[n] = float(np.clip(x0[n], lo, hi))
-    # The solver works on dimensionless z = x / scale, so that its finite-difference steps and
-    # tolerances do not depend on the units of u and y (theta's entries scale with them).
-    # The residual is divided by the RMS output, so that scipy's absolute gradient tolerance
-    # means the same in every unit.
-    scale = _parameter_scale(x0, k)
+    bound_lo = np.r_[np.full(n_lin, -np.inf), lower, np.full(n_past, -np.inf)]
+    bound_hi = np.r_[np.full(n_lin, np.inf), upper, np.full(n_past, np.inf)]
+    x0 = np.clip(x0, bound_lo, bound_hi)
+    # The solver works on dimensionless z = x / scale and a residual divided by the RMS output,
+    # so that its finite-difference steps and tolerances mean the same in every unit.
+    scale = _parameter_scale(x0, s, u, y)
     y_scale = _rms(y)
     ls = scipy.optimize.least_squares(
         lambda z: residual(z * scale) / y_scale, x0 / scale, method="trf", x_scale="jac",
-        max_nfev=max_nfev,
-        bounds=(np.r_[np.full(n, -np.inf), lo], np.r_[np.full(n, np.inf), hi]))
-    ls.x = ls.x * scale
-    ls.x[n] = _on_active_bound(ls.x[n], ls.active_mask[n], lo, hi)
-    ls.fun = ls.fun * y_scale
-    ls.jac = ls.jac * y_scale / scale
-    sse = float(ls.fun @ ls.fun)
-    cov, s2 = parameter_covariance(ls.jac, sse, m)
+        max_nfev=max_nfev, bounds=(bound_lo / scale, bound_hi / scale))
+    x = ls.x * scale
+    for j in range(n_free):
+        x[n_lin + j] = _on_active_bound(x[n_lin + j], ls.active_mask[n_lin + j], lower[j],
+                                        upper[j])
+    fun = ls.fun * y_scale
+    jac = ls.jac * y_scale / scale
+    sse = float(fun @ fun)
+    cov, s2 = parameter_covariance(jac, sse, m)
     status = Status.CONVERGED if ls.status > 0 else Status.MAX_ITER if ls.status == 0 else \
         Status.FAILED
-    return _OEFit(theta=ls.x[:n].copy(), alpha=float(ls.x[n]), sse=sse, start_shrink=shrink,
+    active = ls.active_mask[n_lin:n_lin + n_free]
+    return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=shrink,
                   status=status, message=f"output-error fit (scipy.optimize.least_squares): "
                   f"{ls.message} ({count[0]} simulations)", covariance=cov, noise_variance=s2,
-                  nit=int(ls.njev), nfev=count[0], at_lower=bool(ls.active_mask[n] < 0),
-                  at_upper=bool(ls.active_mask[n] > 0))
+                  nit=int(ls.njev), nfev=count[0], at_lower=active < 0, at_upper=active > 0)
 
 
 def _rms(y):
@@ -173,68 +173,101 @@ def _rms(y):
     return value if value > 0 else 1.0
 
 
-def _parameter_scale(x0, n_output):
-    """Typical size of each parameter: ``|x0|``, a zero entry taking its block's largest."""
-    scale = np.abs(x0)
-    scale[-1] = 1.0                                    # alpha is dimensionless
-    for block in (slice(0, n_output), slice(n_output, x0.shape[0] - 1)):
+def _parameter_scale(x0, structure, u, y):
+    """Typical size of each parameter.
+
+    ``|x0|`` for theta's entries (a zero entry takes its block's largest), the offset's and
+    the past levels' own scale (the RMS of y or u), 1 for the orders (dimensionless).
+    """
+    layout = structure.layout
+    scale = np.abs(x0).astype(float)
+    k, n = layout.n_output_params, layout.n_params
+    for block in (slice(0, k), slice(k, n)):
         part = scale[block]
         part[part == 0] = part.max() if part.max() > 0 else 1.0
+    pos = n
+    if structure.offset:
+        scale[pos] = max(scale[pos], _rms(y))
+        pos += 1
+    n_free = len(structure.orders.free)
+    scale[pos:pos + n_free] = 1.0
+    if structure.past == "estimate":
+        scale[pos + n_free] = _rms(u)
+        scale[pos + n_free + 1] = _rms(y)
     return scale
 
 
-def _start(builder, options, bounds):
-    """``(theta0, alpha0, J0, description)``: the varpro estimate or the given start."""
+def _start(builder, options, lower, upper):
+    """``(linear0, params0, J0, description)``: the varpro estimate or the given start."""
     start = options.start
+    s = builder.structure
     if start is None:
-        vp = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi),
+        vp = separable_least_squares(builder, bounds=(lower, upper),
                                      options=VarproOptions(n_grid=options.n_grid))
-        return vp.theta, vp.alpha, vp.rss / builder.n_samples, "the varpro estimate"
+        return vp.linear, vp.params, vp.rss / builder.n_samples, "the varpro estimate"
     if isinstance(start, IdentificationResult):
-        theta0, alpha0 = start.theta, start.alpha
+        if start.structure != s:
+            raise ParameterError("`start` is a result for another model structure "
+                                 f"({start.structure.describe()}); this fit is "
+                                 f"{s.describe()}.")
+        linear0, params0 = start.linear, start.nonlinear
     else:
         try:
-            theta0, alpha0 = start
+            linear0, params0 = start
         except (TypeError, ValueError):
             raise ParameterError("`start` must be an IdentificationResult or a pair "
-                                 f"(theta, alpha); got {start!r}.") from None
-    theta0 = builder.layout.check_theta(theta0, "start theta")
-    alpha0 = check_scalar(alpha0, "start alpha", lower=bounds.lo, upper=bounds.hi)
-    J0 = float(np.mean((builder.y - builder.matrix(alpha0) @ theta0) ** 2))
-    return theta0, alpha0, J0, "the given start"
+                                 f"(linear, nonlinear) of parameter vectors; got {start!r}."
+                                 ) from None
+        linear0 = check_array(linear0, "start linear parameters")
+        if linear0.shape[0] != s.n_linear:
+            raise DimensionError(f"`start` linear parameters must have {s.n_linear} entries "
+                                 f"({', '.join(s.linear_names)}); got {linear0.shape[0]}.")
+        params0 = np.atleast_1d(np.asarray(params0, dtype=np.float64))
+        if params0.shape[0] != s.n_nonlinear:
+            raise DimensionError(f"`start` nonlinear parameters must have {s.n_nonlinear} "
+                                 f"entries ({', '.join(s.nonlinear_names)}); got "
+                                 f"{params0.shape[0]}.")
+        for j, name in enumerate(s.orders.free):
+            check_scalar(params0[j], f"start {name}", lower=lower[j], upper=upper[j])
+    J0 = float(np.mean((builder.y - builder.matrix(params0) @ linear0) ** 2))
+    return np.array(linear0, dtype=float), np.array(params0, dtype=float), J0, "the given start"
 
 
-def output_error_result(builder, options, bounds):
+def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     """Equation-error start (varpro) or a given one, then the simulation-error fit."""
+    s = builder.structure
     options = options.check(builder.n_samples)
-    theta0, alpha0, J0, origin = _start(builder, options, bounds)
-    record = dict(options.as_dict(), alpha_bounds=(bounds.lo, bounds.hi))
+    lower, upper = bounds
+    linear0, params0, J0, origin = _start(builder, options, lower, upper)
+    record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))
     if options.start is not None:
         record["start"] = origin
-    Phi0 = builder.matrix(alpha0)
+    Phi0 = builder.matrix(params0)
     fac = _linalg.factor(Phi0, with_q=False)
     if fac.rank < fac.n_columns:        # not identifiable: no fit (it would drift along the
-        return finish(builder, method="output_error", theta=theta0, alpha=alpha0,  # null space)
-                      status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0, rank_factor=fac,
-                      message=f"no simulation-error fit: the start ({origin}) is rank deficient.",
-                      options=record)
-    fit = fit_output_error(builder.u, builder.y, layout=builder.layout, f_basis=builder.f_basis,
-                           g_basis=builder.g_basis, theta0=theta0, alpha0=alpha0,
-                           bounds=(bounds.lo, bounds.hi), n_init=options.n_init,
-                           max_nfev=options.max_nfev)
+        return finish(builder, method="output_error", linear=linear0, params=params0,  # null
+                      status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0,        # space)
+                      rank_factor=fac, options=record, operating_point=operating_point,
+                      message=f"no simulation-error fit: the start ({origin}) is rank deficient.")
+    fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
+                           n_init=options.n_init, max_nfev=options.max_nfev)
     message = fit.message
-    message += (f" Started from {origin} (alpha = {alpha0:.6g})"
+    first = ", ".join(f"{n} = {v:.6g}" for n, v in zip(s.nonlinear_names, params0))
+    message += (f" Started from {origin}" + (f" ({first})" if first else "")
                 + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "
                    "stable." if fit.start_shrink < 1 else "."))
     message += f" Simulation error criterion from sample {options.n_init} on."
-    if fit.at_lower or fit.at_upper:
-        message += bound_note(fit.alpha, bounds.lo, bounds.hi, fit.at_lower, fit.at_upper)
+    for j, name in enumerate(s.orders.free):
+        if fit.at_lower[j] or fit.at_upper[j]:
+            message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j])
     record["simulation_sse"] = fit.sse
-    Phi = builder.matrix(fit.alpha)
-    J = float(np.mean((builder.y - Phi @ fit.theta) ** 2))
-    return finish(builder, method="output_error", theta=fit.theta, alpha=fit.alpha,
+    Phi = builder.matrix(fit.params)
+    J = float(np.mean((builder.y - Phi @ fit.linear) ** 2))
+    alpha_history = [params0[0], fit.params[0]] if s.orders.free else None
+    return finish(builder, method="output_error", linear=fit.linear, params=fit.params,
                   status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
-                  alpha_at_bound=fit.at_lower or fit.at_upper, options=record, Phi=Phi,
-                  covariance=fit.covariance,
-                  noise_variance=fit.noise_variance, alpha_history=[alpha0, fit.alpha],
-                  J_history=[J0, J])
+                  alpha_at_bound=bool(np.any(fit.at_lower) or np.any(fit.at_upper)),
+                  options=record, Phi=Phi, covariance=fit.covariance,
+                  noise_variance=fit.noise_variance, alpha_history=alpha_history,
+                  J_history=[J0, J] if alpha_history else None,
+                  operating_point=operating_point)

@@ -249,7 +249,7 @@ class RlsOptions(MethodOptions):
     initial_alpha_variance: float = 0.1
 
 
-def rls_result(builder, options, bounds):
+def rls_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     """One pass of MultiInnovationRLS wrapped as an IdentificationResult."""
     alpha0 = 0.5 * (bounds.lo + bounds.hi) if options.alpha0 is None else options.alpha0
     options = options.replace(alpha0=alpha0)
@@ -262,8 +262,9 @@ def rls_result(builder, options, bounds):
                "was not tested.")
     if est.alpha_at_bound_:
         message += " Alpha was held at a bound at least once."
-    return finish(builder, method="rls", schedule="recursive", theta=est.theta_,
-                  alpha=est.alpha_, status=Status.NOT_TESTED, nit=1, nfev=1, message=message,
+    return finish(builder, method="rls", schedule="recursive", linear=est.theta_,
+                  params=[est.alpha_], status=Status.NOT_TESTED, nit=1, nfev=1, message=message,
+                  operating_point=operating_point,
                   alpha_at_bound=est.alpha_at_bound_,
                   options=dict(options.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
                   theta_history=est.theta_history_, alpha_sample_history=est.alpha_history_)

@@ -25,6 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
+import scipy.ndimage
 import scipy.optimize
 
 from .. import _linalg
@@ -137,8 +139,8 @@ def parameter_covariance(jacobian, rss, n_samples):
 
 @dataclass
 class _VarproFit:
-    theta: np.ndarray
-    alpha: float
+    linear: np.ndarray
+    params: np.ndarray
     rss: float
     grid: np.ndarray
     grid_J: np.ndarray
@@ -148,22 +150,40 @@ class _VarproFit:
     nit: int
     nfev: int
     message: str
-    at_lower: bool
-    at_upper: bool
+    at_lower: np.ndarray
+    at_upper: np.ndarray
     covariance: np.ndarray | None
     noise_variance: float
     rank_factor: object
 
 
+class _Profile:
+    """``theta(params)`` and ``rss(params)`` of the separable problem, cached per point."""
+
+    def __init__(self, builder):
+        self.builder = builder
+        self.cache = {}
+
+    def __call__(self, params):
+        key = tuple(np.atleast_1d(params).tolist())
+        if key not in self.cache:
+            self.cache[key] = _linalg.lstsq(self.builder.matrix(params), self.builder.y)
+        return self.cache[key]
+
+    @property
+    def count(self):
+        return len(self.cache)
+
+
 def separable_least_squares(builder, *, bounds, options=None):
-    """Separable least-squares estimate of ``(theta, alpha)`` for one record.
+    """Separable least-squares estimate of the linear and nonlinear parameters of one record.
 
     Parameters
     ----------
     builder : RegressorBuilder
-        The record.
-    bounds : (float, float)
-        Interval searched for alpha (the polish may reach its ends).
+        The record and the model class (:attr:`RegressorBuilder.structure`).
+    bounds : (array_like, array_like)
+        Lower and upper bounds of each free order (past levels are unbounded).
     options : VarproOptions, optional
         Grid, tolerances and polish.
 
@@ -173,28 +193,72 @@ def separable_least_squares(builder, *, bounds, options=None):
         Internal record; :func:`fohw.identify` wraps it into an ``IdentificationResult``.
     """
     opts = (options or VarproOptions()).check()
-    y = builder.y
+    s = builder.structure
+    lo = np.atleast_1d(np.asarray(bounds[0], dtype=float))
+    hi = np.atleast_1d(np.asarray(bounds[1], dtype=float))
+    profile = _Profile(builder)
+    if s.n_nonlinear == 0:
+        return _linear_only(builder, profile)
+    if s.n_nonlinear == 1 and len(s.orders.free) == 1:
+        params, search, grid, grid_J, nit, ok, message = _scalar_search(builder, profile,
+                                                                        lo[0], hi[0], opts)
+    else:
+        params, search, grid, grid_J, nit, ok, message = _vector_search(builder, profile, lo,
+                                                                        hi, opts)
+    linear, rss, fac = profile(params)
+    nfev = profile.count
+    n_free = len(s.orders.free)
+    edge = 1e-5 * (hi - lo)
+    at_lower = params[:n_free] - lo < edge
+    at_upper = hi - params[:n_free] < edge
+    status = Status.CONVERGED if ok else Status.MAX_ITER
+    if fac.rank < fac.n_columns:
+        message += "; no polish (the information matrix is rank deficient)."
+    elif opts.polish:
+        linear, params, rss, ls = _polish(builder, linear, params, lo, hi, opts)
+        nit += int(ls.njev)
+        nfev += int(ls.nfev)
+        at_lower, at_upper = ls.active_mask[s.n_linear:][:n_free] < 0, \
+            ls.active_mask[s.n_linear:][:n_free] > 0
+        status = (Status.CONVERGED if ls.status > 0 else
+                  Status.MAX_ITER if ls.status == 0 else Status.FAILED)
+        message += f"; polish (scipy.optimize.least_squares): {ls.message}"
+        fac = None
+    cov, s2 = parameter_covariance(builder.jacobian(linear, params), rss, builder.n_samples)
+    return _VarproFit(linear=linear, params=params, rss=rss, grid=grid, grid_J=grid_J,
+                      search_alphas=search[0], search_J=search[1], status=status, nit=nit,
+                      nfev=nfev, message=message, at_lower=np.asarray(at_lower, dtype=bool),
+                      at_upper=np.asarray(at_upper, dtype=bool), covariance=cov,
+                      noise_variance=s2, rank_factor=fac)
+
+
+def _linear_only(builder, profile):
+    """Every order fixed and no past levels: one linear least-squares solve."""
+    params = np.zeros(0)
+    linear, rss, fac = profile(params)
+    cov, s2 = parameter_covariance(builder.matrix(params), rss, builder.n_samples)
+    return _VarproFit(linear=linear, params=params, rss=rss, grid=np.zeros(0),
+                      grid_J=np.zeros(0), search_alphas=[], search_J=[],
+                      status=Status.CONVERGED, nit=0, nfev=1,
+                      message="converged: linear least squares (every order fixed)",
+                      at_lower=np.zeros(0, bool), at_upper=np.zeros(0, bool), covariance=cov,
+                      noise_variance=s2, rank_factor=fac)
+
+
+def _scalar_search(builder, profile, lo, hi, opts):
+    """One free order: a grid scan inside the bounds, then Brent's bounded search."""
     n_samples = builder.n_samples
-    lo, hi = bounds
     grid = np.linspace(lo, hi, opts.n_grid + 2)[1:-1]
-    cache = {}
-
-    def profile(alpha):
-        alpha = float(alpha)
-        if alpha not in cache:
-            cache[alpha] = _linalg.lstsq(builder.matrix(alpha), y)
-        return cache[alpha]
-
     grid_J = np.array([profile(a)[1] for a in grid]) / n_samples
     i = int(np.argmin(grid_J))
     left = grid[i - 1] if i > 0 else lo + 1e-6 * (hi - lo)
     right = grid[i + 1] if i < opts.n_grid - 1 else hi - 1e-6 * (hi - lo)
-    search_alphas, search_J = [], []
+    alphas, values = [], []
 
     def traced(alpha):
         value = profile(alpha)[1] / n_samples
-        search_alphas.append(float(alpha))
-        search_J.append(value)
+        alphas.append(float(alpha))
+        values.append(value)
         return value
 
     opt = scipy.optimize.minimize_scalar(traced, bounds=(left, right), method="bounded",
@@ -205,54 +269,136 @@ def separable_least_squares(builder, *, bounds, options=None):
     for edge_alpha, touched in ((lo, i == 0), (hi, i == opts.n_grid - 1)):
         if touched and profile(edge_alpha)[1] < profile(alpha)[1]:
             alpha = float(edge_alpha)
-    theta, rss, fac = profile(alpha)
-    nit, nfev = int(opt.nit), len(cache)
-    edge = 1e-5 * (hi - lo)
-    at_lower, at_upper = alpha - lo < edge, hi - alpha < edge
-    status = Status.CONVERGED if opt.success else Status.MAX_ITER
     message = f"alpha search: {opt.message}"
-    if fac.rank < fac.n_columns:
-        message += "; no polish (the information matrix is rank deficient)."
-    elif opts.polish:
-        theta, alpha, rss, ls = _polish(builder, theta, alpha, lo, hi, opts)
+    return np.array([alpha]), (alphas, values), grid, grid_J, int(opt.nit), bool(opt.success), \
+        message
+
+
+#: Points per order of the full grid of starts, for two and three free orders.
+_FULL_GRID = (0, 15, 8)
+_SCAN_NOTE = {2: " and the minima of a 15 x 15 grid", 3: " and the minima of an 8^3 grid",
+              4: " and one sweep of one-order scans"}
+
+
+def _vector_search(builder, profile, lo, hi, opts):
+    """Several nonlinear parameters: scan the tied line, then variable projection from the best.
+
+    The free orders are moved together, each at the same relative position in its bounds (the
+    commensurate line when the bounds are equal), with past levels at 0. The starts are the
+    best local minima of that scan (at most three), and for two or three free orders the
+    best local minima of a full grid (at most four), for more a sweep of one-order scans from
+    the best tied point. From each, :func:`scipy.optimize.least_squares` minimises the profile
+    ``||y - Phi(params) theta(params)||`` over all nonlinear parameters with Golub and
+    Pereyra's Jacobian; the best end point is kept.
+    """
+    s = builder.structure
+    n_free, n_samples = len(s.orders.free), builder.n_samples
+    n_past = s.n_nonlinear - n_free
+    tau = np.linspace(0.0, 1.0, opts.n_grid + 2)[1:-1]
+    grid_points = [np.r_[lo + t * (hi - lo), np.zeros(n_past)] for t in tau]
+    if n_free == 0:                       # only past levels: start at rest
+        grid_points, tau = [np.zeros(n_past)], np.zeros(1)
+    grid_J = np.array([profile(p)[1] for p in grid_points]) / n_samples
+    interior = [i for i in range(len(grid_J))
+                if (i == 0 or grid_J[i] <= grid_J[i - 1])
+                and (i == len(grid_J) - 1 or grid_J[i] <= grid_J[i + 1])]
+    starts = [grid_points[i] for i in sorted(interior, key=lambda i: grid_J[i])[:3]]
+    if 1 < n_free <= len(_FULL_GRID):
+        # The profile of two or three orders can have several minima along a curved valley
+        # (a noise-free record with two tied orders had one at J = 2e-7 beside the true
+        # J = 0, both off the tied line): the local minima of a full grid are the starts.
+        m = _FULL_GRID[n_free - 1]
+        axes = [lo[j] + np.linspace(0.0, 1.0, m + 2)[1:-1] * (hi[j] - lo[j])
+                for j in range(n_free)]
+        mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n_free)
+        values = np.array([profile(np.r_[p, np.zeros(n_past)])[1] for p in mesh])
+        cube = values.reshape((m,) * n_free)
+        minima = np.flatnonzero(cube == scipy.ndimage.minimum_filter(cube, size=3,
+                                                                     mode="nearest"))
+        starts = [np.r_[mesh[i], np.zeros(n_past)]
+                  for i in minima[np.argsort(values[minima])][:4]]
+    elif n_free > 1:
+        # More orders: one sweep of one-order scans from the best tied point, each order
+        # over its bounds with the others held, gives a start off the diagonal.
+        point = starts[0].copy()
+        for j in range(n_free):
+            trial = []
+            for t in tau:
+                p = point.copy()
+                p[j] = lo[j] + t * (hi[j] - lo[j])
+                trial.append((profile(p)[1], p))
+            point = min(trial, key=lambda item: item[0])[1]
+        starts.insert(0, point)
+    y = builder.y
+    y_scale = float(np.sqrt(np.mean(y * y))) or 1.0
+    lower = np.r_[lo, np.full(n_past, -np.inf)]
+    upper = np.r_[hi, np.full(n_past, np.inf)]
+
+    def residual(params):
+        linear, _, _ = profile(params)
+        return (y - builder.matrix(params) @ linear) / y_scale
+
+    def golub_pereyra(params):
+        # d/dp of P_perp y: -P_perp dPhi theta - (Phi^+)^T dPhi^T r (Golub and Pereyra);
+        # Kaufman's approximation drops the second term, exact only at a zero residual.
+        linear, _, fac = profile(params)
+        k = fac.rank
+        q, r_tri = fac.q[:, :k], fac.r[:k, :k]
+        resid = y - builder.matrix(params) @ linear
+        cols = []
+        for d in builder.matrix_derivatives(params):
+            v = d @ linear
+            w = ((d.T @ resid) / fac.scale)[fac.perm[:k]]
+            z = scipy.linalg.solve_triangular(r_tri, w, trans="T")
+            cols.append(-(v - q @ (q.T @ v)) - q @ z)
+        return np.column_stack(cols) / y_scale
+
+    best, nit = None, 0
+    for x0 in starts:
+        x0 = np.clip(x0, lower, upper)
+        ls = scipy.optimize.least_squares(residual, x0, jac=golub_pereyra, bounds=(lower, upper),
+                                          method="trf", x_scale="jac", ftol=opts.tol,
+                                          xtol=opts.tol, gtol=opts.tol)
         nit += int(ls.njev)
-        nfev += int(ls.nfev)
-        at_lower, at_upper = bool(ls.active_mask[-1] < 0), bool(ls.active_mask[-1] > 0)
-        status = (Status.CONVERGED if ls.status > 0 else
-                  Status.MAX_ITER if ls.status == 0 else Status.FAILED)
-        message += f"; polish (scipy.optimize.least_squares): {ls.message}"
-        fac = None
-    cov, s2 = parameter_covariance(builder.jacobian(theta, alpha), rss, n_samples)
-    return _VarproFit(theta=theta, alpha=alpha, rss=rss, grid=grid, grid_J=grid_J,
-                      search_alphas=search_alphas, search_J=search_J, status=status, nit=nit,
-                      nfev=nfev, message=message, at_lower=at_lower, at_upper=at_upper,
-                      covariance=cov, noise_variance=s2, rank_factor=fac)
+        if best is None or ls.cost < best.cost:
+            best = ls
+    message = (f"variable projection from {len(starts)} start(s) of the tied-order scan"
+               f"{_SCAN_NOTE.get(min(n_free, 4), '')}: "
+               f"{best.message}")
+    grid = lo[0] + tau * (hi[0] - lo[0]) if n_free else tau
+    return best.x, ([], []), grid, grid_J, nit, best.status > 0, message
 
 
-def _polish(builder, theta, alpha, lo, hi, opts):
-    """Joint least squares over ``(theta, alpha)`` from the profile estimate.
+def _polish(builder, linear, params, lo, hi, opts):
+    """Joint least squares over ``(linear, params)`` from the profile estimate.
 
     The residual is divided by the RMS output so that the solver's absolute gradient
     tolerance means the same whatever the units of ``y``; ``x_scale="jac"`` does the same for
     the parameters.
     """
-    n = theta.shape[0]
+    s = builder.structure
+    n, n_free = s.n_linear, len(s.orders.free)
+    n_past = s.n_nonlinear - n_free
     y = builder.y
     y_scale = float(np.sqrt(np.mean(y * y))) or 1.0
 
     def residual(x):
-        return (y - builder.matrix(x[n]) @ x[:n]) / y_scale
+        return (y - builder.matrix(x[n:]) @ x[:n]) / y_scale
 
     def jacobian(x):
-        return builder.jacobian(x[:n], x[n]) / -y_scale
+        return builder.jacobian(x[:n], x[n:]) / -y_scale
 
+    lower = np.r_[np.full(n, -np.inf), lo, np.full(n_past, -np.inf)]
+    upper = np.r_[np.full(n, np.inf), hi, np.full(n_past, np.inf)]
+    x0 = np.r_[linear, np.clip(params, lower[n:], upper[n:])]
     ls = scipy.optimize.least_squares(
-        residual, np.append(theta, np.clip(alpha, lo, hi)), jac=jacobian, method="trf",
-        bounds=(np.r_[np.full(n, -np.inf), lo], np.r_[np.full(n, np.inf), hi]),
-        x_scale="jac", ftol=opts.tol, xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
+        residual, x0, jac=jacobian, method="trf", bounds=(lower, upper), x_scale="jac",
+        ftol=opts.tol, xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
     rss = float(ls.fun @ ls.fun) * y_scale**2
-    alpha = float(_on_active_bound(ls.x[n], ls.active_mask[n], lo, hi))
-    return ls.x[:n].copy(), alpha, rss, ls
+    params = ls.x[n:].copy()
+    for m in range(n_free):
+        params[m] = _on_active_bound(params[m], ls.active_mask[n + m], lo[m], hi[m])
+    return ls.x[:n].copy(), params, rss, ls
 
 
 def _on_active_bound(value, active, lo, hi):
@@ -260,16 +406,31 @@ def _on_active_bound(value, active, lo, hi):
     return lo if active < 0 else hi if active > 0 else value
 
 
-def varpro_result(builder, options, bounds):
-    """Run separable least squares and wrap it as an IdentificationResult."""
-    fit = separable_least_squares(builder, bounds=(bounds.lo, bounds.hi), options=options)
+def varpro_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
+    """Run separable least squares and wrap it as an IdentificationResult.
+
+    ``bounds`` is ``(lower, upper)`` over the free orders (:func:`fohw.identify` builds it).
+    """
+    s = builder.structure
+    lo, hi = bounds
+    fit = separable_least_squares(builder, bounds=(lo, hi), options=options)
     message = fit.message
-    if fit.at_lower or fit.at_upper:
-        message += bound_note(fit.alpha, bounds.lo, bounds.hi, fit.at_lower, fit.at_upper)
-    return finish(builder, method="varpro", theta=fit.theta, alpha=fit.alpha, status=fit.status,
-                  nit=fit.nit, nfev=fit.nfev, message=message,
-                  alpha_at_bound=fit.at_lower or fit.at_upper,
-                  options=dict(options.as_dict(), alpha_bounds=(bounds.lo, bounds.hi)),
-                  rank_factor=fit.rank_factor, covariance=fit.covariance,
-                  noise_variance=fit.noise_variance, alpha_history=fit.search_alphas,
-                  J_history=fit.search_J, alpha_profile=np.vstack([fit.grid, fit.grid_J]))
+    for m, name in enumerate(s.orders.free):
+        if fit.at_lower[m] or fit.at_upper[m]:
+            message += bound_note(name, lo[m], hi[m], fit.at_lower[m], fit.at_upper[m])
+    record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lo, hi))
+    profile = np.vstack([fit.grid, fit.grid_J]) if fit.grid.size else None
+    return finish(builder, method="varpro", linear=fit.linear, params=fit.params,
+                  status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
+                  alpha_at_bound=bool(np.any(fit.at_lower) or np.any(fit.at_upper)),
+                  options=record, rank_factor=fit.rank_factor, covariance=fit.covariance,
+                  noise_variance=fit.noise_variance,
+                  alpha_history=fit.search_alphas or None, J_history=fit.search_J or None,
+                  alpha_profile=profile, operating_point=operating_point)
+
+
+def _bounds_record(structure, lo, hi):
+    """``alpha_bounds`` as given back in the result: a pair, or one pair per free order."""
+    if len(set(zip(lo.tolist(), hi.tolist()))) <= 1 and lo.size:
+        return (float(lo[0]), float(hi[0]))
+    return {name: (float(a), float(b)) for name, a, b in zip(structure.orders.free, lo, hi)}

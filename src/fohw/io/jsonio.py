@@ -15,17 +15,20 @@ import numpy as np
 
 from ..exceptions import DataFileError, ParameterError
 from ..model.basis import Basis, as_basis, polynomial_basis
-from ..model.params import ThetaLayout
+from ..model.orders import Orders
+from ..model.structure import Structure
 from ..model.system import HammersteinWiener
 
 __all__ = ["save_model", "load_model", "load_result", "MODEL_FORMAT_VERSION",
            "RESULT_FORMAT_VERSION"]
 
-#: Version of the model files this fohw writes (it reads the versions in ``_READS``).
-MODEL_FORMAT_VERSION = 1
-#: Version of the result files: 2 replaced ``n_iter``/``converged`` by ``status``/``nit``/``nfev``.
+#: Version of the model files this fohw writes (it reads the versions in ``_READS``): 2 added
+#: the structure (orders per term, dt, offset, past levels, operating point).
+MODEL_FORMAT_VERSION = 2
+#: Version of the result files: 2 replaced ``n_iter``/``converged`` by ``status``/``nit``/``nfev``
+#: and added the structure and its estimates (orders, offset, past, operating point).
 RESULT_FORMAT_VERSION = 2
-_READS = {"fohw-model": (1,), "fohw-result": (1, 2)}
+_READS = {"fohw-model": (1, 2), "fohw-result": (1, 2)}
 
 
 def _basis_to_dict(basis: Basis) -> dict:
@@ -55,21 +58,40 @@ def _floats(a) -> list:
     return [float(x) for x in np.asarray(a, dtype=np.float64).ravel()]
 
 
+def _structure_to_dict(structure) -> dict:
+    return {"orders": structure.orders.to_dict(), "offset": structure.offset,
+            "past": structure.past, "dt": structure.dt}
+
+
+def _structure_from_dict(d, f_basis, g_basis) -> Structure:
+    return Structure(Orders.from_dict(d["orders"]), f_basis, g_basis, offset=d["offset"],
+                     past=d["past"], dt=d["dt"])
+
+
 def model_to_dict(model: HammersteinWiener) -> dict:
     """A JSON-ready dict of a model."""
     return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION,
             "a": _floats(model.a), "b": _floats(model.b), "p": _floats(model.p),
-            "q": _floats(model.q), "alpha": float(model.alpha),
+            "q": _floats(model.q), "orders": dict(model.orders),
+            "structure": _structure_to_dict(model.structure), "offset": float(model.offset),
+            "past": list(model.past), "operating_point": list(model.operating_point),
             "f_basis": _basis_to_dict(model.f_basis), "g_basis": _basis_to_dict(model.g_basis)}
 
 
 def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> HammersteinWiener:
-    """Inverse of :func:`model_to_dict`."""
-    _check_header(d, "fohw-model", path)
+    """Inverse of :func:`model_to_dict` (version 1 files: the paper's model)."""
+    version = _check_header(d, "fohw-model", path)
     try:
-        return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["alpha"],
-                                 f_basis=_basis_from_dict(d["f_basis"], f_basis, "f_basis", path),
-                                 g_basis=_basis_from_dict(d["g_basis"], g_basis, "g_basis", path))
+        f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
+        g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
+        if version == 1:
+            return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["alpha"], f_basis=f,
+                                     g_basis=g)
+        structure = _structure_from_dict(d["structure"], f, g)
+        return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["orders"], f_basis=f,
+                                 g_basis=g, orders=structure.orders, dt=structure.dt,
+                                 offset=d["offset"], past=tuple(d["past"]),
+                                 operating_point=tuple(d["operating_point"]))
     except KeyError as exc:
         raise DataFileError(f"{path}: missing field {exc.args[0]!r}.") from None
 
@@ -141,10 +163,31 @@ def result_to_dict(result) -> dict:
     d["layout"] = {"na": result.layout.na, "nb": result.layout.nb}
     d["f_basis"] = _basis_to_dict(result.f_basis)
     d["g_basis"] = _basis_to_dict(result.g_basis)
-    d["options"] = {k: (list(v) if isinstance(v, tuple) else v) for k, v in result.options.items()
-                    if isinstance(v, (int, float, str, bool, tuple, type(None)))}
+    d["structure"] = _structure_to_dict(result.structure)
+    d["orders"] = dict(result.orders)
+    d["offset"] = result.offset
+    d["past"] = list(result.past)
+    d["operating_point"] = list(result.operating_point)
+    d["options"] = {k: _jsonable(v) for k, v in result.options.items()
+                    if isinstance(v, (int, float, str, bool, tuple, dict, type(None)))}
     d["parameter_names"] = list(result.parameter_names)
     return d
+
+
+def _jsonable(value):
+    if isinstance(value, tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    return value
+
+
+def _from_json(value):
+    if isinstance(value, list):
+        return tuple(_from_json(v) for v in value)
+    if isinstance(value, dict):
+        return {k: _from_json(v) for k, v in value.items()}
+    return value
 
 
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
@@ -159,22 +202,30 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
     g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
     try:
-        layout = ThetaLayout(na=d["layout"]["na"], nb=d["layout"]["nb"], n_g=len(g), n_f=len(f))
         arrays = {k: (None if d[k] is None else
                       np.array(d[k]["data"], dtype=np.float64).reshape(d[k]["shape"]))
                   for k in _ARRAYS}
-        if version == 1:        # n_iter and converged; no status, nfev
+        if version == 1:        # the paper's model; n_iter and converged, no status or nfev
+            structure = Structure(Orders.preset("commensurate", na=d["layout"]["na"],
+                                                nb=d["layout"]["nb"]), f, g)
             status = Status.CONVERGED if d["converged"] else Status.MAX_ITER
             nit = nfev = d["n_iter"]
+            orders, offset, past, point = {"alpha": d["alpha"]}, None, (0.0, 0.0), (0.0, 0.0)
         else:
+            structure = _structure_from_dict(d["structure"], f, g)
             status, nit, nfev = Status(d["status"]), d["nit"], d["nfev"]
-        model, _ = recover_model(layout, f, g, arrays["theta"], d["alpha"])
-        opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in d["options"].items()}
+            orders, offset = d["orders"], d["offset"]
+            past, point = tuple(d["past"]), tuple(d["operating_point"])
+        model, _ = recover_model(structure, arrays["theta"], orders, offset=offset, past=past,
+                                 operating_point=point)
+        opts = {k: _from_json(v) for k, v in d["options"].items()}
         return IdentificationResult(
             method=d["method"], schedule=d["schedule"], alpha=d["alpha"], model=model, J=d["J"],
             status=status, nit=nit, nfev=nfev, message=d["message"],
-            alpha_at_bound=d["alpha_at_bound"], layout=layout, f_basis=f, g_basis=g,
-            n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"], **arrays)
+            alpha_at_bound=d["alpha_at_bound"], layout=structure.layout, f_basis=f, g_basis=g,
+            n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"],
+            structure=structure, orders=orders, offset=offset, past=past, operating_point=point,
+            **arrays)
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
                             f"{exc}).") from None

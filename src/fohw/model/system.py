@@ -162,6 +162,18 @@ class HammersteinWiener:
         """Names of the entries of :attr:`theta` (``a1``, ``q2a1``, ``b1``, ``p2b1``, …)."""
         return self.layout.names
 
+    @property
+    def linear(self) -> np.ndarray:
+        """The linear parameters of :attr:`structure`: :attr:`theta`, then the offset if any."""
+        extra = [self.offset] if self.structure.offset else []
+        return np.concatenate([self.theta, extra])
+
+    @property
+    def nonlinear(self) -> np.ndarray:
+        """The nonlinear parameters of :attr:`structure`: free orders, then the past levels."""
+        past = list(self.past) if self.structure.past == "estimate" else []
+        return np.array([self.orders[n] for n in self.structure.orders.free] + past, dtype=float)
+
     def static_gain(self, u_level):
         """The steady output for a constant input ``u_level`` (model units), or ``nan``.
 
@@ -654,3 +666,46 @@ def _pair(value, name):
     except (TypeError, ValueError):
         raise ParameterError(f"`{name}` must be a pair of numbers; got {value!r}.") from None
     return check_scalar(a, f"{name}[0]"), check_scalar(b, f"{name}[1]")
+
+
+def simulate_parameters(structure, linear, params, u, *, operating_point=(0.0, 0.0), noise=None,
+                        divergence_threshold=None, history=None):
+    """Free run of the predictor an estimator fitted: any structure, unstructured theta.
+
+    Parameters
+    ----------
+    structure : Structure
+    linear : ndarray
+        ``[theta, offset]`` (:attr:`Structure.linear_names`).
+    params : ndarray
+        The nonlinear parameters (:attr:`Structure.nonlinear_names`).
+    u : ndarray
+        Input in the data's units.
+    operating_point, noise, divergence_threshold, history
+        As in :func:`simulate`.
+
+    Returns
+    -------
+    y : ndarray
+    """
+    if not isinstance(structure, Structure):
+        raise ParameterError(f"`structure` must be a fohw.Structure; got "
+                             f"{type(structure).__name__}.")
+    linear = check_array(linear, "linear")
+    params = np.atleast_1d(check_array(params, "params", ndim=None, min_length=0))
+    for value, names, name in ((linear, structure.linear_names, "linear"),
+                               (params, structure.nonlinear_names, "params")):
+        if value.shape[0] != len(names):
+            raise DimensionError(f"`{name}` must have {len(names)} entries {names}; got "
+                                 f"{value.shape[0]}.")
+    layout = structure.layout
+    qa, pb = layout.blocks(linear[:layout.n_params])
+    offset = float(linear[layout.n_params]) if structure.offset else 0.0
+    values, past = structure.split_nonlinear(params)
+    u = check_array(u, "u")
+    v = np.zeros(u.shape[0]) if noise is None else check_array(noise, "noise")
+    check_same_length(u, v, "u", "noise")
+    Q, A = _output_representation(qa)
+    return _run(structure, Q, A, qa, pb, values, u, v, offset=offset, past=past,
+                operating_point=operating_point, threshold=_threshold(divergence_threshold),
+                history=history)
