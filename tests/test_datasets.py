@@ -67,3 +67,39 @@ def test_load_daisy_missing_file_and_column_count(tmp_path):
     path.write_text("1 2 3\n4 5 6\n")
     with pytest.raises(fohw.DataFileError, match="line 1 has 3 column"):
         fohw.datasets.load_daisy(path, n_columns=2)
+
+
+def test_cascaded_tanks_is_the_benchmark_file():
+    t = fohw.datasets.cascaded_tanks()
+    with open(t.estimation.path, "rb") as fh:
+        assert hashlib.sha256(fh.read()).hexdigest() == (
+            "ef2388ed822f3aef4aa80d6b0f2b466dd80b361786b3eafc7a2957c31ea323a7")
+    est, val = t.estimation, t.validation
+    assert (est.n_samples, val.n_samples, est.dt, val.dt) == (1024, 1024, 4.0, 4.0)
+    # First data row of dataBenchmark.csv: uEst, uVal, yEst, yVal = 3.2567, 0.97619, 5.205, 4.9728.
+    assert (est.u[0], val.u[0], est.y[0], val.y[0]) == (3.2567, 0.97619, 5.205, 4.9728)
+    # The data README: the sensor saturates at 10 V, 47 estimation and 37 validation samples.
+    assert (np.sum(est.y == 10.0), np.sum(val.y == 10.0), est.y.max()) == (47, 37, 10.0)
+    assert "Schoukens" in t.source and "free run" in t.rules
+    assert (est.input_unit, est.output_unit, est.time_unit) == ("V", "V", "s")
+
+
+def test_record_split_keeps_meaning_and_refuses_bad_points():
+    est = fohw.datasets.cascaded_tanks().estimation
+    a, b = est.split(0.75)
+    assert (a.n_samples, b.n_samples) == (768, 256)
+    np.testing.assert_array_equal(np.r_[a.y, b.y], est.y)
+    assert b.dt == 4.0 and b.output_name == "lower tank level"
+    np.testing.assert_array_equal(b.time[:2], [0.0, 4.0])
+    c, d = est.split(100)
+    assert c.n_samples == 100 and d.u[0] == est.u[100]
+    for bad in (0, 1024, 1.0, 0.0, True, "half"):
+        with pytest.raises(fohw.ParameterError, match="`at`"):
+            est.split(bad)
+    with pytest.raises(fohw.ParameterError, match="contiguous slice"):
+        est[::2]
+    with pytest.raises(fohw.DimensionError, match="same length"):
+        fohw.Record(u=np.ones(3), y=np.ones(4))
+    with pytest.raises(fohw.ParameterError, match="`dt`"):
+        fohw.Record(u=np.ones(3), y=np.ones(3), dt=0.0)
+    assert not est.u.flags.writeable

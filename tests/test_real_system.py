@@ -14,23 +14,20 @@ from fohw.estimators.baselines import fit_linear_output_error
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
 
-def test_robot_arm_from_path_folder_and_env(robot_arm_path, monkeypatch):
+def test_robot_arm_shipped_copy_from_path_and_folder(robot_arm_path):
     a = fohw.datasets.robot_arm(robot_arm_path)
     b = fohw.datasets.robot_arm(robot_arm_path.parent)
-    monkeypatch.setenv("FOHW_DATA_DIR", str(robot_arm_path.parent))
     c = fohw.datasets.robot_arm()
     assert a.n_samples == 1024 and a.sampling_time is None
+    assert "De Moor" in c.source and c.output_name == "arm acceleration"
     np.testing.assert_array_equal(a.u, b.u)
     np.testing.assert_array_equal(a.y, c.y)
     # The halves are near mirror images (data README).
     assert np.corrcoef(a.y[:512], -a.y[512:])[0, 1] > 0.99
 
 
-def test_robot_arm_missing_file_says_what_and_where(tmp_path, monkeypatch):
-    monkeypatch.delenv("FOHW_DATA_DIR", raising=False)
-    with pytest.raises(FileNotFoundError, match="FOHW_DATA_DIR is not set.*DaISy data set 96-009"):
-        fohw.datasets.robot_arm()
-    with pytest.raises(FileNotFoundError, match="not found.*96-009"):
+def test_robot_arm_missing_file_says_what_and_where(tmp_path):
+    with pytest.raises(FileNotFoundError, match="robot-arm data not found.*without a path"):
         fohw.datasets.robot_arm(tmp_path)
 
 

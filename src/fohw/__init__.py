@@ -40,6 +40,7 @@ from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.structure import Structure
 from .model.system import HammersteinWiener, simulate, simulate_parameters, simulate_theta
+from .record import Benchmark, Record
 from .results import IdentificationResult, Status
 
 __version__ = "0.1.0.dev0"
@@ -82,6 +83,8 @@ __all__ = [
     "HybridIdentifier",
     "HybridOptions",
     "IdentificationResult",
+    "Record",
+    "Benchmark",
     "MultiInnovationGradient",
     "MultiInnovationRLS",
     "NotFittedError",

@@ -1,4 +1,8 @@
-"""Data sets: the paper's academic example (Section 6.1) and DaISy-format files (Section 6.2)."""
+"""Data sets: the paper's example (Section 6.1), the robot arm (6.2) and the cascaded tanks.
+
+The measured records ship inside the package (``fohw/data``) with their citations and
+checksums; every loader verifies the checksum.
+"""
 
 from __future__ import annotations
 
@@ -10,9 +14,10 @@ import numpy as np
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
 from .model.system import HammersteinWiener, simulate
+from .record import Benchmark, Record
 
 __all__ = ["SimulatedData", "MeasuredData", "paper_model", "paper_example", "load_daisy",
-           "robot_arm"]
+           "robot_arm", "cascaded_tanks"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -208,73 +213,79 @@ def _is_float(text: str) -> bool:
     return True
 
 
-#: sha256 of DaISy 96-009 ``robot_arm.dat`` as distributed (see the data README).
+#: sha256 of the files shipped in ``fohw/data`` (see ``fohw/data/README.md``).
 ROBOT_ARM_SHA256 = "4ee167a8a28ce0da868d1b42f6a2fe0c456ea0e56b60c70915bf6d4a2a933635"
 ROBOT_ARM_FILENAME = "daisy_robot_arm.dat"
+CASCADED_TANKS_SHA256 = "ef2388ed822f3aef4aa80d6b0f2b466dd80b361786b3eafc7a2957c31ea323a7"
+CASCADED_TANKS_FILENAME = "cascaded_tanks.csv"
+
+ROBOT_ARM_SOURCE = ("DaISy data set 96-009, 'Data from a flexible robot arm' (KU Leuven); B. De "
+                    "Moor, P. De Gersem, B. De Schutter, W. Favoreel, 'DAISY: A database for "
+                    "identification of systems', Journal A 38(3), 4-5, 1997.")
+CASCADED_TANKS_SOURCE = ("M. Schoukens, P. Mattsson, T. Wigren, J.-P. Noel, 'Cascaded tanks "
+                         "benchmark combining soft and hard nonlinearities', Workshop on "
+                         "Nonlinear System Identification Benchmarks, Brussels, 2016; M. "
+                         "Schoukens, J.-P. Noel, 'Three benchmarks addressing open challenges "
+                         "in nonlinear system identification', IFAC World Congress, 2017.")
+
+#: Kept for code written against fohw 0.x: the loaders return :class:`fohw.Record`.
+MeasuredData = Record
 
 
-@dataclass(frozen=True, repr=False)
-class MeasuredData:
-    """A measured input–output record.
+def _packaged(filename, sha256):
+    """Path of a data file shipped in ``fohw/data``, its checksum verified."""
+    import hashlib
+    from importlib import resources
 
-    Attributes
-    ----------
-    u, y : ndarray, shape (N,)
-        Input and output.
-    name : str
-        Where the record comes from.
-    sampling_time : float or None
-        ``None`` where the source gives none.
-    path : str
-        The file read.
-    """
-
-    u: np.ndarray
-    y: np.ndarray
-    name: str
-    sampling_time: float | None
-    path: str
-
-    @property
-    def n_samples(self) -> int:
-        """Number of samples ``N``."""
-        return self.u.shape[0]
-
-    def __repr__(self):
-        return f"MeasuredData({self.name!r}, n_samples={self.n_samples}, path={self.path!r})"
+    path = str(resources.files("fohw") / "data" / filename)
+    with open(path, "rb") as fh:
+        digest = hashlib.sha256(fh.read()).hexdigest()
+    if digest != sha256:
+        raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}: "
+                            "the installed fohw is damaged; reinstall it.")
+    return path
 
 
-def _robot_arm_help() -> str:
-    return ("The flexible robot arm record is DaISy data set 96-009 (KU Leuven; De Moor et al., "
-            "'DAISY: a database for identification of systems', 1997), file robot_arm.dat: "
-            "1024 lines of 'u y' (reaction torque, arm acceleration). fohw does not ship it. "
-            f"Save it as {ROBOT_ARM_FILENAME!r} and pass its path (command line: --data PATH), "
-            "fohw.datasets.robot_arm(path=...), or set the environment variable FOHW_DATA_DIR "
-            "to the folder that holds it.")
+def _verified(path, filename, sha256, what):
+    import hashlib
+
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        path = os.path.join(path, filename)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"{what} not found at {path!r}; call the loader without a path "
+                                "to use the copy shipped with fohw.")
+    with open(path, "rb") as fh:
+        digest = hashlib.sha256(fh.read()).hexdigest()
+    if digest != sha256:
+        raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}; "
+                            "the file is corrupted or another file. Call the loader without a "
+                            "path to use the copy shipped with fohw, or pass verify=False.")
+    return path
 
 
 def robot_arm(path=None, *, verify=True):
-    """The DaISy flexible robot arm record (paper Section 6.2).
+    """The DaISy flexible robot arm record (paper Section 6.2), shipped with fohw.
 
     Parameters
     ----------
     path : str or os.PathLike, optional
-        The file, or a folder holding ``daisy_robot_arm.dat``. Default: the folder named by the
-        environment variable ``FOHW_DATA_DIR``.
+        Another copy to read (the file, or a folder holding ``daisy_robot_arm.dat``). Default:
+        the copy shipped inside the package.
     verify : bool, optional
-        Check the file's sha256 against the published one (default True).
+        Check a given file's sha256 against the published one (default True; the shipped copy
+        is always checked).
 
     Returns
     -------
-    MeasuredData
+    Record
         ``u`` = reaction torque, ``y`` = arm acceleration, 1024 samples; the source gives no
-        sampling time (``sampling_time=None``; use one sample as the unit).
+        sampling time (``dt=None``; use one sample as the unit).
 
     Raises
     ------
     FileNotFoundError
-        No path given and ``FOHW_DATA_DIR`` unset, or no file there; the message says what the
-        file is and where to get it.
+        A given path holds no file.
     DataFileError
         The file's checksum or content is wrong.
 
@@ -284,28 +295,62 @@ def robot_arm(path=None, *, verify=True):
     first half (correlation −0.996 for u, −0.998 for y: a periodic sweep), so a first-half /
     second-half split is a weak validation.
     """
-    import hashlib
-
     if path is None:
-        folder = os.environ.get("FOHW_DATA_DIR")
-        if not folder:
-            raise FileNotFoundError("no path given and FOHW_DATA_DIR is not set. "
-                                    + _robot_arm_help())
-        path = os.path.join(folder, ROBOT_ARM_FILENAME)
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        path = os.path.join(path, ROBOT_ARM_FILENAME)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"robot-arm data not found at {path!r}. " + _robot_arm_help())
-    if verify:
-        with open(path, "rb") as fh:
-            digest = hashlib.sha256(fh.read()).hexdigest()
-        if digest != ROBOT_ARM_SHA256:
-            raise DataFileError(f"{path}: sha256 {digest} does not match DaISy 96-009's "
-                                f"{ROBOT_ARM_SHA256}; the file is corrupted or another file. "
-                                + _robot_arm_help())
+        path = _packaged(ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256)
+    elif verify:
+        path = _verified(path, ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256, "robot-arm data")
+    else:
+        path = os.fspath(path)
+        if os.path.isdir(path):
+            path = os.path.join(path, ROBOT_ARM_FILENAME)
     data = load_daisy(path, n_columns=2)
     if data.shape[0] != 1024:
         raise DataFileError(f"{path}: expected 1024 samples; got {data.shape[0]}.")
-    return MeasuredData(u=data[:, 0].copy(), y=data[:, 1].copy(),
-                        name="DaISy 96-009 flexible robot arm", sampling_time=None, path=path)
+    return Record(u=data[:, 0], y=data[:, 1], dt=None, name="DaISy 96-009 flexible robot arm",
+                  input_name="reaction torque", output_name="arm acceleration",
+                  source=ROBOT_ARM_SOURCE, path=path)
+
+
+def cascaded_tanks():
+    """The cascaded-tanks benchmark (Schoukens, Mattsson, Wigren, Noël 2016), shipped with fohw.
+
+    A pump (input: voltage) fills an upper tank that drains into a lower one; the output is
+    the lower tank's water level as the sensor's voltage. Outflows are square-root (soft)
+    nonlinearities; a full tank overflows and the sensor saturates at 10 V (47 estimation and
+    37 validation samples reach it).
+
+    Returns
+    -------
+    Benchmark
+        ``estimation`` and ``validation`` records of 1024 samples each, ``dt = 4`` s, in volts.
+        The benchmark's rules: estimate on the estimation record, simulate the validation
+        record in free run from its input alone, report the RMS error of the simulated output
+        in volts. The initial water levels are not given.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> tanks = fohw.datasets.cascaded_tanks()
+    >>> tanks.validation.n_samples, tanks.validation.dt, float(tanks.validation.y.max())
+    (1024, 4.0, 10.0)
+    """
+    path = _packaged(CASCADED_TANKS_FILENAME, CASCADED_TANKS_SHA256)
+    with open(path, encoding="ascii") as fh:
+        lines = fh.read().splitlines()
+    header = [h.strip().strip('"') for h in lines[0].split(",")]
+    if header[:5] != ["uEst", "uVal", "yEst", "yVal", "Ts"]:
+        raise DataFileError(f"{path}: unexpected header {lines[0]!r}.")
+    rows = [line.split(",") for line in lines[1:] if line.strip()]
+    values = np.array([[float(v) for v in row[:4]] for row in rows])
+    dt = float(rows[0][4])
+    common = dict(dt=dt, input_name="pump voltage", output_name="lower tank level",
+                  input_unit="V", output_unit="V", time_unit="s", source=CASCADED_TANKS_SOURCE,
+                  path=path)
+    return Benchmark(
+        estimation=Record(u=values[:, 0], y=values[:, 2], name="cascaded tanks, estimation",
+                          **common),
+        validation=Record(u=values[:, 1], y=values[:, 3], name="cascaded tanks, validation",
+                          **common),
+        name="cascaded tanks with overflow", source=CASCADED_TANKS_SOURCE,
+        rules="estimate on `estimation`; simulate `validation` in free run from its input "
+              "alone; report the RMS error of the simulated output in volts")

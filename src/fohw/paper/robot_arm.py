@@ -2,7 +2,7 @@
 
     fohw reproduce robot-arm --outdir results [--fast] [--data PATH]
 
-The record is read by fohw.datasets.robot_arm (from --data, or from $FOHW_DATA_DIR).
+The record is read by fohw.datasets.robot_arm (the copy shipped with fohw, or --data).
 
 1. Structure for the equation-error models: the (na, nb, f degree, g degree) with the smallest
    BIC = N ln J + d ln N of the separable least-squares fit over the whole record.
@@ -106,7 +106,7 @@ def main(argv=None):
     ap.add_argument("--outdir", type=Path, default=Path("results"))
     ap.add_argument("--fast", action="store_true", help="small structure grids, fewer iterations")
     ap.add_argument("--data", default=None, help="the DaISy file or its folder "
-                    "(default: $FOHW_DATA_DIR)")
+                    "(default: the copy shipped with fohw)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     data = fohw.datasets.robot_arm(args.data)
