@@ -21,6 +21,8 @@ EXAMPLES = {
                            "accuracy_vs_n.png"],
     "table_2_monte_carlo.py": ["table_2_monte_carlo.md", "table_2_monte_carlo.csv",
                                "table_2_monte_carlo.png"],
+    "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
+                          "forgetting_best.png"],
 }
 
 

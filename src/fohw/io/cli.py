@@ -5,7 +5,9 @@
   prints a summary (or, with ``--json``, the estimates as JSON).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
   [--output FILE]`` — simulate a saved model (``fohw.save_model``) for an input.
-* ``fohw reproduce {table2,figures,robot-arm,accuracy} --outdir DIR [--fast]``.
+* ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
+  ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
+  factor on r that is not in the paper; default 1, the paper as printed).
 
 Usage errors and bad input print one line ``fohw: error: …`` and exit with status 2.
 """
@@ -156,13 +158,19 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
 
     rep = sub.add_parser("reproduce", help="reproduce the paper's tables and figures")
-    rep.add_argument("what", choices=sorted(list(_REPRODUCE) + ["robot-arm", "accuracy"]),
+    rep.add_argument("what", choices=sorted(list(_REPRODUCE) + ["robot-arm", "accuracy",
+                                                                 "forgetting"]),
                      help="table2: Table 2 and Figs. 3-6; figures: Figs. 3-6; robot-arm: "
-                     "Section 6.2; accuracy: methods against the Cramér-Rao bound")
+                     "Section 6.2; accuracy: methods against the Cramér-Rao bound; "
+                     "forgetting: Table 2 over a forgetting factor (not in the paper), "
+                     "innovation length and schedule")
     rep.add_argument("--outdir", default="results", help="folder for the files (default: results)")
     rep.add_argument("--fast", action="store_true", help="a quick, smaller run")
     rep.add_argument("--seed", type=int, default=0, help="table2/figures: seed of the record")
     rep.add_argument("--data", default=None, help="robot-arm: the DaISy file or its folder")
+    rep.add_argument("--forgetting", type=float, default=None, metavar="LAMBDA",
+                     help="table2/figures: forgetting factor on r in (0, 1]; not in the paper "
+                     "(default 1: the paper as printed)")
     return parser
 
 
@@ -242,8 +250,18 @@ def _reproduce(args):
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
             forwarded.append("--fast")
+        if args.forgetting is not None:
+            if not 0.0 < args.forgetting <= 1.0:
+                raise UsageError(f"--forgetting must be in (0, 1]; got {args.forgetting:g}.")
+            forwarded += ["--forgetting", repr(args.forgetting)]
         return example_main(_REPRODUCE[args.what], f"fohw reproduce {args.what}", forwarded)
+    if args.forgetting is not None:
+        raise UsageError(f"--forgetting applies to table2 and figures, not to {args.what}.")
     forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
+    if args.what == "forgetting":
+        from ..paper.reproduction import forgetting_main
+
+        return forgetting_main(forwarded, "fohw reproduce forgetting")
     if args.what == "robot-arm":
         from ..paper.robot_arm import main as study
         if args.data:
