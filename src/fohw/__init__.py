@@ -10,6 +10,7 @@ from . import datasets
 from .analysis import metrics
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
+from .analysis.selection import Selection, select_structure
 from .estimators.hybrid import (
     HybridIdentifier,
     HybridOptions,
@@ -72,6 +73,8 @@ def _keep_old_module_paths():
 _keep_old_module_paths()
 
 __all__ = [
+    "Selection",
+    "select_structure",
     "Basis",
     "CRBResult",
     "ConvergenceWarning",

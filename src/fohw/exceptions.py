@@ -42,18 +42,37 @@ class SimulationDivergedError(FohwError, ArithmeticError):
         The offending output value (may be ``inf`` or ``nan``).
     threshold : float
         The bound on ``|y[k]|`` that was exceeded.
+    cause : {"growth", "output_basis"}
+        ``"growth"``: the model is unstable for this input (the output grew past the bound).
+        ``"output_basis"``: the output basis ``g`` returned NaN or inf at a finite ``y[k]`` (a
+        function used outside its domain, such as ``sqrt`` of a negative output). An input
+        basis that does so is caught before the simulation starts (a ``ParameterError``).
     """
 
-    def __init__(self, sample: int, value: float, threshold: float):
+    CAUSES = ("growth", "output_basis")
+
+    def __init__(self, sample: int, value: float, threshold: float, cause: str = "growth"):
         self.sample = int(sample)
         self.value = float(value)
         self.threshold = float(threshold)
-        super().__init__(
-            f"the simulated output diverged at sample k = {self.sample}: y[k] = {self.value!r} "
-            f"(|y| must stay finite and at most {self.threshold:g}). The model is unstable for "
-            "this input; for the paper's example use a bounded (uniform) input or a smaller "
-            "input amplitude."
-        )
+        self.cause = cause if cause in self.CAUSES else "growth"
+        k = self.sample
+        if self.cause == "output_basis":
+            text = (f"the output basis g returned a non-finite value at sample k = {k} "
+                    f"(y[k] = {self.value!r}): a basis function is not defined there (e.g. "
+                    "sqrt or log of a negative value). Check the output's range (an operating "
+                    "point shifts it), or use basis functions defined on the whole line.")
+        else:
+            text = (f"the simulated output diverged at sample k = {k}: y[k] = {self.value!r} "
+                    f"(|y| must stay finite and at most {self.threshold:g}). The model is "
+                    "unstable for this input. Check that the input stays in the range the "
+                    "model was estimated on (a polynomial basis extrapolates fast), prefer "
+                    "structures chosen by free-run simulation (fohw.select_structure), or fit "
+                    "with method='output_error', which rejects unstable simulations.")
+        super().__init__(text)
+
+    def __reduce__(self):               # picklable across process and dask executors
+        return (type(self), (self.sample, self.value, self.threshold, self.cause))
 
 
 class DataFileError(FohwError, ValueError):

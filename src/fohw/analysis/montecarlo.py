@@ -6,13 +6,13 @@ parallel through joblib (the optional extra ``fohw[parallel]``); without joblib,
 ``n_jobs=1``, they run serially and give the same numbers, since every record is drawn from its
 own seed.
 
-On a cluster, the same call runs through joblib's dask backend::
+Any ``concurrent.futures.Executor`` runs it too (``executor=``), which is how it goes onto a
+cluster: point a dask client at a running scheduler and pass its executor (``pip install
+'fohw[distributed]'``)::
 
     from dask.distributed import Client
-    import joblib
-    client = Client("scheduler-address:8786")
-    with joblib.parallel_backend("dask"):
-        rows = fohw.monte_carlo(methods, seeds=range(1000), n_jobs=-1)
+    client = Client("tcp://scheduler-address:8786")
+    rows = fohw.monte_carlo(methods, seeds=range(1000), executor=client.get_executor())
 """
 
 from __future__ import annotations
@@ -23,9 +23,10 @@ import warnings
 
 import numpy as np
 
+from .._parallel import TaskError, run_tasks
 from ..datasets import paper_example
 from ..estimators.identify import identify
-from ..exceptions import ConvergenceWarning, SimulationDivergedError
+from ..exceptions import ConvergenceWarning, FohwError, ParameterError, SimulationDivergedError
 
 __all__ = ["monte_carlo", "summarise"]
 
@@ -58,7 +59,7 @@ def _run_task(make_data, methods, seed, setting):
 
 
 def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_jobs=1,
-                progress=None):
+                progress=None, executor=None):
     """Run identification methods over many simulated records.
 
     Parameters
@@ -79,6 +80,10 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
         joblib is not installed the run is serial, with a ``RuntimeWarning``.
     progress : bool, optional
         Print progress to stderr; default: only when stderr is a terminal.
+    executor : concurrent.futures.Executor, optional
+        Run the records on it instead (a ``ProcessPoolExecutor``, or dask's
+        ``Client.get_executor()`` for a cluster); then ``n_jobs`` must stay 1. ``make_data``
+        must be picklable (a module-level function). The rows do not depend on the backend.
 
     Returns
     -------
@@ -100,6 +105,21 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
     tasks = [(seed, dict(setting)) for setting in settings for seed in seeds]
     if progress is None:
         progress = sys.stderr.isatty()
+    if executor is not None:
+        if n_jobs != 1:
+            raise ParameterError("give `executor` or `n_jobs`, not both; got n_jobs="
+                                 f"{n_jobs!r} with an executor.")
+        parts = run_tasks(_run_task, [(make_data, methods, seed, setting)
+                                      for seed, setting in tasks],
+                          executor=executor, progress=progress, label="monte_carlo")
+        rows = []
+        for (seed, setting), part in zip(tasks, parts):
+            if isinstance(part, TaskError):
+                raise FohwError(f"monte_carlo: the record of seed {seed} (setting {setting}) "
+                                f"could not be run on the executor: {part.message}") \
+                    from part.exception
+            rows.extend(part)
+        return rows
     use_joblib = n_jobs != 1
     if use_joblib:
         try:

@@ -412,7 +412,7 @@ def _recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed
                     raise SimulationDivergedError(k, yk, threshold)
             zk = zfun(yk)
             if not all(isfinite(x) for x in zk):
-                raise SimulationDivergedError(k, yk, threshold)
+                raise SimulationDivergedError(k, yk, threshold, "output_basis")
             y[k] = yk
             for r in signals:
                 zrows[r][k] = zk[r]
@@ -510,7 +510,8 @@ def _run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, operating
         y = _recursion(Q, A, out_terms, structure.g_basis, w, threshold,
                        _leaf_size(u.shape[0], method), structure.dt, y_fixed)
     except SimulationDivergedError as err:
-        raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold) \
+        raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold,
+                                      err.cause) \
             from None
     y = y[n_hist:]
     return y + y0 if y0 != 0.0 else y

@@ -1,0 +1,211 @@
+"""fohw.select_structure: candidates fitted on the estimation part, scored by free run on a held-back part."""
+
+import warnings
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pytest
+
+import fohw
+from fohw.analysis.metrics import fit_percent, rmse
+from fohw.analysis.selection import expand_candidates, input_in_range
+
+STRUCT = dict(f_basis=2, g_basis=3)
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return fohw.datasets.paper_example(800, random_state=1)
+
+
+def test_grid_and_list_spellings():
+    grid = expand_candidates({"na": [1, 2], "orders": [0, "mixed"]})
+    assert grid == [dict(na=1, orders=0), dict(na=1, orders="mixed"), dict(na=2, orders=0),
+                    dict(na=2, orders="mixed")]
+    assert expand_candidates([dict(na=1), dict(na=3)]) == [dict(na=1), dict(na=3)]
+
+
+@pytest.mark.parametrize("candidates, message", [
+    ({"na": 2}, "Write [2] for one value"),
+    ({"na": []}, "is empty"),
+    ([], "`candidates` is empty"),
+    ([dict(na=1), 3], "`candidates[1]` must be a dict"),
+    ("na=2", "list of dicts"),
+])
+def test_bad_candidates_are_named(candidates, message, paper):
+    with pytest.raises(fohw.ParameterError, match=message.replace("[", r"\[").replace(
+            "]", r"\]")):
+        fohw.select_structure(paper.u, paper.y, candidates, nb=2, **STRUCT)
+
+
+@pytest.mark.parametrize("validation, message", [
+    (0.0, "in \\(0, 1\\)"), (1.5, "in \\(0, 1\\)"), (799, "must leave at least 2"),
+    (0, "hold back at least 1"), ("end", "must be a fraction"), (True, "must be a fraction"),
+])
+def test_bad_validation_is_named(validation, message, paper):
+    with pytest.raises(fohw.ParameterError, match=message):
+        fohw.select_structure(paper.u, paper.y, [dict(na=2)], nb=2, validation=validation,
+                              **STRUCT)
+
+
+def test_bad_score_and_executor(paper):
+    with pytest.raises(fohw.ParameterError, match="`score` must be one of"):
+        fohw.select_structure(paper.u, paper.y, [dict(na=2)], nb=2, score="r2", **STRUCT)
+    with pytest.raises(fohw.ParameterError, match="`executor` must be a concurrent.futures"):
+        fohw.select_structure(paper.u, paper.y, [dict(na=2)], nb=2, executor=4, **STRUCT)
+
+
+def test_rows_are_the_fits_they_name_and_the_true_structure_wins(paper):
+    # The record is the paper's example (na = nb = 2): na = 2 must beat na = 1 on the part it
+    # never saw. Each row is recomputed by hand: fit on the first 600, free run over all 800.
+    sel = fohw.select_structure(paper.u, paper.y, {"na": [1, 2]}, nb=2, validation=200,
+                                **STRUCT)
+    assert [r["status"] for r in sel.rows] == ["ok", "ok"]
+    assert sel.best_row["na"] == 2 and sel.rows[1] is sel.best_row
+    for row in sel.rows:
+        res = fohw.identify(paper.u[:600], paper.y[:600], na=row["na"], nb=2, **STRUCT)
+        ysim = res.simulate(paper.u)
+        assert row["fit"] == fit_percent(paper.y[600:], ysim[600:])
+        assert row["rmse"] == rmse(paper.y[600:], ysim[600:])
+        assert row["fit_estimation"] == fit_percent(paper.y[:600], ysim[:600])
+        d = res.theta.size + 1
+        assert row["n_params"] == d
+        assert row["bic"] == pytest.approx(600 * np.log(res.J) + d * np.log(600), rel=1e-12)
+        assert row["orders"] == f"alpha={res.alpha:.4g}"
+    assert sel.rows[1]["fit"] > sel.rows[0]["fit"] + 1.0
+    # the winner is refitted on all 800 samples
+    full = fohw.identify(paper.u, paper.y, na=2, nb=2, **STRUCT)
+    np.testing.assert_array_equal(sel.best.theta, full.theta)
+    assert sel.best.n_samples == 800 and sel.results[1].n_samples == 600
+
+
+def test_separate_validation_record_and_record_input(paper):
+    other = fohw.datasets.paper_example(300, random_state=7)
+    est = fohw.Record(paper.u, paper.y)
+    sel = fohw.select_structure(est, candidates=[dict(na=2)], nb=2,
+                                validation=(other.u, other.y), **STRUCT)
+    res = fohw.identify(paper.u, paper.y, na=2, nb=2, **STRUCT)
+    assert sel.rows[0]["fit"] == fit_percent(other.y, res.simulate(other.u))
+    assert sel.best is sel.results[0]          # nothing more to refit on
+
+
+def spike(x):
+    """x**3, plus a huge value above 0.95: the held-back part meets it, the estimation part not."""
+    return x**3 + 1e6 * (x > 0.95)
+
+
+def root_of_shifted(y):
+    """Defined for y >= -0.5 only (NaN below): as an output basis function."""
+    return np.sqrt(y + 0.5)
+
+
+def test_bad_candidates_never_lose_the_others():
+    rng = np.random.default_rng(3)
+    data = fohw.datasets.paper_example(600, random_state=3)
+    u = data.u.copy()
+    u[:450] = np.clip(u[:450], -0.9, 0.9)       # estimation part stays below the spike
+    assert u[450:].max() > 0.95                 # the held-back part reaches it
+    model = data.model
+    y = fohw.simulate(model, u) + 0.05 * rng.standard_normal(u.size)
+    cands = [
+        dict(na=2, nb=2, f_basis=2, g_basis=3),                                   # fine
+        dict(na=2, nb=2, f_basis=fohw.Basis((lambda x: x, spike), names=("x", "x3+spike")),
+             g_basis=3),                                                          # diverges
+        dict(na=2, nb=2, f_basis=2, g_basis=fohw.Basis((lambda y: y, root_of_shifted),
+                                                      names=("y", "sqrt(y+0.5)"))),  # NaN
+        dict(na=2, nb=2, f_basis=fohw.Basis((lambda x: x, lambda x: 2 * x), names=("x", "2x")),
+             g_basis=3, method="output_error"),                                   # rank deficient
+        dict(na=-1, nb=2, f_basis=2, g_basis=3),                                  # bad keyword
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")           # nothing leaks out of the candidates
+        sel = fohw.select_structure(u, y, cands, validation=150)
+    status = [r["status"] for r in sel.rows]
+    assert status[0] == "ok" and sel.best_index == 0
+    assert status[1] == "diverged" and "diverged at sample" in sel.rows[1]["reason"]
+    assert "estimated on" in sel.rows[1]["reason"]        # advice about the user's data
+    assert sel.rows[1]["in_range"] is False
+    assert status[2] in ("nan", "failed")
+    assert "non-finite" in sel.rows[2]["reason"] or "NaN" in sel.rows[2]["reason"]
+    assert "rank deficient" in sel.rows[3]["reason"]
+    assert status[4] == "failed" and "`na`" in sel.rows[4]["reason"]
+    assert sel.rows[0]["in_range"] is False     # beyond 0.9 + 5 % of 1.8
+    text = sel.to_markdown()
+    assert text.count("\n") == 2 + len(cands)
+
+
+def test_output_basis_nan_is_reported_as_such():
+    # g = (y, sqrt(y + 0.5)) and y[1] = p1 b1 u[0] = -3: the simulator says the basis did it.
+    struct = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=fohw.Basis(
+        (lambda y: y, root_of_shifted), names=("y", "r")))
+    lin = np.zeros(struct.n_linear)
+    lin[4] = 1.0                                   # p1 b1: theta = [q (x) a, p (x) b]
+    with pytest.raises(fohw.SimulationDivergedError) as exc:
+        fohw.simulate_parameters(struct, lin, [0.5], -3.0 * np.ones(20))
+    assert exc.value.cause == "output_basis" and exc.value.sample == 1
+    assert "output basis g" in str(exc.value)
+
+
+def test_input_range_tolerance():
+    assert input_in_range(np.array([0.0, 1.04]), (0.0, 1.0))
+    assert not input_in_range(np.array([0.0, 1.06]), (0.0, 1.0))
+    assert not input_in_range(np.array([-0.06]), (0.0, 1.0))
+
+
+def test_csv_markdown_and_plot(paper, tmp_path):
+    sel = fohw.select_structure(paper.u, paper.y, {"na": [1, 2]}, nb=2, **STRUCT)
+    text = sel.to_csv(tmp_path / "sel.csv")
+    assert (tmp_path / "sel.csv").read_text() == text
+    header = text.splitlines()[0].split(",")
+    assert header[:3] == ["candidate", "status", "fit"] and "na" in header
+    assert len(text.splitlines()) == 3
+    fig, ax = sel.plot()
+    assert len(ax.patches) == 2
+    fig.savefig(tmp_path / "sel.png")
+
+
+def test_process_pool_gives_the_same_table(paper):
+    cands = {"na": [1, 2], "nb": [1, 2]}
+    serial = fohw.select_structure(paper.u, paper.y, cands, **STRUCT)
+    with ProcessPoolExecutor(2) as pool:
+        parallel = fohw.select_structure(paper.u, paper.y, cands, executor=pool, **STRUCT)
+    drop = ("seconds",)
+    assert [{k: v for k, v in r.items() if k not in drop} for r in serial.rows] == \
+        [{k: v for k, v in r.items() if k not in drop} for r in parallel.rows]
+    np.testing.assert_array_equal(serial.best.theta, parallel.best.theta)
+
+
+def test_unpicklable_candidate_fails_alone_on_a_process_pool(paper):
+    cands = [dict(na=2), dict(na=2, f_basis=fohw.Basis((lambda x: x, lambda x: x**2),
+                                                       names=("x", "x2")))]
+    with ProcessPoolExecutor(1) as pool:
+        sel = fohw.select_structure(paper.u, paper.y, cands, nb=2, g_basis=3, f_basis=2,
+                                    executor=pool)
+    assert sel.rows[0]["status"] == "ok"
+    assert sel.rows[1]["status"] == "failed" and "executor" in sel.rows[1]["reason"]
+
+
+def test_dask_executor_gives_the_same_table(paper):
+    distributed = pytest.importorskip("distributed")
+    cands = {"na": [1, 2]}
+    serial = fohw.select_structure(paper.u, paper.y, cands, nb=2, **STRUCT)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        parallel = fohw.select_structure(paper.u, paper.y, cands, nb=2,
+                                         executor=client.get_executor(), **STRUCT)
+    assert [r["fit"] for r in serial.rows] == [r["fit"] for r in parallel.rows]
+    assert [r["status"] for r in parallel.rows] == ["ok", "ok"]
+
+
+def test_monte_carlo_on_an_executor_gives_the_same_rows():
+    methods = {"varpro": {"method": "varpro"}}
+    settings = [{"n_samples": 300}]
+    serial = fohw.monte_carlo(methods, seeds=range(3), settings=settings)
+    with ProcessPoolExecutor(2) as pool:
+        parallel = fohw.monte_carlo(methods, seeds=range(3), settings=settings, executor=pool)
+    drop = ("seconds",)
+    assert [{k: v for k, v in r.items() if k not in drop} for r in serial] == \
+        [{k: v for k, v in r.items() if k not in drop} for r in parallel]
+    with pytest.raises(fohw.ParameterError, match="not both"):
+        fohw.monte_carlo(methods, seeds=range(1), settings=settings, executor=pool, n_jobs=2)
