@@ -21,6 +21,8 @@ EXAMPLES = {
                            "accuracy_vs_n.png"],
     "table_2_monte_carlo.py": ["table_2_monte_carlo.md", "table_2_monte_carlo.csv",
                                "table_2_monte_carlo.png"],
+    "cascaded_tanks.py": ["cascaded_tanks.md", "cascaded_tanks_selection.csv",
+                          "cascaded_tanks_selection.png", "cascaded_tanks.png"],
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
 }

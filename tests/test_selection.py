@@ -22,6 +22,18 @@ def test_grid_and_list_spellings():
     grid = expand_candidates({"na": [1, 2], "orders": [0, "mixed"]})
     assert grid == [dict(na=1, orders=0), dict(na=1, orders="mixed"), dict(na=2, orders=0),
                     dict(na=2, orders="mixed")]
+
+
+def test_rows_keep_the_candidates_own_keywords(paper):
+    sel = fohw.select_structure(paper.u, paper.y, {"orders": [0, "commensurate"]}, na=2, nb=2,
+                                **STRUCT)
+    assert [r["orders"] for r in sel.rows] == [0, "commensurate"]
+    assert sel.rows[0]["estimated_orders"] == ""
+    assert sel.rows[1]["estimated_orders"].startswith("alpha=")
+    assert [r["candidate"] for r in sel.rows] == ["orders=0", "orders=commensurate"]
+    by = sel.best_by("orders")
+    assert by[0] is sel.rows[0] and by["commensurate"] is sel.rows[1]
+    assert list(by)[0] == sel.best_row["orders"]
     assert expand_candidates([dict(na=1), dict(na=3)]) == [dict(na=1), dict(na=3)]
 
 
@@ -71,7 +83,7 @@ def test_rows_are_the_fits_they_name_and_the_true_structure_wins(paper):
         d = res.theta.size + 1
         assert row["n_params"] == d
         assert row["bic"] == pytest.approx(600 * np.log(res.J) + d * np.log(600), rel=1e-12)
-        assert row["orders"] == f"alpha={res.alpha:.4g}"
+        assert row["estimated_orders"] == f"alpha={res.alpha:.4g}"
     assert sel.rows[1]["fit"] > sel.rows[0]["fit"] + 1.0
     # the winner is refitted on all 800 samples
     full = fohw.identify(paper.u, paper.y, na=2, nb=2, **STRUCT)

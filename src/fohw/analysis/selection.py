@@ -37,7 +37,7 @@ SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
 
 #: The columns of :attr:`Selection.rows` besides the candidate's own keywords.
 COLUMNS = ("candidate", "status", "fit", "rmse", "fit_estimation", "aic", "bic", "n_params",
-           "orders", "in_range", "fit_status", "seconds", "reason")
+           "estimated_orders", "in_range", "fit_status", "seconds", "reason")
 
 
 def expand_candidates(candidates):
@@ -114,7 +114,8 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range)
     from ..estimators.identify import identify
 
     row = dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
-               bic=np.nan, n_params=0, orders="", in_range=True, fit_status="", reason="")
+               bic=np.nan, n_params=0, estimated_orders="", in_range=True, fit_status="",
+               reason="")
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -125,7 +126,8 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range)
                        seconds=time.perf_counter() - t0)
             return row, None
         row["fit_status"] = res.status.name
-        row["orders"] = ", ".join(f"{k}={v:.4g}" for k, v in (res.orders or {}).items())
+        row["estimated_orders"] = ", ".join(f"{k}={v:.4g}"
+                                            for k, v in (res.orders or {}).items())
         n = len(y_est)
         d = res.linear.size + res.nonlinear.size
         row["n_params"] = int(d)
@@ -181,8 +183,9 @@ class Selection:
         (free-run fit % on the held-back part), ``rmse`` (on it, in the data's units),
         ``fit_estimation`` (free-run fit % on the estimation part), ``aic``, ``bic`` (from the
         method's own criterion on the estimation part: the one-step ``J`` of Eq. 41, or the
-        mean squared simulation error for ``"output_error"``), ``n_params``, ``orders`` (the
-        estimated free orders), ``in_range`` (whether the held-back input stayed inside the
+        mean squared simulation error for ``"output_error"``), ``n_params``,
+        ``estimated_orders`` (the estimated free orders), ``in_range`` (whether the held-back
+        input stayed inside the
         estimation input's range widened by :data:`RANGE_TOLERANCE` of its span),
         ``fit_status`` (the estimator's :class:`fohw.Status` name),
         ``seconds``, ``reason`` (why a candidate failed, or the warnings its fit raised).
@@ -221,14 +224,33 @@ class Selection:
         ok.sort(key=lambda r: -r[col] if larger else r[col])
         return ok + [r for r in self.rows if r not in ok]
 
+    def best_by(self, key):
+        """The best row for each value of a candidate keyword, e.g. ``best_by("orders")``.
+
+        Returns
+        -------
+        dict
+            ``{value: row}`` over the candidates that simulated, in ranking order (the best
+            value first).
+        """
+        out = {}
+        for row in self.ranked():
+            if row["status"] != "ok" or key not in row:
+                continue
+            value = row[key]
+            marker = value if isinstance(value, (str, numbers.Number)) else _describe(value)
+            if marker not in out:
+                out[marker] = row
+        return out
+
     def _columns(self):
         return ["candidate"] + [c for c in COLUMNS if c != "candidate"]
 
     def to_markdown(self, top=None, columns=None):
         """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them)."""
         cols = list(columns) if columns is not None else [
-            "candidate", "status", "fit", "rmse", "fit_estimation", "orders", "in_range",
-            "seconds", "reason"]
+            "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
+            "in_range", "seconds", "reason"]
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
         for r in rows:
@@ -407,7 +429,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     for c, mine, outcome in zip(cands, own, outcomes):
         if isinstance(outcome, TaskError):
             row = dict(status="failed", fit=np.nan, rmse=np.nan, fit_estimation=np.nan,
-                       aic=np.nan, bic=np.nan, n_params=0, orders="", in_range=True,
+                       aic=np.nan, bic=np.nan, n_params=0, estimated_orders="", in_range=True,
                        fit_status="", seconds=np.nan, reason=f"executor: {outcome.message}")
             res = None
         else:
