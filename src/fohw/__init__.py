@@ -34,6 +34,7 @@ from .exceptions import (
     SimulationDivergedError,
 )
 from .io.jsonio import load_model, load_result, save_model
+from .io.text import read_record
 from .model.basis import Basis, as_basis, polynomial_basis
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.orders import Orders
@@ -73,6 +74,7 @@ def _keep_old_module_paths():
 _keep_old_module_paths()
 
 __all__ = [
+    "read_record",
     "Selection",
     "select_structure",
     "Basis",

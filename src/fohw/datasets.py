@@ -334,15 +334,13 @@ def cascaded_tanks():
     >>> tanks.validation.n_samples, tanks.validation.dt, float(tanks.validation.y.max())
     (1024, 4.0, 10.0)
     """
+    from .io.text import read_table
+
     path = _packaged(CASCADED_TANKS_FILENAME, CASCADED_TANKS_SHA256)
-    with open(path, encoding="ascii") as fh:
-        lines = fh.read().splitlines()
-    header = [h.strip().strip('"') for h in lines[0].split(",")]
-    if header[:5] != ["uEst", "uVal", "yEst", "yVal", "Ts"]:
-        raise DataFileError(f"{path}: unexpected header {lines[0]!r}.")
-    rows = [line.split(",") for line in lines[1:] if line.strip()]
-    values = np.array([[float(v) for v in row[:4]] for row in rows])
-    dt = float(rows[0][4])
+    table = read_table(path)
+    if table.names != ["uEst", "uVal", "yEst", "yVal"] or "Ts" not in table.scalars:
+        raise DataFileError(f"{path}: unexpected columns {table.names} {sorted(table.scalars)}.")
+    values, dt = table.data, table.scalars["Ts"]
     common = dict(dt=dt, input_name="pump voltage", output_name="lower tank level",
                   input_unit="V", output_unit="V", time_unit="s", source=CASCADED_TANKS_SOURCE,
                   path=path)

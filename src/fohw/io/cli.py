@@ -39,17 +39,21 @@ class _Parser(argparse.ArgumentParser):
 
 
 def read_table(path):
-    """Read a numeric table: whitespace- or comma-separated, optional header line of names.
+    """Read a numeric table with :func:`fohw.io.text.read_table`.
+
+    CSV or whitespace columns, a header, comments, trailing separators, values given once.
 
     Returns
     -------
     data : ndarray, shape (n_rows, n_columns)
+        The signal columns (a column given once, such as ``Ts``, is not among them).
     names : list of str or None
-        The header's column names, if the first line is a header.
+        The header's column names, if the file has a header.
     """
-    from ..datasets import _parse_table
+    from .text import read_table as parse
 
-    return _parse_table(path, header=True)
+    table = parse(path)
+    return table.data, table.names
 
 
 def _pick_columns(data, names, spec, count, path):
@@ -70,6 +74,9 @@ def _pick_columns(data, names, spec, count, path):
             else:
                 raise UsageError(f"--columns: {p!r} is neither a column number nor a header name"
                                  f" of {path}" + (f" ({', '.join(names)})." if names else "."))
+    if len(set(idx)) != len(idx):
+        raise UsageError(f"--columns names the same column twice ({spec!r}): the input and the "
+                         "output must be different columns.")
     for i in idx:
         if not 0 <= i < data.shape[1]:
             raise UsageError(f"--columns: column {i} does not exist; {path} has "
