@@ -736,9 +736,10 @@ def plot_forgetting_map(summary):
              for s in schedules]
     finite = np.concatenate([g[np.isfinite(g)] for g in grids])
     norm = LogNorm(vmin=min(finite.min(), 0.01), vmax=max(finite.max(), 1.0))
-    fig, axes = subplots(1, len(schedules), figsize=(3.6 * len(schedules) + 1.2, 4.6),
+    fig, axes = subplots(1, len(schedules), figsize=(3.3 * len(schedules) + 2.2, 4.6),
                          squeeze=False)
     axes = axes[0]
+    fig.subplots_adjust(left=0.13, right=0.86, wspace=0.08, top=0.86, bottom=0.1)
     for ax, s, grid in zip(axes, schedules, grids):
         im = ax.imshow(grid, norm=norm, cmap="viridis_r", aspect="auto")
         for i in range(len(lams)):
@@ -748,10 +749,12 @@ def plot_forgetting_map(summary):
                         va="center", fontsize=9,
                         color="white" if np.isfinite(v) and norm(v) > 0.55 else "black")
         ax.set_xticks(range(len(Ps)), [f"P = {P}" for P in Ps])
-        ax.set_yticks(range(len(lams)), [f"{lam:g}" for lam in lams])
+        ax.set_yticks(range(len(lams)),
+                      [f"{lam:g}" for lam in lams] if ax is axes[0] else [""] * len(lams))
         ax.set_title(s, fontsize=10)
     axes[0].set_ylabel("forgetting factor lambda (1 = the paper)")
-    fig.colorbar(im, ax=list(axes), label=f"median delta at k = {kmax}")
+    fig.colorbar(im, cax=fig.add_axes([0.88, 0.1, 0.02, 0.76]),
+                 label=f"median delta at k = {kmax}")
     fig.suptitle("Hybrid MIGD + MI-LM with r(k) = lambda r(k-1) + ||Phi||^2 (lambda: not in "
                  "the paper)", fontsize=10)
     return fig, axes
