@@ -221,3 +221,18 @@ def test_monte_carlo_on_an_executor_gives_the_same_rows():
         [{k: v for k, v in r.items() if k not in drop} for r in parallel]
     with pytest.raises(fohw.ParameterError, match="not both"):
         fohw.monte_carlo(methods, seeds=range(1), settings=settings, executor=pool, n_jobs=2)
+
+
+def test_extrapolation_warning_fires_outside_the_estimation_range_only(paper, tmp_path):
+    u_est, y_est = np.clip(paper.u[:600], -1.0, 1.0), paper.y[:600]
+    res = fohw.identify(u_est, y_est, na=2, nb=2, **STRUCT)
+    assert res.input_range == (float(u_est.min()), float(u_est.max()))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res.simulate(np.clip(paper.u[600:], -1.0, 1.0))            # in range: silent
+        res.simulate(np.clip(paper.u[600:], -1.0, 1.09))           # within 5 % of the span 2
+    with pytest.warns(fohw.ExtrapolationWarning, match=r"beyond the range \[-1, 1\]"):
+        res.simulate(paper.u[600:])                                 # reaches +-1.7
+    path = tmp_path / "r.json"
+    res.to_json(path)
+    assert fohw.load_result(path).input_range == res.input_range

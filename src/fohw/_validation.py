@@ -132,3 +132,16 @@ class AlphaBounds:
             self.hit = True
             return float(np.clip(alpha, *self.inner))
         return alpha
+
+
+#: How far (a fraction of the estimation input's span) an input may go beyond the estimation
+#: range before it counts as outside it: an i.i.d. input exceeds its own sample range a little.
+RANGE_TOLERANCE = 0.05
+
+
+def input_in_range(u, u_range, tolerance=RANGE_TOLERANCE) -> bool:
+    """Whether ``u`` stays within ``u_range = (lo, hi)`` widened by ``tolerance`` of its span."""
+    u = np.asarray(u)
+    lo, hi = u_range
+    slack = tolerance * (hi - lo)
+    return bool(u.size == 0 or (u.min() >= lo - slack and u.max() <= hi + slack))

@@ -16,6 +16,7 @@ __all__ = [
     "EstimationDivergedError",
     "ConvergenceWarning",
     "RankDeficiencyWarning",
+    "ExtrapolationWarning",
 ]
 
 
@@ -97,3 +98,7 @@ class RankDeficiencyWarning(UserWarning):
     The message names the columns (parameters) that are linear combinations of the others; the
     result has ``status == Status.RANK_DEFICIENT`` and ``converged == False``.
     """
+
+
+class ExtrapolationWarning(UserWarning):
+    """A model was simulated on an input outside the range it was estimated on."""

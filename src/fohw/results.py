@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import enum
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._validation import RANGE_TOLERANCE, input_in_range
+from .exceptions import ExtrapolationWarning
 from .model.basis import Basis
 from .model.orders import Orders
 from .model.params import ThetaLayout
@@ -119,6 +122,10 @@ class IdentificationResult:
         operating point; ``(0, 0)`` under ``past="rest"``).
     operating_point : (float, float)
         ``(u0, y0)`` removed before fitting; :meth:`predict` and :meth:`simulate` add it back.
+    input_range : (float, float) or None
+        The smallest and largest input of the estimation record (data units), set by
+        :func:`fohw.identify`; :meth:`simulate` warns (:class:`fohw.ExtrapolationWarning`) on an
+        input that goes beyond it by more than 5 % of its span.
 
     Notes
     -----
@@ -155,6 +162,7 @@ class IdentificationResult:
     offset: float | None = None
     past: tuple = (0.0, 0.0)
     operating_point: tuple = (0.0, 0.0)
+    input_range: tuple | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "status", Status(self.status))
@@ -331,7 +339,23 @@ class IdentificationResult:
         ------
         SimulationDivergedError
             The identified model is unstable on this input.
+
+        Warns
+        -----
+        ExtrapolationWarning
+            ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
+            its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
+        if self.input_range is not None:
+            u_arr = np.asarray(u, dtype=np.float64)
+            if u_arr.ndim == 1 and np.all(np.isfinite(u_arr)) \
+                    and not input_in_range(u_arr, self.input_range):
+                lo, hi = self.input_range
+                warnings.warn(ExtrapolationWarning(
+                    f"the input spans [{u_arr.min():.4g}, {u_arr.max():.4g}], beyond the range "
+                    f"[{lo:.4g}, {hi:.4g}] the model was estimated on (by more than "
+                    f"{RANGE_TOLERANCE:.0%} of its span); the basis functions extrapolate "
+                    "there, so check the simulation before trusting it."), stacklevel=2)
         return simulate_parameters(self.structure, self.linear, self.nonlinear, u,
                                    operating_point=self.operating_point, history=history,
                                    **kwargs)

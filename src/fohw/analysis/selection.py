@@ -24,12 +24,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._parallel import TaskError, run_tasks
-from .._validation import check_array, check_same_length
+from .._validation import RANGE_TOLERANCE, check_array, check_same_length, input_in_range
 from ..exceptions import ParameterError, SimulationDivergedError
 from ..record import Record
 from .metrics import fit_percent, rmse
 
-__all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
+__all__ = ["select_structure", "Selection", "expand_candidates", "SCORES", "RANGE_TOLERANCE",
+           "input_in_range"]
 
 #: Ranking criteria: name -> (column, True if larger is better).
 SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
@@ -91,18 +92,6 @@ def _describe(value):
 
 def _label(candidate):
     return " ".join(f"{k}={_describe(v)}" for k, v in candidate.items())
-
-
-#: How far (a fraction of the estimation input's span) an input may go beyond the estimation
-#: range before it counts as outside it: an i.i.d. input exceeds its own sample range a little.
-RANGE_TOLERANCE = 0.05
-
-
-def input_in_range(u, u_range, tolerance=RANGE_TOLERANCE):
-    """Whether ``u`` stays within ``u_range = (lo, hi)`` widened by ``tolerance`` of its span."""
-    lo, hi = u_range
-    slack = tolerance * (hi - lo)
-    return bool(u.size == 0 or (u.min() >= lo - slack and u.max() <= hi + slack))
 
 
 def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range):

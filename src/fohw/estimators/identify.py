@@ -9,6 +9,7 @@ the paper in :mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.output_error
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 
@@ -221,7 +222,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
     # and criterion for finiteness and raises EstimationDivergedError with the reason.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return run(builder, opts, bounds, point)
+        result = run(builder, opts, bounds, point)
+    return replace(result, input_range=(float(u.min()), float(u.max())))
 
 
 def _operating_point(spec, u, y):

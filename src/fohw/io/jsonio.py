@@ -168,6 +168,7 @@ def result_to_dict(result) -> dict:
     d["offset"] = result.offset
     d["past"] = list(result.past)
     d["operating_point"] = list(result.operating_point)
+    d["input_range"] = None if result.input_range is None else list(result.input_range)
     d["options"] = {k: _jsonable(v) for k, v in result.options.items()
                     if isinstance(v, (int, float, str, bool, tuple, dict, type(None)))}
     d["parameter_names"] = list(result.parameter_names)
@@ -225,6 +226,7 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
             alpha_at_bound=d["alpha_at_bound"], layout=structure.layout, f_basis=f, g_basis=g,
             n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"],
             structure=structure, orders=orders, offset=offset, past=past, operating_point=point,
+            input_range=None if d.get("input_range") is None else tuple(d["input_range"]),
             **arrays)
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
