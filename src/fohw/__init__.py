@@ -11,6 +11,7 @@ from .analysis import metrics
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
 from .analysis.selection import Selection, select_structure
+from .analysis.validation import Validation, compare
 from .estimators.hybrid import (
     HybridIdentifier,
     HybridOptions,
@@ -75,6 +76,8 @@ def _keep_old_module_paths():
 _keep_old_module_paths()
 
 __all__ = [
+    "Validation",
+    "compare",
     "read_record",
     "Selection",
     "select_structure",

@@ -360,6 +360,12 @@ class IdentificationResult:
                                    operating_point=self.operating_point, history=history,
                                    **kwargs)
 
+    def validate(self, u, y, **kwargs):
+        """Free-run simulation and one-step prediction on a record: :func:`fohw.compare`."""
+        from .analysis.validation import compare
+
+        return compare(self, u, y, **kwargs)
+
     def to_dict(self) -> dict:
         """A JSON-ready dict (see :mod:`fohw.io.jsonio`)."""
         from .io.jsonio import result_to_dict

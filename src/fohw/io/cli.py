@@ -153,7 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
                      type=_option_arg, help="any option of the method (repeatable), e.g. "
                      "--option forgetting=0.95; see fohw.identify")
     ide.add_argument("--json", action="store_true", help="print the estimates as JSON")
-    ide.add_argument("--plot", help="write the fit figure (PNG) to this file")
+    ide.add_argument("--plot", help="write a figure of the free-run simulation and the one-step "
+                     "prediction (PNG) to this file")
     ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
 
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
@@ -218,15 +219,11 @@ def _identify(args):
     if args.save:
         res.to_json(args.save)
     if args.plot:
-        from .._plotting import subplots
+        from ..analysis.validation import compare
 
-        fig, ax = subplots(figsize=(9, 4))
-        ax.plot(y, "k", lw=1, label="measured y")
-        ax.plot(res.predict(u, y), "C1--", lw=0.9, label="one-step prediction")
-        ax.set_xlabel("sample k")
-        ax.legend()
-        ax.set_title(f"fohw identify ({res.method}), J = {res.J:.3g}")
-        fig.tight_layout()
+        fig, axes = compare(res, u, y).plot()
+        axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
+                          "one-step prediction", fontsize=10)
         fig.savefig(args.plot, dpi=120)
     return 0
 
