@@ -1,5 +1,6 @@
 """fohw.select_structure: candidates fitted on the estimation part, scored by free run on a held-back part."""
 
+import os
 import warnings
 from concurrent.futures import ProcessPoolExecutor
 
@@ -9,6 +10,7 @@ import pytest
 import fohw
 from fohw.analysis.metrics import fit_percent, rmse
 from fohw.analysis.selection import expand_candidates, input_in_range
+from fohw.io.cli import main
 
 STRUCT = dict(f_basis=2, g_basis=3)
 
@@ -236,3 +238,31 @@ def test_extrapolation_warning_fires_outside_the_estimation_range_only(paper, tm
     path = tmp_path / "r.json"
     res.to_json(path)
     assert fohw.load_result(path).input_range == res.input_range
+
+
+def test_cli_select_on_the_benchmark_csv(tmp_path, capsys):
+    tanks = os.path.join(os.path.dirname(fohw.__file__), "data", "cascaded_tanks.csv")
+    csv_path, png = tmp_path / "rows.csv", tmp_path / "scores.png"
+    assert main(["select", tanks, "--columns", "uEst,yEst", "--na", "1,2", "--f-basis", "2",
+                 "--g-basis", "1", "--orders", "0", "--validation", "256", "--offset",
+                 "--operating-point", "mean", "--dt", "4", "--csv", str(csv_path), "--plot",
+                 str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "2 candidates; the last 256 of 1024 samples held back" in out
+    assert "best: na=" in out and "refitted on all the data" in out
+    assert len(csv_path.read_text().splitlines()) == 3 and png.stat().st_size > 5000
+    # the same numbers as the API call
+    bench = fohw.datasets.cascaded_tanks()
+    sel = fohw.select_structure(bench.estimation, [dict(na=1, nb=1), dict(na=2, nb=2)],
+                                validation=256, f_basis=2, g_basis=1, orders=0, offset=True,
+                                operating_point="mean", dt=4.0)
+    rows = csv_path.read_text().splitlines()[1:]
+    assert [float(r.split(",")[2]) for r in rows] == [r["fit"] for r in sel.rows]
+
+
+def test_cli_select_bad_lists_are_one_line_errors(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["select", "x.dat", "--na", "1,two"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "comma-separated integers" in err and err.count("\n") == 1

@@ -25,7 +25,7 @@ import numpy as np
 
 from .._parallel import TaskError, run_tasks
 from .._validation import RANGE_TOLERANCE, check_array, check_same_length, input_in_range
-from ..exceptions import ParameterError, SimulationDivergedError
+from ..exceptions import ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
 from .metrics import fit_percent, rmse
 
@@ -151,7 +151,8 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range)
             pass
     row["fit"] = fit_percent(y_score, ysim[score_from:])
     row["rmse"] = rmse(y_score, ysim[score_from:])
-    notes = sorted({str(w.message).split("\n")[0] for w in caught})
+    notes = sorted({str(w.message).split("\n")[0] for w in caught
+                    if not issubclass(w.category, ExtrapolationWarning)})   # in `in_range`
     if notes:
         row["reason"] = "; ".join(notes)
     row["seconds"] = time.perf_counter() - t0
@@ -390,6 +391,8 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     (['ok', 'ok'], 2)
     """
     if isinstance(u, Record):
+        if y is not None and candidates is None:     # select_structure(record, candidates)
+            y, candidates = None, y
         if y is not None:
             raise ParameterError("`u` is a Record: give the output through it, not as `y`.")
         u, y = u.u, u.y

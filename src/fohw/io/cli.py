@@ -3,6 +3,10 @@
 * ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
   [--json] [--plot FILE] [--save FILE]`` — identify from a whitespace- or comma-separated file;
   prints a summary (or, with ``--json``, the estimates as JSON).
+* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
+  [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
+  [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
+  structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
   [--output FILE]`` — simulate a saved model (``fohw.save_model``) for an input.
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
@@ -122,6 +126,31 @@ def _option_arg(text):
     return name.strip(), value
 
 
+def _int_list(text):
+    try:
+        values = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
+            from None
+    return values
+
+
+def _orders_list(text):
+    return [0 if v.strip() == "0" else v.strip() for v in text.split(",")]
+
+
+def _validation_arg(text):
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction or a number of samples; got "
+                                         f"{text!r}") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
     from ..estimators.hybrid import SCHEDULES
@@ -156,6 +185,33 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--plot", help="write a figure of the free-run simulation and the one-step "
                      "prediction (PNG) to this file")
     ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
+
+    sel = sub.add_parser("select", help="choose a structure by free-run simulation on a "
+                         "held-back part (fohw.select_structure)")
+    sel.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
+    sel.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'uEst,yEst' "
+                     "(default: the first two)")
+    for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
+                       ("--f-basis", "input polynomial degrees"),
+                       ("--g-basis", "output polynomial degrees")):
+        sel.add_argument(flag, type=_int_list, default=None if flag == "--nb" else [1],
+                         help=f"{what}: a comma-separated list, e.g. 1,2,3")
+    sel.add_argument("--orders", type=_orders_list, default=["commensurate"],
+                     help="classes of orders, e.g. '0,commensurate,mixed,per_lag' "
+                     "(default commensurate)")
+    sel.add_argument("--method", choices=METHODS, default="varpro",
+                     help="estimator of every candidate (default varpro)")
+    sel.add_argument("--validation", type=_validation_arg, default=0.25,
+                     help="held-back part: a fraction (default 0.25) or a number of samples")
+    sel.add_argument("--offset", action="store_true", help="a constant term in every model")
+    sel.add_argument("--operating-point", choices=("initial", "mean"), default=None,
+                     help="remove the first samples or the means before fitting")
+    sel.add_argument("--dt", type=float, default=1.0, help="sampling time (default 1)")
+    sel.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    sel.add_argument("--top", type=int, default=10, help="rows to print (default 10)")
+    sel.add_argument("--csv", help="write every row to this CSV file")
+    sel.add_argument("--plot", help="write the scores (PNG) to this file")
+    sel.add_argument("--save", help="save the refitted winner as JSON (fohw.load_result)")
 
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
     sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model")
@@ -228,6 +284,54 @@ def _identify(args):
     return 0
 
 
+def _select(args):
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ..analysis.selection import select_structure
+
+    if args.jobs < 1:
+        raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
+    data, names = read_table(args.data)
+    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
+            "orders": args.orders}
+    candidates = [dict(c, nb=c["na"]) if args.nb is None else c for c in
+                  ({**c} for c in _expand(grid, args.nb))]
+    pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
+    try:
+        sel = select_structure(u, y, candidates, validation=args.validation,
+                               method=args.method, offset=args.offset,
+                               operating_point=args.operating_point, dt=args.dt,
+                               executor=pool)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
+    print(sel.to_markdown(top=args.top))
+    if sel.best is None:
+        print("no candidate simulated; see the reasons above.")
+    else:
+        print(f"best: {sel.best_row['candidate']} (held-back fit {sel.best_row['fit']:.1f} %), "
+              "refitted on all the data:")
+        print(sel.best.summary())
+        if args.save:
+            sel.best.to_json(args.save)
+    if args.csv:
+        sel.to_csv(args.csv)
+    if args.plot:
+        fig, _ = sel.plot()
+        fig.savefig(args.plot, dpi=120)
+    return 0
+
+
+def _expand(grid, nb):
+    from ..analysis.selection import expand_candidates
+
+    if nb is not None:
+        grid = dict(grid, nb=nb)
+    return expand_candidates(grid)
+
+
 def _simulate(args):
     import numpy as np
 
@@ -284,7 +388,8 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    handler = {"identify": _identify, "simulate": _simulate, "reproduce": _reproduce}
+    handler = {"identify": _identify, "select": _select, "simulate": _simulate,
+               "reproduce": _reproduce}
     try:
         return handler[args.command](args)
     except (UsageError, FohwError, FileNotFoundError) as exc:
