@@ -266,3 +266,20 @@ def test_cli_select_bad_lists_are_one_line_errors(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "comma-separated integers" in err and err.count("\n") == 1
+
+
+def test_identify_many_keeps_order_and_failures_on_any_backend():
+    recs = [fohw.datasets.paper_example(400, random_state=s) for s in range(3)]
+    records = [(recs[0].u, recs[0].y), fohw.Record(recs[1].u, recs[1].y),
+               (recs[2].u, np.full(400, np.nan))]                     # cannot be fitted
+    serial = fohw.identify_many(records, na=2, nb=2, f_basis=2, g_basis=3)
+    with ProcessPoolExecutor(2) as pool:
+        parallel = fohw.identify_many(records, na=2, nb=2, f_basis=2, g_basis=3, executor=pool)
+    for i in (0, 1):
+        alone = fohw.identify(recs[i].u, recs[i].y, na=2, nb=2, f_basis=2, g_basis=3)
+        np.testing.assert_array_equal(serial[i].theta, alone.theta)
+        np.testing.assert_array_equal(parallel[i].theta, alone.theta)
+    assert isinstance(serial[2], fohw.FohwError) and isinstance(parallel[2], fohw.FohwError)
+    assert str(serial[2]) == str(parallel[2])
+    with pytest.raises(fohw.ParameterError, match=r"`records\[0\]` must be a Record or a pair"):
+        fohw.identify_many([3], na=2, nb=2, f_basis=2, g_basis=3)

@@ -8,6 +8,7 @@ matrix, and the paper's estimators.
 
 from . import datasets
 from .analysis import metrics
+from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
 from .analysis.selection import Selection, select_structure
@@ -76,6 +77,7 @@ def _keep_old_module_paths():
 _keep_old_module_paths()
 
 __all__ = [
+    "identify_many",
     "Validation",
     "compare",
     "read_record",

@@ -1,0 +1,64 @@
+"""Many records, one call: :func:`identify_many`, serially or on any executor."""
+
+from __future__ import annotations
+
+from .._parallel import TaskError, run_tasks
+from ..exceptions import ParameterError
+from ..record import Record
+
+__all__ = ["identify_many"]
+
+
+def _identify_one(u, y, kwargs):
+    from ..estimators.identify import identify
+
+    try:
+        return identify(u, y, **kwargs)
+    except Exception as exc:                 # one record never loses the others
+        return exc
+
+
+def identify_many(records, *, executor=None, progress=None, **kwargs):
+    """Run :func:`fohw.identify` with the same keywords on many records.
+
+    Parameters
+    ----------
+    records : sequence of Record or (u, y)
+        The records.
+    executor : concurrent.futures.Executor, optional
+        Where to run them (a ``ProcessPoolExecutor``, dask's ``Client.get_executor()``);
+        default serially. The results do not depend on the backend.
+    progress : bool, optional
+        A progress bar on stderr; default: when stderr is a terminal.
+    **kwargs
+        Keywords of :func:`fohw.identify` (``na``, ``nb``, ``f_basis``, ``g_basis``, …).
+
+    Returns
+    -------
+    list
+        One entry per record, in order: its :class:`fohw.IdentificationResult`, or the
+        exception its fit raised (so one bad record never loses the others; test with
+        ``isinstance(entry, Exception)``).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> recs = [fohw.datasets.paper_example(400, random_state=s) for s in range(3)]
+    >>> out = fohw.identify_many([(r.u, r.y) for r in recs], na=2, nb=2, f_basis=2, g_basis=3)
+    >>> [type(r).__name__ for r in out]
+    ['IdentificationResult', 'IdentificationResult', 'IdentificationResult']
+    """
+    tasks = []
+    for i, rec in enumerate(records):
+        if isinstance(rec, Record):
+            tasks.append((rec.u, rec.y, kwargs))
+            continue
+        try:
+            u, y = rec
+        except (TypeError, ValueError):
+            raise ParameterError(f"`records[{i}]` must be a Record or a pair (u, y); got "
+                                 f"{type(rec).__name__}.") from None
+        tasks.append((u, y, kwargs))
+    out = run_tasks(_identify_one, tasks, executor=executor, progress=progress,
+                    label="identify_many")
+    return [entry.exception if isinstance(entry, TaskError) else entry for entry in out]
