@@ -122,3 +122,20 @@ def test_cli_refuses_the_same_column_twice(tmp_path, capsys):
     assert main(["identify", str(path), "--columns", "0,0", "--na", "1", "--nb", "1",
                  "--f-basis", "1", "--g-basis", "1"]) == 2
     assert "same column twice" in capsys.readouterr().err
+
+
+def test_cli_default_columns_never_guess(tmp_path, capsys):
+    data = fohw.datasets.paper_example(300, random_state=0)
+    named = tmp_path / "named.csv"
+    named.write_text("t,u,y\n" + "\n".join(f"{k},{a:.17g},{b:.17g}" for k, (a, b)
+                                            in enumerate(zip(data.u, data.y))) + "\n")
+    args = ["--na", "2", "--nb", "2", "--f-basis", "2", "--g-basis", "3", "--json"]
+    assert main(["identify", str(named), *args]) == 0          # picks u and y by name
+    by_name = capsys.readouterr().out
+    assert main(["identify", str(named), "--columns", "u,y", *args]) == 0
+    assert capsys.readouterr().out == by_name
+    unnamed = tmp_path / "three.dat"
+    np.savetxt(unnamed, np.c_[np.arange(300), data.u, data.y])
+    assert main(["identify", str(unnamed), *args]) == 2
+    err = capsys.readouterr().err
+    assert "has 3 columns: say which to use with --columns" in err and err.count("\n") == 1

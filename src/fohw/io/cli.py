@@ -63,7 +63,16 @@ def read_table(path):
 def _pick_columns(data, names, spec, count, path):
     """Column indices from ``--columns`` ("0,1" or header names), ``count`` of them."""
     if spec is None:
-        idx = list(range(count))
+        lower = [n.lower() for n in names] if names else []
+        if count == 2 and "u" in lower and "y" in lower:
+            idx = [lower.index("u"), lower.index("y")]
+        elif data.shape[1] == count:
+            idx = list(range(count))
+        else:
+            have = f" ({', '.join(names)})" if names else ""
+            raise UsageError(f"{path} has {data.shape[1]} columns{have}: say which to use with "
+                             f"--column{'s' if count == 2 else ''} (numbers from 0 or header "
+                             "names).")
     else:
         parts = [p.strip() for p in spec.split(",")]
         if len(parts) != count:
@@ -164,7 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     ide = sub.add_parser("identify", help="identify a model from a data file")
     ide.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
     ide.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'u,y' "
-                     "(default: the first two)")
+                     "(default: the columns named u and y, or the two columns of a two-column "
+                     "file)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
     ide.add_argument("--nb", type=int, required=True, help="input lags")
     ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
@@ -190,7 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "held-back part (fohw.select_structure)")
     sel.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
     sel.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'uEst,yEst' "
-                     "(default: the first two)")
+                     "(default: as for identify)")
     for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
                        ("--f-basis", "input polynomial degrees"),
                        ("--g-basis", "output polynomial degrees")):
