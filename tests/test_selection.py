@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 import fohw
+from fohw._validation import input_in_range
 from fohw.analysis.metrics import fit_percent, rmse
-from fohw.analysis.selection import expand_candidates, input_in_range
+from fohw.analysis.selection import expand_candidates
 from fohw.io.cli import main
 
 STRUCT = dict(f_basis=2, g_basis=3)

@@ -158,38 +158,31 @@ def load_daisy(path, *, n_columns=None):
     """
     if n_columns is not None:
         n_columns = check_int(n_columns, "n_columns", minimum=1)
-    return _parse_table(path, n_columns=n_columns)[0]
+    return _parse_daisy(path, n_columns=n_columns)
 
 
-def _parse_table(path, *, n_columns=None, header=False):
-    """Numeric rows of a text file, with the errors of :func:`load_daisy`.
+def _parse_daisy(path, *, n_columns=None):
+    """Numeric rows of a DaISy file (ASCII, whitespace-separated, ``%``/``#`` comments).
 
-    DaISy mode (``header=False``): ASCII, whitespace-separated. Table mode (``header=True``):
-    UTF-8, comma-separated where a line has a comma, and a first line of names allowed.
-    Returns ``(data, names)``.
+    Stricter than :func:`fohw.io.text.read_table` (the loader of general CSV and text
+    records): no header, no empty fields, every line the same number of columns.
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"data file not found: {path!r}")
-    rows, names = [], None
-    encoding = "utf-8" if header else "ascii"
+    rows = []
     with open(path, "rb") as fh:
         for lineno, raw in enumerate(fh, start=1):
             try:
-                text = raw.decode(encoding).strip()
+                text = raw.decode("ascii").strip()
             except UnicodeDecodeError:
-                label = "UTF-8" if header else "ASCII"
-                raise DataFileError(f"{path}: line {lineno} is not {label} text.") from None
+                raise DataFileError(f"{path}: line {lineno} is not ASCII text.") from None
             if not text or text[0] in "%#":
                 continue
-            fields = [f.strip() for f in (text.split(",") if header and "," in text
-                                          else text.split())]
+            fields = text.split()
             try:
                 values = [float(f) for f in fields]
             except ValueError:
-                if header and not rows and names is None:
-                    names, n_columns = fields, len(fields)
-                    continue
                 bad = next(f for f in fields if not _is_float(f))
                 raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.") from None
             if n_columns is None:
@@ -202,7 +195,7 @@ def _parse_table(path, *, n_columns=None, header=False):
             rows.append(values)
     if not rows:
         raise DataFileError(f"{path}: no data lines found.")
-    return np.array(rows, dtype=np.float64), names
+    return np.array(rows, dtype=np.float64)
 
 
 def _is_float(text: str) -> bool:

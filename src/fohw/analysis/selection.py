@@ -24,13 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._parallel import TaskError, run_tasks
-from .._validation import RANGE_TOLERANCE, check_array, check_same_length, input_in_range
+from .._validation import check_array, check_same_length
 from ..exceptions import ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
 from .metrics import fit_percent, rmse
 
-__all__ = ["select_structure", "Selection", "expand_candidates", "SCORES", "RANGE_TOLERANCE",
-           "input_in_range"]
+__all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
 
 #: Ranking criteria: name -> (column, True if larger is better).
 SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
@@ -94,7 +93,14 @@ def _label(candidate):
     return " ".join(f"{k}={_describe(v)}" for k, v in candidate.items())
 
 
-def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range):
+def _blank_row(**changes):
+    """A row before (or without) a fit: every score missing."""
+    return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
+                     bic=np.nan, n_params=0, estimated_orders="", in_range=True, fit_status="",
+                     seconds=np.nan, reason=""), **changes)
+
+
+def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
     """One candidate: fit on the estimation part, free-run over ``u_sim``, score the tail.
 
     Module level (it is pickled for process and dask executors). Never raises: a failure is
@@ -102,9 +108,7 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range)
     """
     from ..estimators.identify import identify
 
-    row = dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
-               bic=np.nan, n_params=0, estimated_orders="", in_range=True, fit_status="",
-               reason="")
+    row = _blank_row()
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -125,22 +129,16 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, u_range)
         if np.isfinite(criterion) and criterion > 0:
             row["aic"] = float(n * np.log(criterion) + 2 * d)
             row["bic"] = float(n * np.log(criterion) + d * np.log(n))
-        row["in_range"] = input_in_range(u_sim[score_from:], u_range)
-        try:
+        try:       # the simulator raises on any non-finite output, so ysim is finite
             ysim = res.simulate(u_sim)
         except SimulationDivergedError as exc:
-            row.update(status="diverged" if exc.cause == "growth" else "nan", reason=str(exc),
-                       seconds=time.perf_counter() - t0)
-            return row, res
+            row.update(status="diverged" if exc.cause == "growth" else "nan", reason=str(exc))
         except Exception as exc:
-            row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}",
-                       seconds=time.perf_counter() - t0)
-            return row, res
-    if not np.all(np.isfinite(ysim)):
-        bad = int(np.flatnonzero(~np.isfinite(ysim))[0])
-        row.update(status="nan", reason=f"the simulated output is not finite from sample {bad} "
-                   "(a basis function returned NaN or inf there?)",
-                   seconds=time.perf_counter() - t0)
+            row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}")
+    # result.simulate warns when the input leaves the estimation input's range
+    row["in_range"] = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
+    if row["status"] != "ok":
+        row["seconds"] = time.perf_counter() - t0
         return row, res
     if score_from:                      # the held-back part continues the estimation part
         row["fit_estimation"] = fit_percent(y_est, ysim[:score_from])
@@ -175,10 +173,9 @@ class Selection:
         method's own criterion on the estimation part: the one-step ``J`` of Eq. 41, or the
         mean squared simulation error for ``"output_error"``), ``n_params``,
         ``estimated_orders`` (the estimated free orders), ``in_range`` (whether the held-back
-        input stayed inside the
-        estimation input's range widened by :data:`RANGE_TOLERANCE` of its span),
-        ``fit_status`` (the estimator's :class:`fohw.Status` name),
-        ``seconds``, ``reason`` (why a candidate failed, or the warnings its fit raised).
+        input stayed inside the estimation input's range widened by 5 % of its span: no
+        :class:`fohw.ExtrapolationWarning` from the simulation), ``fit_status`` (the
+        estimator's :class:`fohw.Status` name), ``seconds``, ``reason`` (why a candidate failed, or the warnings its fit raised).
     best : IdentificationResult or None
         The winner refitted on all the data given as estimation data (``None`` if every
         candidate failed).
@@ -411,8 +408,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     own = expand_candidates(candidates)
     cands = [dict(common, **c) for c in own]
     u_est, y_est, u_sim, y_score, score_from, described = _split(u, y, validation)
-    u_range = (float(np.min(u_est)), float(np.max(u_est)))
-    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, u_range) for c in cands]
+    tasks = [(u_est, y_est, u_sim, y_score, score_from, c) for c in cands]
     t0 = time.perf_counter()
     outcomes = run_tasks(_fit_and_score, tasks, executor=executor, progress=progress,
                          label="select_structure")
@@ -420,9 +416,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     rows, results = [], []
     for c, mine, outcome in zip(cands, own, outcomes):
         if isinstance(outcome, TaskError):
-            row = dict(status="failed", fit=np.nan, rmse=np.nan, fit_estimation=np.nan,
-                       aic=np.nan, bic=np.nan, n_params=0, estimated_orders="", in_range=True,
-                       fit_status="", seconds=np.nan, reason=f"executor: {outcome.message}")
+            row = _blank_row(status="failed", reason=f"executor: {outcome.message}")
             res = None
         else:
             row, res = outcome
