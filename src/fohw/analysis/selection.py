@@ -175,7 +175,8 @@ class Selection:
         ``estimated_orders`` (the estimated free orders), ``in_range`` (whether the held-back
         input stayed inside the estimation input's range widened by 5 % of its span: no
         :class:`fohw.ExtrapolationWarning` from the simulation), ``fit_status`` (the
-        estimator's :class:`fohw.Status` name), ``seconds``, ``reason`` (why a candidate failed, or the warnings its fit raised).
+        estimator's :class:`fohw.Status` name), ``seconds``, ``reason`` (why a candidate
+        failed, or the warnings its fit raised).
     best : IdentificationResult or None
         The winner refitted on all the data given as estimation data (``None`` if every
         candidate failed).
