@@ -297,7 +297,7 @@ def _identify(args):
 def _select(args):
     from concurrent.futures import ProcessPoolExecutor
 
-    from ..analysis.selection import select_structure
+    from ..analysis.selection import expand_candidates, select_structure
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
@@ -305,8 +305,11 @@ def _select(args):
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
-    candidates = [dict(c, nb=c["na"]) if args.nb is None else c for c in
-                  ({**c} for c in _expand(grid, args.nb))]
+    if args.nb is not None:
+        grid["nb"] = args.nb
+    candidates = expand_candidates(grid)
+    if args.nb is None:                 # nb = na
+        candidates = [dict(c, nb=c["na"]) for c in candidates]
     pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
     try:
         sel = select_structure(u, y, candidates, validation=args.validation,
@@ -332,14 +335,6 @@ def _select(args):
         fig, _ = sel.plot()
         fig.savefig(args.plot, dpi=120)
     return 0
-
-
-def _expand(grid, nb):
-    from ..analysis.selection import expand_candidates
-
-    if nb is not None:
-        grid = dict(grid, nb=nb)
-    return expand_candidates(grid)
 
 
 def _simulate(args):
