@@ -20,10 +20,11 @@ from importlib import resources
 
 import numpy as np
 
+from .._parallel import TaskError, run_tasks
 from .._plotting import subplots
 from ..datasets import SimulatedData, paper_example
 from ..estimators.identify import OPTIONS, identify
-from ..exceptions import ConvergenceWarning
+from ..exceptions import ConvergenceWarning, FohwError, ParameterError
 from ..results import IdentificationResult
 
 __all__ = ["paper_table2", "PaperRuns", "run_paper_example", "table2_rows", "table2_markdown",
@@ -556,15 +557,13 @@ def forgetting_map(seeds=range(10), n_samples=10_000, *, forgetting=FORGETTING_F
         ``{(schedule, forgetting, seed): {P: (delta, alpha)}}`` for the recursive schedule,
         sampled at ``k = curve_step, 2 curve_step, ...``.
     """
-    import sys
-
     checkpoints = tuple(int(k) for k in checkpoints)
     if max(checkpoints) > n_samples:
-        raise ValueError(f"`checkpoints` must not exceed `n_samples` = {n_samples}; got "
+        raise ParameterError(f"`checkpoints` must not exceed `n_samples` = {n_samples}; got "
                          f"{checkpoints}.")
     unknown = [s for s in schedules if s not in FORGETTING_SCHEDULES]
     if unknown:
-        raise ValueError(f"`schedules` must be among {tuple(FORGETTING_SCHEDULES)}; got "
+        raise ParameterError(f"`schedules` must be among {tuple(FORGETTING_SCHEDULES)}; got "
                          f"{unknown}.")
     # The most expensive tasks first, so that the two workers finish together.
     order = {"iterative-record": 0, "recursive": 1, "iterative": 2}
@@ -572,27 +571,24 @@ def forgetting_map(seeds=range(10), n_samples=10_000, *, forgetting=FORGETTING_F
               max_iter)
              for s in sorted(schedules, key=lambda s: order.get(s, 3))
              for lam in sorted(forgetting) for seed in seeds]
-    rows, curves = [], {}
+    pool = None
+    if jobs != 1:
+        from concurrent.futures import ProcessPoolExecutor
 
-    def collect(i, part):
+        pool = ProcessPoolExecutor(max_workers=jobs)
+    try:
+        parts = run_tasks(_forgetting_task, tasks, executor=pool, progress=progress,
+                          label="forgetting map")
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    rows, curves = [], {}
+    for task, part in zip(tasks, parts):
+        if isinstance(part, TaskError):
+            raise FohwError(f"forgetting map: the task {task[:4]} could not be run: "
+                            f"{part.message}") from part.exception
         rows.extend(part[0])
         curves.update(part[1])
-        if progress:
-            print(f"\rforgetting map: {i}/{len(tasks)} tasks", end="", file=sys.stderr,
-                  flush=True)
-
-    if jobs == 1:
-        for i, task in enumerate(tasks, start=1):
-            collect(i, _forgetting_task(*task))
-    else:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(_forgetting_task, *task) for task in tasks]
-            for i, fut in enumerate(as_completed(futures), start=1):
-                collect(i, fut.result())
-    if progress:
-        print(file=sys.stderr)
     names = list(FORGETTING_SCHEDULES)
     rows.sort(key=lambda r: (names.index(r["schedule"]), -r["forgetting"], r["P"], r["k"],
                              r["seed"]))
