@@ -13,6 +13,12 @@ from ..results import IdentificationResult, Status, recover_model
 __all__: list[str] = []
 
 
+def rms_scale(x):
+    """The RMS of a signal, or 1 for a zero signal: a scale for residuals and parameters."""
+    value = float(np.sqrt(np.mean(x * x)))
+    return value if value > 0 else 1.0
+
+
 def dependent_columns_note(fac, names):
     """A sentence naming the columns a rank-revealing factorisation found dependent."""
     cols = [names[i] for i in fac.dependent]

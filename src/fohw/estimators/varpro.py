@@ -11,6 +11,13 @@ at the best theta) is a function of one variable. The estimator
    reflective, ``x_scale="jac"``, alpha bounded) and the exact Jacobian
    ``[Phi, dPhi/dalpha @ theta]`` (:meth:`fohw.RegressorBuilder.jacobian`).
 
+A general structure with several nonlinear parameters (free orders, past levels) replaces
+steps 1-2: a scan with the orders moved together (``n_grid`` points), starts from a full grid
+of the orders (two or three orders) or from one-order scans (more), and from each start
+:func:`scipy.optimize.least_squares` on the profile ``||y - Phi theta(params)||`` with Golub
+and Pereyra's Jacobian (tolerance ``tol``; ``xtol`` and ``max_nfev`` do not apply there);
+step 3 follows.
+
 Every linear solve equilibrates the columns of ``Phi`` and factors it by QR with column
 pivoting, so the estimate does not depend on the units of ``u`` and ``y`` and a rank-deficient
 information matrix is reported (it names the dependent columns) instead of giving huge,
@@ -33,7 +40,7 @@ from .. import _linalg
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, finish
+from ._common import bound_note, finish, rms_scale
 from .options import MethodOptions
 
 __all__ = ["VarproOptions", "profile_theta", "separable_least_squares", "parameter_covariance"]
@@ -158,21 +165,34 @@ class _VarproFit:
 
 
 class _Profile:
-    """``theta(params)`` and ``rss(params)`` of the separable problem, cached per point."""
+    """``theta(params)`` and ``rss(params)`` of the separable problem.
+
+    The information matrix and its factorisation are kept for the latest point only (the
+    solver asks for the residual and then the Jacobian at the same point; a grid of starts
+    would otherwise hold one N x n factor per point); :attr:`count` is the number of distinct
+    points evaluated.
+    """
 
     def __init__(self, builder):
         self.builder = builder
-        self.cache = {}
+        self.points = set()
+        self.last = None               # (key, matrix, linear, rss, factor)
+
+    def solve(self, params):
+        """``(matrix, linear, rss, factor)`` at ``params``."""
+        key = tuple(np.atleast_1d(params).tolist())
+        if self.last is None or self.last[0] != key:
+            matrix = self.builder.matrix(params)
+            self.last = (key, matrix, *_linalg.lstsq(matrix, self.builder.y))
+            self.points.add(key)
+        return self.last[1:]
 
     def __call__(self, params):
-        key = tuple(np.atleast_1d(params).tolist())
-        if key not in self.cache:
-            self.cache[key] = _linalg.lstsq(self.builder.matrix(params), self.builder.y)
-        return self.cache[key]
+        return self.solve(params)[1:]
 
     @property
     def count(self):
-        return len(self.cache)
+        return len(self.points)
 
 
 def separable_least_squares(builder, *, bounds, options=None):
@@ -234,10 +254,9 @@ def separable_least_squares(builder, *, bounds, options=None):
 
 def _linear_only(builder, profile):
     """Every order fixed and no past levels: one linear least-squares solve."""
-    params = np.zeros(0)
-    linear, rss, fac = profile(params)
-    cov, s2 = parameter_covariance(builder.matrix(params), rss, builder.n_samples)
-    return _VarproFit(linear=linear, params=params, rss=rss, grid=np.zeros(0),
+    matrix, linear, rss, fac = profile.solve(np.zeros(0))
+    cov, s2 = parameter_covariance(matrix, rss, builder.n_samples)
+    return _VarproFit(linear=linear, params=np.zeros(0), rss=rss, grid=np.zeros(0),
                       grid_J=np.zeros(0), search_alphas=[], search_J=[],
                       status=Status.CONVERGED, nit=0, nfev=1,
                       message="converged: linear least squares (every order fixed)",
@@ -274,20 +293,20 @@ def _scalar_search(builder, profile, lo, hi, opts):
         message
 
 
-#: Points per order of the full grid of starts, for two and three free orders.
-_FULL_GRID = (0, 15, 8)
-_SCAN_NOTE = {2: " and the minima of a 15 x 15 grid", 3: " and the minima of an 8^3 grid",
-              4: " and one sweep of one-order scans"}
+#: Points per order of the full grid of starts, by number of free orders.
+_FULL_GRID = {2: 15, 3: 8}
 
 
 def _vector_search(builder, profile, lo, hi, opts):
-    """Several nonlinear parameters: scan the tied line, then variable projection from the best.
+    """Several nonlinear parameters: starts from scans, then variable projection from each.
 
-    The free orders are moved together, each at the same relative position in its bounds (the
-    commensurate line when the bounds are equal), with past levels at 0. The starts are the
-    best local minima of that scan (at most three), and for two or three free orders the
-    best local minima of a full grid (at most four), for more a sweep of one-order scans from
-    the best tied point. From each, :func:`scipy.optimize.least_squares` minimises the profile
+    The tied scan moves the free orders together, each at the same relative position in its
+    bounds (the commensurate line when the bounds are equal), with past levels at 0; it is
+    the reported profile. The starts are: for two or three free orders, the best local minima
+    (at most four) of a full grid over the orders (:data:`_FULL_GRID` points per order); for
+    more, the point reached by one sweep of one-order scans from the best tied point, then the
+    best local minima of the tied scan (at most three); with past levels only, rest. From each,
+    :func:`scipy.optimize.least_squares` minimises the profile
     ``||y - Phi(params) theta(params)||`` over all nonlinear parameters with Golub and
     Pereyra's Jacobian; the best end point is kept.
     """
@@ -299,15 +318,11 @@ def _vector_search(builder, profile, lo, hi, opts):
     if n_free == 0:                       # only past levels: start at rest
         grid_points, tau = [np.zeros(n_past)], np.zeros(1)
     grid_J = np.array([profile(p)[1] for p in grid_points]) / n_samples
-    interior = [i for i in range(len(grid_J))
-                if (i == 0 or grid_J[i] <= grid_J[i - 1])
-                and (i == len(grid_J) - 1 or grid_J[i] <= grid_J[i + 1])]
-    starts = [grid_points[i] for i in sorted(interior, key=lambda i: grid_J[i])[:3]]
-    if 1 < n_free <= len(_FULL_GRID):
+    if n_free in _FULL_GRID:
         # The profile of two or three orders can have several minima along a curved valley
         # (a noise-free record with two tied orders had one at J = 2e-7 beside the true
         # J = 0, both off the tied line): the local minima of a full grid are the starts.
-        m = _FULL_GRID[n_free - 1]
+        m = _FULL_GRID[n_free]
         axes = [lo[j] + np.linspace(0.0, 1.0, m + 2)[1:-1] * (hi[j] - lo[j])
                 for j in range(n_free)]
         mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n_free)
@@ -317,34 +332,42 @@ def _vector_search(builder, profile, lo, hi, opts):
                                                                      mode="nearest"))
         starts = [np.r_[mesh[i], np.zeros(n_past)]
                   for i in minima[np.argsort(values[minima])][:4]]
-    elif n_free > 1:
-        # More orders: one sweep of one-order scans from the best tied point, each order
-        # over its bounds with the others held, gives a start off the diagonal.
-        point = starts[0].copy()
-        for j in range(n_free):
-            trial = []
-            for t in tau:
-                p = point.copy()
-                p[j] = lo[j] + t * (hi[j] - lo[j])
-                trial.append((profile(p)[1], p))
-            point = min(trial, key=lambda item: item[0])[1]
-        starts.insert(0, point)
+        origin = f"the minima of a {m}^{n_free} grid"
+    else:
+        interior = [i for i in range(len(grid_J))
+                    if (i == 0 or grid_J[i] <= grid_J[i - 1])
+                    and (i == len(grid_J) - 1 or grid_J[i] <= grid_J[i + 1])]
+        starts = [grid_points[i] for i in sorted(interior, key=lambda i: grid_J[i])[:3]]
+        origin = "the tied-order scan"
+        if n_free > 1:
+            # More orders: one sweep of one-order scans from the best tied point, each order
+            # over its bounds with the others held, gives a start off the diagonal.
+            point = starts[0].copy()
+            for j in range(n_free):
+                trial = []
+                for t in tau:
+                    p = point.copy()
+                    p[j] = lo[j] + t * (hi[j] - lo[j])
+                    trial.append((profile(p)[1], p))
+                point = min(trial, key=lambda item: item[0])[1]
+            starts.insert(0, point)
+            origin = "one sweep of one-order scans and the tied-order scan"
     y = builder.y
-    y_scale = float(np.sqrt(np.mean(y * y))) or 1.0
+    y_scale = rms_scale(y)
     lower = np.r_[lo, np.full(n_past, -np.inf)]
     upper = np.r_[hi, np.full(n_past, np.inf)]
 
     def residual(params):
-        linear, _, _ = profile(params)
-        return (y - builder.matrix(params) @ linear) / y_scale
+        matrix, linear, _, _ = profile.solve(params)
+        return (y - matrix @ linear) / y_scale
 
     def golub_pereyra(params):
         # d/dp of P_perp y: -P_perp dPhi theta - (Phi^+)^T dPhi^T r (Golub and Pereyra);
         # Kaufman's approximation drops the second term, exact only at a zero residual.
-        linear, _, fac = profile(params)
+        matrix, linear, _, fac = profile.solve(params)
         k = fac.rank
         q, r_tri = fac.q[:, :k], fac.r[:k, :k]
-        resid = y - builder.matrix(params) @ linear
+        resid = y - matrix @ linear
         cols = []
         for d in builder.matrix_derivatives(params):
             v = d @ linear
@@ -362,9 +385,7 @@ def _vector_search(builder, profile, lo, hi, opts):
         nit += int(ls.njev)
         if best is None or ls.cost < best.cost:
             best = ls
-    message = (f"variable projection from {len(starts)} start(s) of the tied-order scan"
-               f"{_SCAN_NOTE.get(min(n_free, 4), '')}: "
-               f"{best.message}")
+    message = f"variable projection from {len(starts)} start(s) ({origin}): {best.message}"
     grid = lo[0] + tau * (hi[0] - lo[0]) if n_free else tau
     return best.x, ([], []), grid, grid_J, nit, best.status > 0, message
 
@@ -380,7 +401,7 @@ def _polish(builder, linear, params, lo, hi, opts):
     n, n_free = s.n_linear, len(s.orders.free)
     n_past = s.n_nonlinear - n_free
     y = builder.y
-    y_scale = float(np.sqrt(np.mean(y * y))) or 1.0
+    y_scale = rms_scale(y)
 
     def residual(x):
         return (y - builder.matrix(x[n:]) @ x[:n]) / y_scale
