@@ -26,7 +26,7 @@ from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
-from ._common import bound_note, finish
+from ._common import bound_note, finish, rms_scale
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
@@ -147,7 +147,7 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     # The solver works on dimensionless z = x / scale and a residual divided by the RMS output,
     # so that its finite-difference steps and tolerances mean the same in every unit.
     scale = _parameter_scale(x0, s, u, y)
-    y_scale = _rms(y)
+    y_scale = rms_scale(y)
     ls = scipy.optimize.least_squares(
         lambda z: residual(z * scale) / y_scale, x0 / scale, method="trf", x_scale="jac",
         max_nfev=max_nfev, bounds=(bound_lo / scale, bound_hi / scale))
@@ -168,11 +168,6 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
                   nit=int(ls.njev), nfev=count[0], at_lower=active < 0, at_upper=active > 0)
 
 
-def _rms(y):
-    value = float(np.sqrt(np.mean(y * y)))
-    return value if value > 0 else 1.0
-
-
 def _parameter_scale(x0, structure, u, y):
     """Typical size of each parameter.
 
@@ -187,13 +182,13 @@ def _parameter_scale(x0, structure, u, y):
         part[part == 0] = part.max() if part.max() > 0 else 1.0
     pos = n
     if structure.offset:
-        scale[pos] = max(scale[pos], _rms(y))
+        scale[pos] = max(scale[pos], rms_scale(y))
         pos += 1
     n_free = len(structure.orders.free)
     scale[pos:pos + n_free] = 1.0
     if structure.past == "estimate":
-        scale[pos + n_free] = _rms(u)
-        scale[pos + n_free + 1] = _rms(y)
+        scale[pos + n_free] = rms_scale(u)
+        scale[pos + n_free + 1] = rms_scale(y)
     return scale
 
 
@@ -227,8 +222,8 @@ def _start(builder, options, lower, upper):
             raise DimensionError(f"`start` nonlinear parameters must have {s.n_nonlinear} "
                                  f"entries ({', '.join(s.nonlinear_names)}); got "
                                  f"{params0.shape[0]}.")
-        for j, name in enumerate(s.orders.free):
-            check_scalar(params0[j], f"start {name}", lower=lower[j], upper=upper[j])
+    for j, name in enumerate(s.orders.free):    # a result's orders too: never clipped silently
+        check_scalar(params0[j], f"start {name}", lower=lower[j], upper=upper[j])
     J0 = float(np.mean((builder.y - builder.matrix(params0) @ linear0) ** 2))
     return np.array(linear0, dtype=float), np.array(params0, dtype=float), J0, "the given start"
 
