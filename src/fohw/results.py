@@ -100,16 +100,19 @@ class IdentificationResult:
         ``N``.
     options : dict
         The settings of the run (innovation length, bounds, …).
-    covariance : ndarray, shape (n + 1, n + 1), or None
-        Asymptotic covariance of ``(theta, alpha)`` (``alpha`` last), ``s^2 (G^T G)^{-1}`` with
-        ``G`` the Jacobian of the one-step predictor; only for least-squares estimates
-        (``"varpro"``). ``None`` where the estimator is not a least-squares optimum, since
-        standard errors would then be meaningless.
+    covariance : ndarray, shape (d, d), or None
+        Asymptotic covariance ``s^2 (G^T G)^{-1}`` of the ``d`` estimates in
+        :attr:`estimate_names` order (the paper's model: ``(theta, alpha)``, ``alpha`` last),
+        with ``G`` the Jacobian of the fitted residual (one-step predictor for ``"varpro"``,
+        free-run simulation for ``"output_error"``); only for these least-squares estimates.
+        ``None`` where the estimator is not a least-squares optimum, since standard errors
+        would then be meaningless.
     noise_variance : float or None
-        ``s^2 = RSS / (N - n - 1)``, with ``covariance``.
+        ``s^2 = RSS / (N - d)``, with ``covariance``.
     alpha_profile : ndarray, shape (2, n_grid), or None
-        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1 (for several
-        free orders: all tied to the same value).
+        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1. With several
+        free orders the scan moves them together, each at the same relative position in its
+        bounds, and row 0 is the first order (zeros when only past levels are free).
     structure : Structure
         The model class that was fitted (orders, bases, offset, past, dt).
     orders : dict
@@ -239,13 +242,15 @@ class IdentificationResult:
                          "defined at a least-squares optimum ('varpro', 'output_error').")
 
     def standard_errors(self) -> dict:
-        """Standard errors of theta, alpha and the recovered ``a, b, p, q``.
+        """Standard errors of the estimates and of the recovered ``a, b, p, q``.
 
         Returns
         -------
         dict of str to float
-            Keyed by :attr:`parameter_names`, ``"alpha"`` and the model parameter names
-            (``a1``, ``b1``, ``p2``, ``q2``, …; the delta method through Eqs. 39–40).
+            Keyed by :attr:`estimate_names` (theta's names, then ``offset``, the free orders,
+            ``u_past``, ``y_past`` where present; the paper's model: theta's names and
+            ``"alpha"``) and the model parameter names (``a1``, ``b1``, ``p2``, ``q2``, …; the
+            delta method through Eqs. 39–40).
 
         Raises
         ------
@@ -313,9 +318,7 @@ class IdentificationResult:
         y = np.asarray(y, dtype=np.float64)
         builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
                                    structure=self.structure)
-        params = self.nonlinear
-        yhat = builder.matrix(params[0] if self.structure.is_paper_model else params) \
-            @ self.linear
+        yhat = builder.matrix(self.nonlinear) @ self.linear
         return yhat + y0 if y0 else yhat
 
     def simulate(self, u, *, history=None, **kwargs):

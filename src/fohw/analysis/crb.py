@@ -70,7 +70,10 @@ class CRBResult:
 
 
 def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
-    """Cramér–Rao bound of ``(theta, alpha)`` for a model, an input and a noise level.
+    """Cramér–Rao bound of a model's parameters for an input and a noise level.
+
+    The parameters are the structure's linear then nonlinear ones
+    (:attr:`CRBResult.estimate_names`): for the paper's model ``(theta, alpha)``.
 
     Parameters
     ----------

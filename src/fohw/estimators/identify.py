@@ -41,7 +41,7 @@ def _alternation(method):
 def _paper_bounds(method, builder, bounds):
     """The recursive methods implement the paper's commensurate model: its one order's bounds."""
     s = builder.structure
-    if not (s.orders.is_commensurate and not s.offset and s.past == "rest" and s.dt == 1.0):
+    if not s.is_paper_model:
         raise ParameterError(
             f"method {method!r} implements the paper's commensurate model (Eq. 16: one order for "
             "every term, no offset, rest before k = 0, dt = 1); this structure is "
@@ -254,13 +254,10 @@ def _order_bounds(structure, alpha_bounds):
             raise ParameterError(f"`alpha_bounds` by name must give exactly the free orders "
                                  f"{list(free)}; unknown {unknown}, missing {missing}.")
         pairs = [AlphaBounds(alpha_bounds[n], name=f"alpha_bounds[{n!r}]") for n in free]
-    else:
-        pairs = [AlphaBounds(alpha_bounds)] * max(len(free), 1)
-    lower = np.array([b.lo for b in pairs])[:len(free)]
-    upper = np.array([b.hi for b in pairs])[:len(free)]
-    if not free:            # a pair is still checked, so a bad value is not silently ignored
-        return np.zeros(0), np.zeros(0)
-    return lower, upper
+    else:                   # a pair is checked even when nothing is free: never ignored
+        b = AlphaBounds(alpha_bounds)
+        pairs = [b] * len(free)
+    return np.array([b.lo for b in pairs]), np.array([b.hi for b in pairs])
 
 
 def _check_offset(structure, u):

@@ -58,11 +58,6 @@ def _floats(a) -> list:
     return [float(x) for x in np.asarray(a, dtype=np.float64).ravel()]
 
 
-def _structure_to_dict(structure) -> dict:
-    return {"orders": structure.orders.to_dict(), "offset": structure.offset,
-            "past": structure.past, "dt": structure.dt}
-
-
 def _structure_from_dict(d, f_basis, g_basis) -> Structure:
     return Structure(Orders.from_dict(d["orders"]), f_basis, g_basis, offset=d["offset"],
                      past=d["past"], dt=d["dt"])
@@ -73,7 +68,7 @@ def model_to_dict(model: HammersteinWiener) -> dict:
     return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION,
             "a": _floats(model.a), "b": _floats(model.b), "p": _floats(model.p),
             "q": _floats(model.q), "orders": dict(model.orders),
-            "structure": _structure_to_dict(model.structure), "offset": float(model.offset),
+            "structure": model.structure.to_dict(), "offset": float(model.offset),
             "past": list(model.past), "operating_point": list(model.operating_point),
             "f_basis": _basis_to_dict(model.f_basis), "g_basis": _basis_to_dict(model.g_basis)}
 
@@ -163,7 +158,7 @@ def result_to_dict(result) -> dict:
     d["layout"] = {"na": result.layout.na, "nb": result.layout.nb}
     d["f_basis"] = _basis_to_dict(result.f_basis)
     d["g_basis"] = _basis_to_dict(result.g_basis)
-    d["structure"] = _structure_to_dict(result.structure)
+    d["structure"] = result.structure.to_dict()
     d["orders"] = dict(result.orders)
     d["offset"] = result.offset
     d["past"] = list(result.past)
