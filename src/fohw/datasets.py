@@ -1,7 +1,8 @@
 """Data sets: the paper's example (Section 6.1), the robot arm (6.2) and the cascaded tanks.
 
 The measured records ship inside the package (``fohw/data``) with their citations and
-checksums; every loader verifies the checksum.
+checksums; the loaders verify the checksum of the shipped copies always, and of a user's copy
+unless ``verify=False``.
 """
 
 from __future__ import annotations
@@ -225,32 +226,34 @@ CASCADED_TANKS_SOURCE = ("M. Schoukens, P. Mattsson, T. Wigren, J.-P. Noel, 'Cas
 MeasuredData = Record
 
 
+def _sha256(path):
+    import hashlib
+
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).hexdigest()
+
+
 def _packaged(filename, sha256):
     """Path of a data file shipped in ``fohw/data``, its checksum verified."""
-    import hashlib
     from importlib import resources
 
     path = str(resources.files("fohw") / "data" / filename)
-    with open(path, "rb") as fh:
-        digest = hashlib.sha256(fh.read()).hexdigest()
+    digest = _sha256(path)
     if digest != sha256:
         raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}: "
                             "the installed fohw is damaged; reinstall it.")
     return path
 
 
-def _verified(path, filename, sha256, what):
-    import hashlib
-
+def _given(path, filename, sha256, what, verify):
+    """A user's copy (the file, or a folder holding ``filename``), its checksum verified."""
     path = os.fspath(path)
     if os.path.isdir(path):
         path = os.path.join(path, filename)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"{what} not found at {path!r}; call the loader without a path "
                                 "to use the copy shipped with fohw.")
-    with open(path, "rb") as fh:
-        digest = hashlib.sha256(fh.read()).hexdigest()
-    if digest != sha256:
+    if verify and (digest := _sha256(path)) != sha256:
         raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}; "
                             "the file is corrupted or another file. Call the loader without a "
                             "path to use the copy shipped with fohw, or pass verify=False.")
@@ -290,12 +293,8 @@ def robot_arm(path=None, *, verify=True):
     """
     if path is None:
         path = _packaged(ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256)
-    elif verify:
-        path = _verified(path, ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256, "robot-arm data")
     else:
-        path = os.fspath(path)
-        if os.path.isdir(path):
-            path = os.path.join(path, ROBOT_ARM_FILENAME)
+        path = _given(path, ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256, "robot-arm data", verify)
     data = load_daisy(path, n_columns=2)
     if data.shape[0] != 1024:
         raise DataFileError(f"{path}: expected 1024 samples; got {data.shape[0]}.")
