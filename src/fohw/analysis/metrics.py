@@ -32,6 +32,12 @@ def _pair(y, yhat, n_init):
     return y[n_init:], yhat[n_init:]
 
 
+def _norm(v):
+    """Euclidean norm without underflow or overflow of the squares (data of any units)."""
+    scale = float(np.max(np.abs(v))) if v.size else 0.0
+    return scale * float(np.linalg.norm(v / scale)) if scale > 0 else 0.0
+
+
 def fit_percent(y, yhat, *, n_init=0):
     """Fit index ``100 (1 - ||y - yhat|| / ||y - mean(y)||)`` (MATLAB ``compare``'s NRMSE fit).
 
@@ -54,10 +60,10 @@ def fit_percent(y, yhat, *, n_init=0):
     (100.0, 0.0)
     """
     y, yhat = _pair(y, yhat, n_init)
-    denom = np.linalg.norm(y - y.mean())
+    denom = _norm(y - y.mean())
     if denom == 0:
         raise DimensionError("`y` is constant after `n_init`: the fit index is undefined.")
-    return float(100.0 * (1.0 - np.linalg.norm(y - yhat) / denom))
+    return float(100.0 * (1.0 - _norm(y - yhat) / denom))
 
 
 def error_range(y, yhat, *, n_init=0):
@@ -77,7 +83,7 @@ def error_range(y, yhat, *, n_init=0):
 def rmse(y, yhat, *, n_init=0):
     """Root-mean-square error after the start-up window."""
     y, yhat = _pair(y, yhat, n_init)
-    return float(np.sqrt(np.mean((y - yhat) ** 2)))
+    return _norm(y - yhat) / float(np.sqrt(y.shape[0]))
 
 
 @dataclass(frozen=True)

@@ -8,12 +8,17 @@
   [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
   structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
-  [--output FILE]`` — simulate a saved model (``fohw.save_model``) for an input.
+  [--output FILE]`` — simulate a saved model (``fohw.save_model``), or the result of
+  ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an input.
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
   ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
   factor on r that is not in the paper; default 1, the paper as printed).
 
-Usage errors and bad input print one line ``fohw: error: …`` and exit with status 2.
+Usage errors, bad input and operating-system errors (permissions, a folder given as a file)
+print one line ``fohw: error: …`` and exit with status 2; Ctrl-C prints one line and exits with
+status 130. Output paths (``--save``, ``--plot``, ``--csv``, ``--output``, ``--outdir``) are
+checked before the run, and files are written atomically: a failed or interrupted save leaves an
+existing file as it was.
 """
 
 from __future__ import annotations
@@ -42,10 +47,17 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"fohw: error: {message}\n")
 
 
-def read_table(path):
+def _progress(message):
+    """A status line on stderr when it is a terminal (never in pipes, files or tests)."""
+    if sys.stderr.isatty():
+        print(f"fohw: {message}", file=sys.stderr, flush=True)
+
+
+def read_table(path, decimal="."):
     """Read a numeric table with :func:`fohw.io.text.read_table`.
 
-    CSV or whitespace columns, a header, comments, trailing separators, values given once.
+    CSV, semicolon or whitespace columns, a header, comments, trailing separators, values
+    given once, decimal commas on request.
 
     Returns
     -------
@@ -54,14 +66,24 @@ def read_table(path):
     names : list of str or None
         The header's column names, if the file has a header.
     """
+    import time
+
     from .text import read_table as parse
 
-    table = parse(path)
+    start = time.perf_counter()
+    _progress(f"reading {path} ...")
+    table = parse(path, decimal=decimal)
+    _progress(f"read {table.data.shape[0]} rows x {table.data.shape[1]} columns in "
+              f"{time.perf_counter() - start:.1f} s" + (f" ({'; '.join(table.skipped)})"
+                                                         if table.skipped else ""))
     return table.data, table.names
 
 
-def _pick_columns(data, names, spec, count, path):
+def _pick_columns(data, names, spec, count, path, flag="--columns"):
     """Column indices from ``--columns`` ("0,1" or header names), ``count`` of them."""
+    if data.shape[1] < count:
+        raise UsageError(f"{path} has {data.shape[1]} signal column(s); this command needs "
+                         f"{count} (the input and the output).")
     if spec is None:
         lower = [n.lower() for n in names] if names else []
         if count == 2 and "u" in lower and "y" in lower:
@@ -71,12 +93,11 @@ def _pick_columns(data, names, spec, count, path):
         else:
             have = f" ({', '.join(names)})" if names else ""
             raise UsageError(f"{path} has {data.shape[1]} columns{have}: say which to use with "
-                             f"--column{'s' if count == 2 else ''} (numbers from 0 or header "
-                             "names).")
+                             f"{flag} (numbers from 0 or header names).")
     else:
         parts = [p.strip() for p in spec.split(",")]
         if len(parts) != count:
-            raise UsageError(f"--columns needs {count} entr{'y' if count == 1 else 'ies'}; "
+            raise UsageError(f"{flag} needs {count} entr{'y' if count == 1 else 'ies'}; "
                              f"got {spec!r}.")
         idx = []
         for p in parts:
@@ -85,27 +106,63 @@ def _pick_columns(data, names, spec, count, path):
             elif names is not None and p in names:
                 idx.append(names.index(p))
             else:
-                raise UsageError(f"--columns: {p!r} is neither a column number nor a header name"
+                raise UsageError(f"{flag}: {p!r} is neither a column number nor a header name"
                                  f" of {path}" + (f" ({', '.join(names)})." if names else "."))
     if len(set(idx)) != len(idx):
-        raise UsageError(f"--columns names the same column twice ({spec!r}): the input and the "
+        raise UsageError(f"{flag} names the same column twice ({spec!r}): the input and the "
                          "output must be different columns.")
     for i in idx:
         if not 0 <= i < data.shape[1]:
-            raise UsageError(f"--columns: column {i} does not exist; {path} has "
+            raise UsageError(f"{flag}: column {i} does not exist; {path} has "
                              f"{data.shape[1]} column(s) (numbered from 0).")
     return [data[:, i] for i in idx]
 
 
 def _basis_arg(text):
+    from ..model.basis import MAX_POLYNOMIAL_DEGREE
+
     try:
         degree = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"a basis is a polynomial degree >= 1; got {text!r}") \
             from None
-    if degree < 1:
-        raise argparse.ArgumentTypeError(f"a basis is a polynomial degree >= 1; got {degree}")
+    if not 1 <= degree <= MAX_POLYNOMIAL_DEGREE:
+        raise argparse.ArgumentTypeError(f"a basis is a polynomial degree from 1 to "
+                                         f"{MAX_POLYNOMIAL_DEGREE}; got {degree}")
     return degree
+
+
+def _check_file_out(path, flag):
+    """Check an output file before the run: not a folder, in a folder that exists."""
+    from ..exceptions import DataFileError
+    from .jsonio import check_output_path
+
+    if path is None:
+        return
+    try:
+        check_output_path(path, flag)
+    except DataFileError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _check_plot_out(path, flag):
+    """As :func:`_check_file_out`, and the extension is a format matplotlib writes."""
+    if path is None:
+        return
+    _check_file_out(path, flag)
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    ext = os.path.splitext(path)[1].lstrip(".").lower()
+    if ext not in formats:
+        raise UsageError(f"{flag} {path!r}: the extension {('.' + ext) if ext else '(none)'} is "
+                         f"not a figure format; use one of {', '.join(sorted(formats))} "
+                         "(e.g. fit.png).")
+
+
+def _check_outdir(path):
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise UsageError(f"--outdir {path!r} is a file, not a folder.")
 
 
 def _pair_arg(text):
@@ -175,12 +232,19 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'u,y' "
                      "(default: the columns named u and y, or the two columns of a two-column "
                      "file)")
+    ide.add_argument("--decimal-comma", action="store_true", help="the file writes 0,5 for "
+                     "0.5 (columns then separated by ';' or whitespace)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
     ide.add_argument("--nb", type=int, required=True, help="input lags")
     ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
     ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
     ide.add_argument("--method", choices=METHODS, default="varpro",
                      help="estimator (default varpro; the paper's method is 'hybrid')")
+    ide.add_argument("--offset", action="store_true", help="estimate a constant term")
+    ide.add_argument("--operating-point", choices=("initial", "mean"), default=None,
+                     help="remove the first samples or the means before fitting (and add them "
+                     "back when simulating)")
+    ide.add_argument("--dt", type=float, default=1.0, help="sampling time (default 1)")
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
                      help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
     ide.add_argument("--schedule", choices=SCHEDULES, default=None,
@@ -201,6 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
     sel.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'uEst,yEst' "
                      "(default: as for identify)")
+    sel.add_argument("--decimal-comma", action="store_true", help="as for identify")
     for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
                        ("--f-basis", "input polynomial degrees"),
                        ("--g-basis", "output polynomial degrees")):
@@ -224,9 +289,12 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("--save", help="save the refitted winner as JSON (fohw.load_result)")
 
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
-    sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model")
+    sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model, or "
+                     "a result JSON written by `fohw identify --save` (the fitted predictor is "
+                     "simulated, as result.simulate does)")
     sim.add_argument("--input", required=True, help="data file with the input column")
     sim.add_argument("--column", default="0", help="input column number or name (default 0)")
+    sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
     sim.add_argument("--noise-std", type=float, default=0.0)
     sim.add_argument("--seed", type=int, default=None)
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
@@ -248,13 +316,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _fohw_warnings():
+    from .. import exceptions
+
+    return tuple(getattr(exceptions, name) for name in exceptions.__all__
+                 if name.endswith("Warning"))
+
+
+def _decimal(args):
+    return "," if args.decimal_comma else "."
+
+
 def _identify(args):
+    import time
     import warnings
 
     from .. import identify
-    from ..exceptions import ConvergenceWarning, RankDeficiencyWarning
+    from ..analysis.validation import compare
+    from ..exceptions import FohwError
 
-    data, names = read_table(args.data)
+    _check_file_out(args.save, "--save")
+    _check_plot_out(args.plot, "--plot")
+    data, names = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     options = {name: value for name, value in (("schedule", args.schedule),
                                                ("innovation_length", args.innovation_length),
@@ -263,13 +346,24 @@ def _identify(args):
         if name in options:
             raise UsageError(f"option {name!r} given twice.")
         options[name] = value
+    start = time.perf_counter()
+    _progress(f"identifying with {args.method} on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
-        warnings.simplefilter("always", RankDeficiencyWarning)
+        for category in _fohw_warnings():
+            warnings.simplefilter("always", category)
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
-                       method=args.method, alpha_bounds=args.alpha_bounds, options=options)
+                       method=args.method, alpha_bounds=args.alpha_bounds, options=options,
+                       offset=args.offset, operating_point=args.operating_point, dt=args.dt)
+    _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run ...")
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)
+    check = None
+    if res.model is not None:
+        try:
+            check = compare(res, u, y)
+        except FohwError as exc:        # e.g. a constant output: no fit index
+            print(f"fohw: warning: no free-run fit on the estimation record: {exc}",
+                  file=sys.stderr)
     if args.json:
         out = {"alpha": res.alpha, "theta": dict(zip(res.parameter_names, res.theta.tolist())),
                "J": res.J, "converged": res.converged, "status": res.status.name,
@@ -279,19 +373,46 @@ def _identify(args):
             out["model"] = {k: getattr(res.model, k).tolist() for k in "abpq"}
         if res.covariance is not None:
             out["standard_errors"] = res.standard_errors()
+        out["estimation_record"] = _fit_dict(check)
         print(json.dumps(out, indent=1))
     else:
         print(res.summary())
+        print(_fit_text(check))
     if args.save:
         res.to_json(args.save)
     if args.plot:
-        from ..analysis.validation import compare
-
-        fig, axes = compare(res, u, y).plot()
+        fig, axes = check.plot() if check is not None else (None, None)
+        if fig is None:
+            raise UsageError("--plot: the result has no model to simulate (see the message "
+                             "above); no figure written.")
         axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
                           "one-step prediction", fontsize=10)
         fig.savefig(args.plot, dpi=120)
     return 0
+
+
+def _fit_dict(check):
+    """The free run and the one-step prediction on the estimation record, JSON-ready."""
+    if check is None:
+        return None
+    bounded = check.simulated is not None
+    return {"free_run": {"bounded": bounded, "diverged": check.diverged or None,
+                         "fit_percent": check.fit_simulation if bounded else None,
+                         "rmse": check.rmse_simulation if bounded else None},
+            "one_step": {"fit_percent": check.fit_prediction, "rmse": check.rmse_prediction}}
+
+
+def _fit_text(check):
+    if check is None:
+        return "No free-run fit on the estimation record (see the messages above)."
+    one_step = (f"one-step prediction fit {check.fit_prediction:.1f} % "
+                f"(RMSE {check.rmse_prediction:.4g})")
+    if check.simulated is None:
+        return (f"On the estimation record: the FREE RUN DIVERGED ({check.diverged}); "
+                f"{one_step}. A one-step fit says little about simulation: do not use this model "
+                "to simulate.")
+    return (f"On the estimation record: free-run simulation fit {check.fit_simulation:.1f} % "
+            f"(RMSE {check.rmse_simulation:.4g}), stayed bounded; {one_step}.")
 
 
 def _select(args):
@@ -301,7 +422,10 @@ def _select(args):
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
-    data, names = read_table(args.data)
+    _check_file_out(args.save, "--save")
+    _check_file_out(args.csv, "--csv")
+    _check_plot_out(args.plot, "--plot")
+    data, names = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
@@ -337,26 +461,52 @@ def _select(args):
     return 0
 
 
+def _load_model_or_result(path):
+    """A fohw-model file's model, or a fohw-result file's result (``(kind, object)``)."""
+    from .jsonio import _read_json, load_result, model_from_dict
+
+    d = _read_json(path)
+    if isinstance(d, dict) and d.get("format") == "fohw-result":
+        return "result", load_result(path)
+    if isinstance(d, dict) and d.get("format") != "fohw-model":
+        raise UsageError(f"{path} is neither a fohw-model file (fohw.save_model) nor a "
+                         "fohw-result file (fohw identify --save, result.to_json).")
+    return "model", model_from_dict(d, path=os.fspath(path))
+
+
 def _simulate(args):
+    import warnings
+
     import numpy as np
 
-    from ..model.system import simulate
-    from .jsonio import load_model
+    from ..model.system import _noise, simulate
 
-    model = load_model(args.model)
-    data, names = read_table(args.input)
-    (u,) = _pick_columns(data, names, args.column, 1, args.input)
-    y = simulate(model, u, noise_std=args.noise_std, random_state=args.seed)
+    _check_file_out(args.output, "--output")
+    kind, loaded = _load_model_or_result(args.model)
+    data, names = read_table(args.input, _decimal(args))
+    (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    with warnings.catch_warnings(record=True) as caught:
+        for category in _fohw_warnings():
+            warnings.simplefilter("always", category)
+        if kind == "result":        # the predictor that was fitted: theta itself, as identify's
+            noise = _noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
+            y = loaded.simulate(u, noise=noise)
+        else:
+            y = simulate(loaded, u, noise_std=args.noise_std, random_state=args.seed)
+    for w in caught:
+        print(f"fohw: warning: {w.message}", file=sys.stderr)
     text = "\n".join(repr(float(v)) for v in y) + "\n"
     if args.output:
-        with open(args.output, "w") as fh:
-            fh.write(text)
+        from .jsonio import _write_text
+
+        _write_text(text, args.output)
     else:
         sys.stdout.write(text)
     return int(not np.all(np.isfinite(y)))
 
 
 def _reproduce(args):
+    _check_outdir(args.outdir)
     if args.what in _REPRODUCE:
         from ..paper.reproduction import example_main
 
@@ -405,6 +555,13 @@ def main(argv=None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
+    except OSError as exc:           # permissions, full disk, ...: one line, no traceback
+        where = f" ({exc.filename})" if exc.filename else ""
+        print(f"fohw: error: {exc.strerror or exc}{where}.", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:        # Ctrl-C: files being saved are written atomically
+        print("fohw: interrupted; no file was left half-written.", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -4,19 +4,24 @@
 parser under it and under the command line. What they accept, and what they refuse rather than
 guess:
 
-* separators: commas (a line with a comma) or whitespace; a trailing separator (an empty last
-  field on every line) is ignored;
+* separators: semicolons, commas or whitespace, whichever the first line (header or data) uses;
+  a trailing separator (an empty last field on every line) is ignored; decimal commas
+  (``0,5``) on request (``decimal=","``);
 * a UTF-8 byte-order mark; blank lines; comment lines starting with ``#`` or ``%``;
 * a header line of names, only if **none** of its fields is a number (a first row such as
   ``0x10 1`` or ``0.5 0.3.1`` is an error at line 1, never a header that drops a sample);
 * a column given once: a value on the first data line and nothing below (the cascaded-tanks
   file gives ``Ts`` so); it is returned as a scalar, not as a signal;
-* anything else that is not a number, or a missing value inside a column, is an error naming
-  the line.
+* anything else that is not a number, a missing value (``NA``, ``nan``, an empty field, ...)
+  or a second header line is an error naming the line and the column: fohw fills no gaps.
+
+Clean files are parsed by :func:`numpy.loadtxt` (5 million rows in seconds); the rest, and every
+error, by a line-by-line reader.
 """
 
 from __future__ import annotations
 
+import io
 import os
 from dataclasses import dataclass, field
 
@@ -44,12 +49,16 @@ class Table:
     scalars : dict
         Columns given once, ``{name or column number: value}``.
     path : str
+    skipped : list of str
+        What was read but is not data: the header line, comment and blank lines, a trailing
+        separator.
     """
 
     data: np.ndarray
     names: list | None
     scalars: dict = field(default_factory=dict)
     path: str = ""
+    skipped: list = field(default_factory=list)
 
 
 def _number(text):
@@ -59,29 +68,143 @@ def _number(text):
         return None
 
 
-def read_table(path) -> Table:
+#: Spellings of a missing value; fohw never fills a gap, so each is an error naming its place.
+MISSING = ("", "na", "n/a", "nan", "null", "none", "-", "?")
+
+
+def _delimiter(text, decimal):
+    """The separator of a file, from its first non-comment line (the header or the data)."""
+    if ";" in text:
+        return ";"
+    if "," in text and decimal != ",":
+        return ","
+    return None                                         # whitespace
+
+
+def _split(text, delimiter):
+    return [f.strip() for f in (text.split(delimiter) if delimiter else text.split())]
+
+
+def _decimal(field, decimal):
+    return field.replace(",", ".") if decimal == "," else field
+
+
+def read_table(path, *, decimal=".") -> Table:
     """Parse a numeric text table (see the module notes for what is accepted).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    decimal : {".", ","}
+        The decimal mark. With ``","`` (``0,5`` for one half) the columns must be separated by
+        ``;`` or whitespace.
+
+    Returns
+    -------
+    Table
+        ``Table.skipped`` says what was not read as data (the header, comment and blank lines,
+        trailing separators).
 
     Raises
     ------
     FileNotFoundError
         No such file.
     DataFileError
-        A directory, an unreadable file, text that is not UTF-8, a field that is not a number,
-        a row with another number of fields, a missing value inside a column, a non-finite
-        value, or no data.
+        A directory, an unreadable file, text that is not UTF-8, a field that is not a number
+        (with a hint when it looks like a decimal comma), a missing value (``NA``, empty, ...)
+        named by line and column, a second header line, a row with another number of fields, a
+        non-finite value, or no data.
+
+    Notes
+    -----
+    A clean file (one header at most, no comment marks after it, the same number of fields on
+    every line) is parsed by :func:`numpy.loadtxt`'s compiled reader; anything else, and every
+    error, goes through a line-by-line reader that names the line. Both give the same numbers
+    (``tests/test_text_io.py``).
     """
     path = os.fspath(path)
+    if decimal not in (".", ","):
+        raise ParameterError(f"`decimal` must be '.' or ','; got {decimal!r}.")
     if os.path.isdir(path):
         raise DataFileError(f"{path!r} is a directory, not a data file.")
     if not os.path.exists(path):
         raise FileNotFoundError(f"data file not found: {path!r}")
     try:
-        with open(path, "rb") as fh:
-            raw_lines = fh.read().splitlines()
+        table = _read_fast(path, decimal)
     except OSError as exc:
         raise DataFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
-    names, rows, linenos = None, [], []
+    return table if table is not None else _read_lines(path, decimal)
+
+
+def _head(path, decimal):
+    """The separator, the header and its line number, from the first lines of the file."""
+    delimiter, names, header_line = "unset", None, 0
+    with open(path, encoding="utf-8-sig") as fh:
+        for lineno, line in enumerate(fh, start=1):
+            line = line.strip()
+            if not line or line[0] in "#%":
+                continue
+            if delimiter == "unset":
+                delimiter = _delimiter(line, decimal)
+            fields = _split(line, delimiter)
+            if names is None and all(_number(_decimal(f, decimal)) is None for f in fields if f):
+                names, header_line = [f.strip('"').strip("'") for f in fields], lineno
+                continue
+            return delimiter, names, header_line
+    return None
+
+
+def _read_fast(path, decimal):
+    """numpy.loadtxt on a clean file; None when the file needs the line reader.
+
+    The file is read from disk by loadtxt's compiled reader (never held as text, except with
+    decimal commas); a comment mark, a missing value, a ragged row, a value given once, text
+    that is not UTF-8 or anything else unusual makes loadtxt fail, and the line reader then
+    reads the file (and names the line of any error).
+    """
+    try:
+        head = _head(path, decimal)
+        if head is None:                         # no data line
+            return None
+        delimiter, names, header_line = head
+        source = path
+        if decimal == ",":
+            with open(path, encoding="utf-8-sig") as fh:
+                source = io.StringIO(fh.read().replace(",", "."))
+        data = np.loadtxt(source, delimiter=delimiter, skiprows=header_line, ndmin=2,
+                          dtype=np.float64, comments=None, encoding="utf-8-sig")
+    except (ValueError, UnicodeDecodeError):
+        return None
+    if data.size == 0 or not np.all(np.isfinite(data)) \
+            or (names is not None and len(names) != data.shape[1]):
+        return None
+    skipped = [f"header on line {header_line} ({', '.join(names)})"] if names else []
+    if header_line > 1:
+        skipped.append(f"{header_line - 1} comment or blank line(s)")
+    return Table(data=data, names=names, scalars={}, path=path, skipped=skipped)
+
+
+def _field_error(path, lineno, value, column, decimal):
+    where = f"line {lineno}: "
+    col = f" (column {column!r})"
+    if value.strip().lower() in MISSING:
+        what = "no value (an empty field)" if not value.strip() else \
+            f"{value!r}, a missing value"
+        return DataFileError(f"{path}: {where}column {column!r} has {what}; fohw does not fill "
+                             "gaps: remove the row or fill it yourself.")
+    hint = ""
+    if decimal == "." and _number(value.replace(",", ".")) is not None:
+        hint = (" It looks like a decimal comma: pass decimal=',' (fohw: --decimal-comma), "
+                "with columns separated by ';' or whitespace.")
+    return DataFileError(f"{path}: {where}{value!r} is not a number{col}.{hint}")
+
+
+def _read_lines(path, decimal):
+    """The line-by-line reader: any layout the module notes allow, and every error by line."""
+    with open(path, "rb") as fh:
+        raw_lines = fh.read().splitlines()
+    names, rows, linenos, delimiter, header_line = None, [], [], "unset", 0
+    n_comments = 0
     for lineno, raw in enumerate(raw_lines, start=1):
         try:
             text = raw.decode("utf-8")
@@ -91,11 +214,24 @@ def read_table(path) -> Table:
             text = text.lstrip("\ufeff")                 # a byte-order mark
         text = text.strip()
         if not text or text[0] in "#%":
+            n_comments += 1
             continue
-        fields = [f.strip() for f in (text.split(",") if "," in text else text.split())]
-        if names is None and not rows and all(_number(f) is None for f in fields if f):
-            names = [f.strip('"').strip("'") for f in fields]
+        if delimiter == "unset":
+            delimiter = _delimiter(text, decimal)
+        fields = _split(text, delimiter)
+        no_number = all(_number(_decimal(f, decimal)) is None for f in fields if f)
+        if names is None and not rows and no_number:
+            names, header_line = [f.strip('"').strip("'") for f in fields], lineno
             continue
+        if no_number and decimal == "." and names is not None and not rows:
+            commas = [f for f in fields if _number(f.replace(",", ".")) is not None]
+            if commas:
+                raise _field_error(path, lineno, commas[0], fields.index(commas[0]), decimal)
+        if names is not None and not rows and no_number \
+                and not all(f.lower() in MISSING for f in fields):
+            raise DataFileError(f"{path}: line {lineno} looks like a second header line (no "
+                                f"field is a number) after the header on line {header_line}; "
+                                "fohw reads one header line: start the others with '#'.")
         rows.append(fields)
         linenos.append(lineno)
     if not rows:
@@ -107,39 +243,42 @@ def read_table(path) -> Table:
     cells = [r + [""] * (width - len(r)) for r in rows]
     keep = [j for j in range(width)
             if any(c[j] for c in cells) or (names is not None and j < len(names) and names[j])]
+    skipped = [f"header on line {header_line} ({', '.join(n for n in names if n)})"] \
+        if names else []
+    if n_comments:
+        skipped.append(f"{n_comments} comment or blank line(s)")
+    if len(keep) < width:
+        skipped.append("a trailing separator")
     if names is not None:
         names = names + [""] * (width - len(names))
     columns, col_names, scalars = [], [], {}
     for j in keep:
         name = names[j] if names is not None else None
-        values = [c[j] for c in cells]
+        label = name or j
+        values = [_decimal(c[j], decimal) for c in cells]
         filled = [i for i, v in enumerate(values) if v]
         if not filled:
-            raise DataFileError(f"{path}: column {name or j!r} has a name but no values.")
+            raise DataFileError(f"{path}: column {label!r} has a name but no values.")
         if filled == [0] and len(values) > 1:               # given once
             value = _number(values[0])
             if value is None:
-                raise DataFileError(f"{path}: line {linenos[0]}: {values[0]!r} is not a number.")
+                raise _field_error(path, linenos[0], cells[0][j], label, decimal)
             scalars[name if name else j] = value
             continue
-        if len(filled) != len(values):
-            i = next(i for i, v in enumerate(values) if not v)
-            raise DataFileError(f"{path}: line {linenos[i]}: column "
-                                f"{(name or str(j))!r} has no value (a row with fewer fields).")
         col = []
         for i, v in enumerate(values):
             x = _number(v)
-            if x is None:
-                raise DataFileError(f"{path}: line {linenos[i]}: {v!r} is not a number.")
+            if x is None or not v:
+                raise _field_error(path, linenos[i], cells[i][j], label, decimal)
             if not np.isfinite(x):
                 raise DataFileError(f"{path}: line {linenos[i]} holds a non-finite value: "
-                                    f"{v!r}.")
+                                    f"{v!r} (column {label!r}); fohw does not fill gaps.")
             col.append(x)
         columns.append(col)
         col_names.append(name)
     data = np.array(columns, dtype=np.float64).T if columns else np.empty((len(rows), 0))
     return Table(data=data, names=col_names if names is not None else None, scalars=scalars,
-                 path=path)
+                 path=path, skipped=skipped)
 
 
 def _column(table, spec, what):
@@ -160,7 +299,7 @@ def _column(table, spec, what):
 
 
 def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", output_unit="",
-                time_unit="", source="") -> Record:
+                time_unit="", source="", decimal=".") -> Record:
     """Read a measured record from a CSV or whitespace-separated text file.
 
     Parameters
@@ -178,6 +317,8 @@ def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", outp
         (any case) if there is one, else ``None`` (one sample is the time unit).
     name, input_unit, output_unit, time_unit, source : str, optional
         Stored on the record; the input and output names come from the header.
+    decimal : {".", ","}
+        The decimal mark (``","``: columns separated by ``;`` or whitespace).
 
     Returns
     -------
@@ -194,7 +335,7 @@ def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", outp
     >>> rec.u, rec.y, rec.dt, rec.input_name
     (array([1. , 1.5]), array([2. , 2.5]), 0.5, 'u')
     """
-    table = read_table(path)
+    table = read_table(path, decimal=decimal)
     n_cols = table.data.shape[1]
     lower = [n.lower() for n in table.names] if table.names else []
     if u is None and y is None:

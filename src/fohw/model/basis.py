@@ -130,8 +130,11 @@ class Basis:
                                      f"`{name}` of shape {x.shape}; it must act elementwise.")
             if not np.all(np.isfinite(val)):
                 k = int(np.flatnonzero(~np.isfinite(val.ravel()))[0])
-                raise ParameterError(f"basis function {fname!r} returned a non-finite value at "
-                                     f"index {k} of `{name}` (value {x.ravel()[k]!r}).")
+                raise ParameterError(
+                    f"basis function {fname!r} returned {float(val.ravel()[k])!r} at index {k} "
+                    f"of `{name}` (where `{name}` = {float(x.ravel()[k])!r}): it returned a "
+                    "non-finite value. If the data are merely large, rescale them: fohw's "
+                    "estimates rescale with the data.")
             out[j] = val
         return out
 
@@ -144,13 +147,18 @@ class Basis:
         return coefficients @ self.evaluate(x, name)
 
 
+#: The highest degree :func:`polynomial_basis` builds.
+MAX_POLYNOMIAL_DEGREE = 100
+
+
 def polynomial_basis(degree):
     """Monomials ``x, x**2, ..., x**degree``.
 
     Parameters
     ----------
     degree : int
-        Highest power, ``degree >= 1``.
+        Highest power, ``1 <= degree <= MAX_POLYNOMIAL_DEGREE`` (100: monomials beyond it are
+        numerically useless in float64, and a huge degree read from a file would hang).
 
     Returns
     -------
@@ -166,7 +174,7 @@ def polynomial_basis(degree):
     array([[ 2., -1.],
            [ 4.,  1.]])
     """
-    degree = check_int(degree, "degree", minimum=1)
+    degree = check_int(degree, "degree", minimum=1, maximum=MAX_POLYNOMIAL_DEGREE)
     return Basis(tuple(_Power(n) for n in range(1, degree + 1)),
                  names=tuple("x" if n == 1 else f"x^{n}" for n in range(1, degree + 1)))
 
