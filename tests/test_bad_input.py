@@ -30,6 +30,44 @@ def _bad_file(tmp, text, name="bad.dat"):
     return str(p)
 
 
+def _model_file(tmp, **change):
+    """A saved paper model with some fields changed (``f_basis=...``, ``version=...``)."""
+    import json
+
+    path = tmp / "m.json"
+    fohw.save_model(M(), path)
+    d = json.loads(path.read_text())
+    d.update(change)
+    path.write_text(json.dumps(d))
+    return str(path)
+
+
+def _result():
+    return fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1)
+
+
+def _result_file(tmp, **change):
+    """A saved result with fields changed; ``theta_0``/``covariance_0`` change one entry."""
+    import json
+
+    path = tmp / "r.json"
+    _result().to_json(path)
+    d = json.loads(path.read_text())
+    for key, value in change.items():
+        if key.endswith("_0"):
+            d[key[:-2]]["data"][0] = value
+        else:
+            d[key] = value
+    path.write_text(json.dumps(d))       # json writes NaN as NaN, as a hand edit might
+    return str(path)
+
+
+def _nan_result():
+    import dataclasses
+
+    return dataclasses.replace(_result(), J=float("nan"))
+
+
 # (where, what is wrong, call, exception, text the message must contain)
 API = [
     ("gl_difference", "alpha is NaN", lambda t: fohw.gl_difference(np.ones(5), np.nan),
@@ -67,7 +105,7 @@ API = [
                                 seeds=range(1), settings=[{"n_samples": 200}]),
      fohw.ParameterError, "method 'varpro' has no option `innovation_length`"),
     ("compare", "a validation record whose u and y differ in length",
-     lambda t: fohw.compare(fohw.identify(U, U**2, na=1, nb=1, f_basis=1, g_basis=1), U,
+     lambda t: fohw.compare(fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1), U,
                             np.zeros(40)),
      fohw.DimensionError, "`u` and `y` must have the same length; got 50 and 40"),
     ("identify_many", "a record that is neither a Record nor a pair",
@@ -165,6 +203,80 @@ API = [
      fohw.ParameterError, "`at` must leave samples on both sides"),
     ("load_result", "not a result file", lambda t: fohw.load_result(_bad_file(t, "{}", "r.json")),
      fohw.DataFileError, "is not a fohw-result file"),
+    # issue 14, cases 4-30 (the numbers are the issue's): each was a traceback, a hang, a silent
+    # NaN or a misleading message before
+    ("identify", "#4/#5/#14 data of size 1e160 (hybrid, varpro, rls)",
+     lambda t: fohw.identify(1e160 * U, 1e160 * U**3, method="rls", **S),
+     fohw.ParameterError, "it returned a non-finite value. If the data are merely large, rescale"),
+    ("identify", "#6 fewer samples than parameters (varpro, output_error)",
+     lambda t: fohw.identify(U[:8], U[:8] ** 3, **S),
+     fohw.DimensionError, "least squares needs more samples than parameters: the record has 8 "
+     "samples for 11 parameters"),
+    ("identify", "#7 as many samples as parameters (was ZeroDivisionError)",
+     lambda t: fohw.identify(U[:11], U[:11] ** 3, method="output_error", **S),
+     fohw.DimensionError, "the record has 11 samples for 11 parameters"),
+    ("identify", "#9 N = 3 with varpro (named an option the user never set)",
+     lambda t: fohw.identify(U[:3], U[:3] ** 3, **S),
+     fohw.DimensionError, "least squares needs more samples than parameters"),
+    ("identify", "#23 n_grid = 10**7 (a hang)",
+     lambda t: fohw.identify(U, U**3, n_grid=10**7, **S),
+     fohw.ParameterError, "`n_grid` must be at most 100000; got 10000000"),
+    ("polynomial_basis", "#22 degree 10**8 (a hang)", lambda t: fohw.polynomial_basis(10**8),
+     fohw.ParameterError, "`degree` must be at most 100; got 100000000"),
+    ("load_model", "#22 'degree': 1e8 in the file (a hang)",
+     lambda t: fohw.load_model(_model_file(t, f_basis={"kind": "polynomial", "degree": 1e8})),
+     fohw.DataFileError, "'degree' must be an integer from 1 to 100; got 100000000.0"),
+    ("load_model", "#24 'degree': \"two\"",
+     lambda t: fohw.load_model(_model_file(t, f_basis={"kind": "polynomial", "degree": "two"})),
+     fohw.DataFileError, "'degree' must be an integer from 1 to 100; got 'two'"),
+    ("load_model", "#24 'f_basis': \"poly2\"",
+     lambda t: fohw.load_model(_model_file(t, f_basis="poly2")),
+     fohw.DataFileError, "field 'f_basis' must be an object such as"),
+    ("load_model", "#25 'degree': 2.7 (was read as 2)",
+     lambda t: fohw.load_model(_model_file(t, f_basis={"kind": "polynomial", "degree": 2.7})),
+     fohw.DataFileError, "'degree' must be an integer from 1 to 100; got 2.7"),
+    ("load_model", "#26 an unknown basis kind",
+     lambda t: fohw.load_model(_model_file(t, f_basis={"kind": "spline"})),
+     fohw.DataFileError, "has kind 'spline'; fohw writes 'polynomial' (a degree) or 'custom'"),
+    ("load_model", "#26 a custom basis not passed again",
+     lambda t: fohw.load_model(_model_file(t, f_basis={"kind": "custom", "names": ["tanh"]})),
+     fohw.ParameterError, "fohw.load_model(path, f_basis=...)"),
+    ("load_model", "#27 'version': \"1\" (a string)",
+     lambda t: fohw.load_model(_model_file(t, version="1")),
+     fohw.DataFileError, "field 'version' is the string '1'; this fohw reads fohw-model files of "
+     "version 1 or 2, written as a JSON integer"),
+    ("load_model", "#15/#17 a directory", lambda t: fohw.load_model(t),
+     fohw.DataFileError, "is a directory, not a fohw JSON file"),
+    ("load_result", "#28 a NaN J", lambda t: fohw.load_result(_result_file(t, J=float("nan"))),
+     fohw.DataFileError, "field 'J' must be a finite number >= 0; got nan"),
+    ("load_result", "#28 a NaN alpha",
+     lambda t: fohw.load_result(_result_file(t, alpha=float("nan"))),
+     fohw.DataFileError, "field 'alpha' must be a finite number or null; got nan"),
+    ("load_result", "#28 'status': \"yes\"",
+     lambda t: fohw.load_result(_result_file(t, status="yes")),
+     fohw.DataFileError, "field 'status' must be one of [-2, -1, 0, 1, 2]"),
+    ("load_result", "#28 a NaN in theta",
+     lambda t: fohw.load_result(_result_file(t, theta_0=float("nan"))),
+     fohw.DataFileError, "field 'theta' holds a non-finite value (nan at entry 0)"),
+    ("load_result", "#28 a negative variance in the covariance",
+     lambda t: fohw.load_result(_result_file(t, covariance_0=-1.0)),
+     fohw.DataFileError, "field 'covariance' has a negative variance"),
+    ("IdentificationResult.to_json", "#1 a result holding NaN (the old file is kept)",
+     lambda t: _nan_result().to_json(t / "r.json"),
+     fohw.ParameterError, "field 'J' is nan, and JSON holds finite numbers only; nothing was "
+     "written"),
+    ("IdentificationResult.to_json", "#17 a directory as the file", lambda t: _result().to_json(t),
+     fohw.DataFileError, "is a directory; give a file name"),
+    ("read_record", "#30 ';' columns with decimal commas, no decimal=','",
+     lambda t: fohw.read_record(_bad_file(t, "u;y\n0,5;1,25\n-0,25;0,5\n", "r.csv")),
+     fohw.DataFileError, "line 2: '0,5' is not a number (column 0). It looks like a decimal "
+     "comma: pass decimal=','"),
+    ("read_record", "#30 two header lines",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\nV,m\n1,2\n3,4\n", "r.csv")),
+     fohw.DataFileError, "line 2 looks like a second header line"),
+    ("read_record", "#30 an NA value",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n1,2\n3,NA\n4,5\n", "r.csv")),
+     fohw.DataFileError, "line 3: column 'y' has 'NA', a missing value; fohw does not fill gaps"),
     ("metrics.fit_percent", "n_init leaves no samples",
      lambda t: fohw.metrics.fit_percent(Y, Y, n_init=49),
      fohw.DimensionError, "`n_init` must leave at least 2 samples"),
@@ -181,7 +293,7 @@ CLI = [
      "'u' is neither a column number nor a header name"),
     ("fohw identify", "basis degree 0",
      lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--f-basis", "0"],
-     "a basis is a polynomial degree >= 1"),
+     "a basis is a polynomial degree from 1 to 100"),
     ("fohw identify", "na missing", lambda t: ["identify", "x.dat", "--nb", "1"],
      "the following arguments are required: --na"),
     ("fohw identify", "malformed line", lambda t: ["identify", _bad_file(t, "1 2\n3 oops\n"), "--na", "1", "--nb", "1"],
@@ -193,6 +305,40 @@ CLI = [
      lambda t: ["simulate", "--model", _bad_file(t, "not json", "m.json"), "--input", _bad_file(t, "1\n2\n")],
      "is not valid JSON"),
     ("fohw reproduce", "unknown target", lambda t: ["reproduce", "table9"], "invalid choice"),
+    # issue 14 (case numbers are the issue's)
+    ("fohw identify", "#17 --save a directory (checked before the run)",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--save", str(t)],
+     "--save '"),
+    ("fohw simulate", "#17 --output a directory",
+     lambda t: ["simulate", "--model", _model_file(t), "--input", _bad_file(t, "1\n2\n"),
+                "--output", str(t)], "--output '"),
+    ("fohw simulate", "#17 --model a directory",
+     lambda t: ["simulate", "--model", str(t), "--input", _bad_file(t, "1\n2\n")],
+     "is a directory, not a fohw JSON file"),
+    ("fohw reproduce", "#18 --outdir an existing file",
+     lambda t: ["reproduce", "table2", "--fast", "--outdir", _bad_file(t, "x")],
+     "is a file, not a folder"),
+    ("fohw identify", "#19 --plot with an unknown format (checked before the run)",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--plot", str(t / "f.xyz")],
+     "the extension .xyz is not a figure format"),
+    ("fohw identify", "#20 --save into a missing folder (checked before the run)",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--save",
+                str(t / "no" / "r.json")], "does not exist"),
+    ("fohw identify", "#24 --f-basis 10**8 (a hang)",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--f-basis", "100000000"],
+     "a basis is a polynomial degree from 1 to 100"),
+    ("fohw simulate", "#26 a model with a custom basis",
+     lambda t: ["simulate", "--model", _model_file(t, f_basis={"kind": "custom", "names": ["tanh"]}),
+                "--input", _bad_file(t, "1\n2\n")], "(the command line cannot)"),
+    ("fohw identify", "#30 ';' and decimal commas without --decimal-comma",
+     lambda t: ["identify", _bad_file(t, "u;y\n0,5;1,25\n-0,25;0,5\n"), "--na", "1", "--nb", "1"],
+     "pass decimal=',' (fohw: --decimal-comma)"),
+    ("fohw identify", "#30 one column",
+     lambda t: ["identify", _bad_file(t, "1\n2\n3\n"), "--na", "1", "--nb", "1"],
+     "has 1 signal column(s); this command needs 2 (the input and the output)"),
+    ("fohw simulate", "a missing --column (was reported as --columns)",
+     lambda t: ["simulate", "--model", _model_file(t), "--input", _bad_file(t, "1\n2\n"),
+                "--column", "5"], "--column: column 5 does not exist"),
 ]
 
 
@@ -243,7 +389,12 @@ def markdown():
              "never silently fixed. Domain exceptions subclass the matching built-in "
              "(`ParameterError` and `DimensionError` are `ValueError`s, `NotFittedError` is an "
              "`AttributeError`, `SimulationDivergedError` an `ArithmeticError`). The command line "
-             "prints one line `fohw: error: …` and exits with status 2.", "",
+             "prints one line `fohw: error: …` and exits with status 2, operating-system errors "
+             "(permissions, a folder given as a file) included; Ctrl-C prints one line and "
+             "exits with status 130. Output paths are checked before a run starts, and files are "
+             "written atomically, so a failed or interrupted save leaves an existing file byte "
+             "for byte (`tests/test_reliability.py`). Rows marked #N are the cases of issue 14.",
+             "",
              "This page is generated from `tests/test_bad_input.py`, which checks every row.", "",
              "## Python API", "", "| entry point | bad input | exception | message contains |",
              "|---|---|---|---|"]

@@ -36,9 +36,15 @@ def test_the_benchmark_csv_loads_with_one_call():
 
 
 def test_the_benchmark_csv_through_the_cli(capsys):
-    assert main(["identify", TANKS, "--columns", "uEst,yEst", "--na", "1", "--nb", "1",
-                 "--f-basis", "1", "--g-basis", "1"]) == 0
-    assert "samples N = 1024" in capsys.readouterr().out
+    args = ["identify", TANKS, "--columns", "uEst,yEst", "--na", "1", "--nb", "1",
+            "--f-basis", "1", "--g-basis", "1"]
+    assert main(args) == 0
+    out = capsys.readouterr()
+    assert "samples N = 1024" in out.out
+    # the tank levels sit far from 0: without an operating point the user is told
+    assert "fohw: warning: fohw.identify: `u` has mean 2.8" in out.err
+    assert main(args + ["--operating-point", "mean"]) == 0
+    assert "warning" not in capsys.readouterr().err
 
 
 def test_header_with_u_and_y_is_used_by_default(tmp_path):

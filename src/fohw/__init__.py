@@ -27,6 +27,7 @@ from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
     DataFileError,
+    DataWarning,
     DimensionError,
     EstimationDivergedError,
     ExtrapolationWarning,
@@ -86,6 +87,7 @@ __all__ = [
     "Basis",
     "CRBResult",
     "ConvergenceWarning",
+    "DataWarning",
     "DataFileError",
     "DimensionError",
     "EstimationDivergedError",

@@ -88,7 +88,7 @@ def paper_example(n_samples=10_000, *, noise_variance=0.01, input_kind="uniform"
         The paper asks for a "random signal with zero mean and unit variance".
         ``"uniform"`` (default) draws from ``[-sqrt(3), sqrt(3)]``; ``"gaussian"`` from
         ``N(0, 1)``. With Gaussian input the ``y**3`` feedback makes the system escape to
-        infinity for most seeds at ``N = 10 000`` (SPEC §6: 28 of 40 seeds), which raises
+        infinity for most seeds at ``N = 10 000`` (28 of 40 seeds; docs/reproduction.md), which raises
         :class:`fohw.SimulationDivergedError`.
     random_state : None, int or numpy.random.Generator, optional
         The input is drawn first, then the noise, from the same generator.

@@ -17,6 +17,7 @@ __all__ = [
     "ConvergenceWarning",
     "RankDeficiencyWarning",
     "ExtrapolationWarning",
+    "DataWarning",
 ]
 
 
@@ -98,6 +99,10 @@ class RankDeficiencyWarning(UserWarning):
     The message names the columns (parameters) that are linear combinations of the others; the
     result has ``status == Status.RANK_DEFICIENT`` and ``converged == False``.
     """
+
+
+class DataWarning(UserWarning):
+    """The data look unlike what the model assumes (e.g. a level far from 0 and no offset)."""
 
 
 class ExtrapolationWarning(UserWarning):

@@ -8,13 +8,14 @@ the paper in :mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.output_error
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
 
 from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from ..exceptions import ParameterError
+from ..exceptions import DataWarning, ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.structure import Structure
 from .hybrid import (
@@ -218,6 +219,8 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     u_dev = u - point[0] if point[0] else u
     y_dev = y - point[1] if point[1] else y
     _check_offset(structure, u_dev)
+    if operating_point is None and not structure.offset:
+        _warn_levels(u, y)
     builder = RegressorBuilder(u_dev, y_dev, structure=structure)
     # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
     # and criterion for finiteness and raises EstimationDivergedError with the reason.
@@ -258,6 +261,25 @@ def _order_bounds(structure, alpha_bounds):
         b = AlphaBounds(alpha_bounds)
         pairs = [b] * len(free)
     return np.array([b.lo for b in pairs]), np.array([b.hi for b in pairs])
+
+
+def _warn_levels(u, y):
+    """Warn when a signal sits far from 0 and the model has no way to represent the level."""
+    for name, x in (("u", u), ("y", y)):
+        scale = float(np.max(np.abs(x)))
+        if scale == 0.0:
+            continue
+        mean, sd = float(np.mean(x / scale)), float(np.std(x / scale))   # no overflow
+        if abs(mean) > sd:
+            mean *= scale
+            ratio = f"{abs(mean) / sd:.1f} times" if sd > 0 else "and it is constant, infinitely"
+            warnings.warn(
+                f"fohw.identify: `{name}` has mean {mean:.4g}, {ratio} its standard deviation, "
+                "and the model has neither `offset` nor `operating_point`: it then assumes the "
+                "signals rested at 0 before k = 0 and must explain the level with its dynamics, "
+                "which commonly drives the fractional orders to 0. Pass operating_point='mean' "
+                "(or 'initial', or (u0, y0)) or offset=True (docs/real_data.md).",
+                DataWarning, stacklevel=3)
 
 
 def _check_offset(structure, u):

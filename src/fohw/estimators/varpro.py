@@ -38,7 +38,7 @@ import scipy.optimize
 
 from .. import _linalg
 from .._validation import check_int, check_scalar
-from ..exceptions import ParameterError
+from ..exceptions import DimensionError, ParameterError
 from ..results import Status
 from ._common import bound_note, finish, rms_scale
 from .options import MethodOptions
@@ -214,6 +214,12 @@ def separable_least_squares(builder, *, bounds, options=None):
     """
     opts = (options or VarproOptions()).check()
     s = builder.structure
+    n_params = s.n_linear + s.n_nonlinear
+    if builder.n_samples <= n_params:
+        raise DimensionError(f"least squares needs more samples than parameters: the record has "
+                             f"{builder.n_samples} samples for {n_params} parameters "
+                             f"({s.n_linear} linear, {s.n_nonlinear} nonlinear: orders, levels); use a "
+                             "longer record, or fewer lags or basis functions.")
     lo = np.atleast_1d(np.asarray(bounds[0], dtype=float))
     hi = np.atleast_1d(np.asarray(bounds[1], dtype=float))
     profile = _Profile(builder)

@@ -1,4 +1,4 @@
-"""The information matrix of fractional differences (paper Eqs. 19–20, 25, 34–38; SPEC §4).
+"""The information matrix of fractional differences (paper Eqs. 19–20, 25, 34–38).
 
 Row ``k`` of the information matrix of the paper's model is
 
@@ -343,7 +343,8 @@ def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, of
     Returns
     -------
     Phi : ndarray, shape (N, n)
-        Row ``k`` is ``phi[k]`` of Eq. (20) in SPEC §4 order (``n = n_g*na + n_f*nb`` for the
+        Row ``k`` is ``phi[k]`` of Eq. (20), columns ordered as in docs/conventions.md (``n =
+        n_g*na + n_f*nb`` for the
         paper's model), then a column of ones for an offset; entries that would need samples
         before ``k = 0`` are zero (or the transient of the past levels).
 

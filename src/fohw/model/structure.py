@@ -10,7 +10,7 @@ the split that separable least squares exploits:
 * **nonlinear**: the free orders (in :attr:`Orders.free` order), then the levels ``u_past`` and
   ``y_past`` of the unseen past if ``past="estimate"``.
 
-The equation (SPEC §3 generalised; deviations from the operating point, see
+The equation (Eq. 16 generalised; deviations from the operating point, see
 :class:`fohw.HammersteinWiener`) is
 
 .. math:: y[k] = \\sum_t a_t (\\Delta_h^{\\nu_t} \\bar g(y))[k - i_t]

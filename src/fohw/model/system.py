@@ -1,6 +1,6 @@
 """The fractional-order Hammerstein–Wiener system and its simulator (Section 2.3, Eqs. 10–18).
 
-Also Eqs. 7, 14 (an order per term), 56–57 and SPEC §3. The paper's model, Eq. (16):
+Also Eqs. 7, 14 (an order per term) and 56–57 (conventions: docs/conventions.md). The paper's model, Eq. (16):
 
 .. math:: y[k] = \\sum_{i=1}^{n_a} a_i (\\Delta^{\\alpha} \\bar g(y))[k-i]
           + \\sum_{i=1}^{n_b} b_i (\\Delta^{\\alpha} \\bar f(u))[k-i] + v[k]
@@ -576,7 +576,7 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
 
     Notes
     -----
-    The exact recursion of SPEC §3 (Eq. 16; Eq. 14 for a general :class:`fohw.Orders`) with
+    The exact recursion of Eq. (16) (Eq. 14 for a general :class:`fohw.Orders`) with
     full memory: ``y[k]`` uses ``(Delta^nu gbar(y))[k-i]`` for every output term, each the GL
     sum over all of ``gbar(y[0..k-i])``. The input branch is computed once by FFT. Up to
     ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``, about 0.04 s at

@@ -1,0 +1,299 @@
+"""Reliability (issue 14): no file is ever lost, no raw traceback, no silent NaN, and the
+newcomer's identify -> save -> simulate loop closes.
+
+The one-line errors of each bad input are in the catalogue, tests/test_bad_input.py (rows
+marked #N); here are the behaviours a catalogue row cannot show: files that survive failures
+and kills, warnings instead of silent wrong answers, and the command line's loop.
+"""
+
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import types
+from contextlib import redirect_stderr, redirect_stdout
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import fohw
+from fohw.io import jsonio
+from fohw.io import text as text_io
+from fohw.io.cli import _fit_text
+from fohw.io.cli import main as cli
+
+S = dict(na=2, nb=2, f_basis=2, g_basis=3)
+
+
+def run_cli(args):
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        try:
+            status = cli([str(a) for a in args])
+        except SystemExit as stop:
+            status = stop.code
+    return status, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory):
+    d = fohw.datasets.paper_example(400, random_state=0)
+    folder = tmp_path_factory.mktemp("paper")
+    path = folder / "good.dat"
+    np.savetxt(path, np.c_[d.u, d.y])
+    return d, path
+
+
+@pytest.fixture
+def old_file(tmp_path, paper):
+    """A good saved result: the file every failure below must leave byte for byte."""
+    d, _ = paper
+    path = tmp_path / "old.json"
+    fohw.identify(d.u, d.y, **S).to_json(path)
+    return path, path.read_bytes()
+
+
+# --- case 1: no file is ever lost ----------------------------------------------------------
+
+def test_a_non_finite_result_is_refused_and_the_old_file_kept(old_file, paper):
+    path, before = old_file
+    import dataclasses
+
+    bad = dataclasses.replace(fohw.identify(paper[0].u, paper[0].y, **S), J=float("inf"))
+    with pytest.raises(fohw.ParameterError, match="field 'J' is inf"):
+        bad.to_json(path)
+    assert path.read_bytes() == before
+    assert os.listdir(path.parent) == ["old.json"]          # no temporary file left
+
+
+def test_a_save_that_fails_at_the_end_keeps_the_old_file(old_file, paper, monkeypatch):
+    """The write fails at its last step (the rename): the old file is untouched."""
+    path, before = old_file
+
+    def fail(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(jsonio.os, "replace", fail)
+    with pytest.raises(OSError, match="No space left"):
+        fohw.identify(paper[0].u, paper[0].y, **S).to_json(path)
+    assert path.read_bytes() == before
+    assert os.listdir(path.parent) == ["old.json"]
+
+
+def test_the_cli_save_that_fails_keeps_the_old_file(old_file, tmp_path):
+    """Data of size 1e160 overflow the output basis: one line, status 2, old file intact."""
+    path, before = old_file
+    big = tmp_path / "big.dat"
+    rng = np.random.default_rng(0)
+    np.savetxt(big, 1e160 * rng.uniform(-1, 1, (200, 2)))
+    status, _, err = run_cli(["identify", big, "--na", 2, "--nb", 2, "--f-basis", 2,
+                              "--g-basis", 3, "--method", "hybrid", "--save", path])
+    assert status == 2 and err.count("\n") == 1 and err.startswith("fohw: error:"), err
+    assert path.read_bytes() == before
+
+
+def test_a_save_killed_midway_keeps_the_old_file(tmp_path):
+    """SIGKILL while a large file is being written: the old file is byte-identical.
+
+    The child writes ~200 MB through the same atomic writer; it is killed once writing has
+    begun. The test checks that it really was killed mid-write (status -9 and its temporary
+    file still there), so it cannot pass by the write finishing first.
+    """
+    target = tmp_path / "old.json"
+    target.write_text('{"format": "fohw-result", "old": true}\n')
+    before = target.read_bytes()
+    child = subprocess.Popen(
+        [sys.executable, "-c",
+         "import sys; from fohw.io.jsonio import _write_text; text = '0123456789' * 20_000_000;"
+         " print('writing', flush=True); _write_text(text, sys.argv[1])", str(target)],
+        stdout=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "writing"
+    deadline = time.monotonic() + 30
+    while not [n for n in os.listdir(tmp_path) if n.endswith(".tmp")]:
+        assert time.monotonic() < deadline and child.poll() is None, "the write never started"
+        time.sleep(0.001)
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    child.stdout.close()
+    assert child.returncode == -signal.SIGKILL
+    assert [n for n in os.listdir(tmp_path) if n.endswith(".tmp")], "finished before the kill"
+    assert target.read_bytes() == before
+
+
+def test_ctrl_c_is_one_line_and_status_130(paper, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fohw, "identify", interrupted)
+    status, _, err = run_cli(["identify", paper[1], "--na", 2, "--nb", 2])
+    assert status == 130
+    assert err == "fohw: interrupted; no file was left half-written.\n"
+
+
+def test_an_unreadable_file_is_one_line(paper, monkeypatch):
+    """Case 15 (PermissionError); root reads mode-000 files, so the refusal is simulated."""
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(text_io, "open", refuse, raising=False)
+    with pytest.raises(fohw.DataFileError, match="cannot be read \\(Permission denied\\)"):
+        fohw.read_record(paper[1])
+    status, _, err = run_cli(["identify", paper[1], "--na", 2, "--nb", 2])
+    assert status == 2 and err.count("\n") == 1 and "Permission denied" in err
+
+
+def test_output_paths_are_checked_before_the_run(paper, tmp_path, monkeypatch):
+    """A bad --plot fails before identify is called (it used to fail after the whole run)."""
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("identify ran before the output paths were checked")
+
+    monkeypatch.setattr(fohw, "identify", must_not_run)
+    for flag, value in (("--plot", tmp_path / "fit.xyz"), ("--plot", tmp_path / "no" / "f.png"),
+                        ("--save", tmp_path), ("--save", tmp_path / "no" / "r.json")):
+        status, _, err = run_cli(["identify", paper[1], "--na", 2, "--nb", 2, flag, value])
+        assert status == 2 and err.startswith(f"fohw: error: {flag} "), err
+
+
+# --- no silent NaN or silent wrong answer ---------------------------------------------------
+
+def test_a_zero_output_is_reported_rank_deficient_not_a_traceback(paper):
+    """Case 8: y = 0 (and u = y = 0) was `LinAlgError: singular matrix`."""
+    d = paper[0]
+    for u, y in ((d.u, 0 * d.y), (0 * d.u, 0 * d.y)):
+        for method in ("varpro", "output_error"):
+            with pytest.warns(fohw.RankDeficiencyWarning, match="rank deficient"):
+                res = fohw.identify(u, y, method=method, **S)
+            assert res.status == fohw.Status.RANK_DEFICIENT and not res.converged
+            assert np.all(np.isfinite(res.theta))
+
+
+def test_data_far_from_zero_without_an_offset_are_warned_about(paper):
+    """Case 10: offset data used to converge silently to alpha ~ 0."""
+    d = paper[0]
+    with pytest.warns(fohw.DataWarning, match="`y` has mean 2.99.* operating_point='mean'"):
+        fohw.identify(d.u, d.y + 3.0, **S)
+    with pytest.warns(fohw.DataWarning, match="`u` has mean 1, and it is constant"):
+        with pytest.warns(fohw.RankDeficiencyWarning):
+            fohw.identify(np.ones_like(d.u), d.y, **S)
+    res = fohw.identify(d.u + 5.0, d.y + 3.0, operating_point="mean", **S)   # no warning
+    assert res.converged and 0.4 < res.alpha < 0.8
+
+
+def test_a_huge_basis_is_reported_for_the_paper_method(paper):
+    """Case 13: f_basis = 50 with hybrid gave J = 1.6e10 and no conditioning warning."""
+    d = paper[0]
+    with pytest.warns(fohw.RankDeficiencyWarning, match="rank deficient: rank"):
+        res = fohw.identify(d.u, d.y, method="hybrid", na=2, nb=2, f_basis=50, g_basis=3)
+    assert res.status == fohw.Status.RANK_DEFICIENT
+
+
+def test_tiny_data_give_finite_fit_indices():
+    """Data x 1e-200: the fit index used to fail ('y is constant') from underflowed squares."""
+    rng = np.random.default_rng(0)
+    y = rng.normal(size=100)
+    yhat = y + 0.1 * rng.normal(size=100)
+    for scale in (1e-200, 1.0, 1e200):
+        assert fohw.metrics.fit_percent(scale * y, scale * yhat) == pytest.approx(
+            fohw.metrics.fit_percent(y, yhat), rel=1e-12)
+        assert fohw.metrics.rmse(scale * y, scale * yhat) / scale == pytest.approx(
+            np.sqrt(np.mean((y - yhat) ** 2)), rel=1e-12)
+
+
+def test_narrow_alpha_bounds_work_with_the_paper_method(paper):
+    """Case 29: `--alpha-bounds 0.7,0.9 --method hybrid` asked for an --alpha0 that did not
+    exist; the default start is now inside any bounds."""
+    status, out, err = run_cli(["identify", paper[1], "--na", 2, "--nb", 2, "--f-basis", 2,
+                                "--g-basis", 3, "--method", "hybrid", "--alpha-bounds", "0.7,0.9",
+                                "--json"])
+    assert status == 0, err
+    assert 0.7 <= json.loads(out)["alpha"] <= 0.9
+
+
+# --- the table reader ----------------------------------------------------------------------
+
+def test_decimal_commas_on_request(tmp_path):
+    path = tmp_path / "dc.csv"
+    path.write_text("u;y\n0,5;1,25\n-0,25;0,5\n1;2\n")
+    rec = fohw.read_record(path, decimal=",")
+    np.testing.assert_array_equal(rec.u, [0.5, -0.25, 1.0])
+    np.testing.assert_array_equal(rec.y, [1.25, 0.5, 2.0])
+    status, out, err = run_cli(["identify", path, "--na", 1, "--nb", 1, "--decimal-comma",
+                                "--method", "rls"])
+    assert status == 0, err
+
+
+def test_what_the_reader_skipped_is_reported(tmp_path):
+    path = tmp_path / "r.csv"
+    path.write_text("# logged 2026-11-23\nu,y,\n1,2,\n\n3,4,\n5,6,\n")
+    table = text_io.read_table(path)
+    assert table.skipped == ["header on line 2 (u, y)", "2 comment or blank line(s)",
+                             "a trailing separator"]
+    np.testing.assert_array_equal(table.data, [[1, 2], [3, 4], [5, 6]])
+
+
+numbers = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+
+@settings(max_examples=60, deadline=None)
+@given(rows=st.lists(st.lists(numbers, min_size=2, max_size=2), min_size=1, max_size=20),
+       sep=st.sampled_from([" ", "\t", ",", ";", " ,  "]),
+       header=st.booleans(), fmt=st.sampled_from(["{!r}", "{:.6g}", "{:.17e}"]))
+def test_the_fast_reader_equals_the_line_reader(tmp_path_factory, rows, sep, header, fmt):
+    """Clean files go through numpy.loadtxt, the rest line by line: the same numbers."""
+    path = tmp_path_factory.mktemp("t") / "t.csv"
+    lines = (["u" + sep + "y"] if header else []) + \
+        [sep.join(fmt.format(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n")
+    fast = text_io.read_table(path)
+    slow = text_io._read_lines(str(path), ".")
+    np.testing.assert_array_equal(fast.data, slow.data)
+    assert fast.names == slow.names
+    expected = np.array([[float(fmt.format(v)) for v in row] for row in rows])
+    np.testing.assert_array_equal(fast.data, expected)
+
+
+# --- the newcomer's loop ---------------------------------------------------------------------
+
+def test_identify_save_then_simulate_the_result_file(paper, tmp_path):
+    d, data = paper
+    saved = tmp_path / "fit.json"
+    status, out, err = run_cli(["identify", data, "--na", 2, "--nb", 2, "--f-basis", 2,
+                                "--g-basis", 3, "--save", saved])
+    assert status == 0, err
+    assert "free-run simulation fit" in out and "stayed bounded" in out
+    status, out, err = run_cli(["simulate", "--model", saved, "--input", data])
+    assert status == 0, err
+    simulated = np.array([float(v) for v in out.split()])
+    np.testing.assert_array_equal(simulated, fohw.load_result(saved).simulate(d.u))
+    status, out, err = run_cli(["simulate", "--model", saved, "--input", data, "--noise-std", 0.1,
+                                "--seed", 3])
+    noisy = np.array([float(v) for v in out.split()])
+    v = 0.1 * np.random.default_rng(3).standard_normal(d.u.shape[0])
+    np.testing.assert_array_equal(noisy, fohw.load_result(saved).simulate(d.u, noise=v))
+
+
+def test_the_json_output_has_the_free_run(paper):
+    status, out, _ = run_cli(["identify", paper[1], "--na", 2, "--nb", 2, "--f-basis", 2,
+                              "--g-basis", 3, "--json"])
+    record = json.loads(out)["estimation_record"]
+    check = fohw.compare(fohw.identify(paper[0].u, paper[0].y, **S), paper[0].u, paper[0].y)
+    assert record["free_run"]["bounded"] is True
+    assert record["free_run"]["fit_percent"] == check.fit_simulation
+    assert record["one_step"]["rmse"] == check.rmse_prediction
+
+
+def test_a_diverging_free_run_is_said_loudly():
+    check = types.SimpleNamespace(simulated=None, diverged="diverged at sample k = 112",
+                                  fit_prediction=99.0, rmse_prediction=0.01)
+    text = _fit_text(check)
+    assert "FREE RUN DIVERGED (diverged at sample k = 112)" in text
+    assert "do not use this model to simulate" in text
+
+
+def test_the_python_default_is_the_recommended_method(paper):
+    assert fohw.identify(paper[0].u, paper[0].y, **S).method == "varpro"
