@@ -343,10 +343,10 @@ def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, of
     Returns
     -------
     Phi : ndarray, shape (N, n)
-        Row ``k`` is ``phi[k]`` of Eq. (20), columns ordered as in docs/conventions.md (``n =
-        n_g*na + n_f*nb`` for the
-        paper's model), then a column of ones for an offset; entries that would need samples
-        before ``k = 0`` are zero (or the transient of the past levels).
+        Row ``k`` is ``phi[k]`` of Eq. (20), columns ordered as in docs/conventions.md
+        (``n = n_g*na + n_f*nb`` for the paper's model), then a column of ones for an offset;
+        entries that would need samples before ``k = 0`` are zero (or the transient of the
+        past levels).
 
     Notes
     -----
