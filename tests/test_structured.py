@@ -1,0 +1,186 @@
+"""The structured parametrisation (a, b, p, q, orders), the output-noise bound and the structured
+estimator: the model (mapping, Jacobians, bounds) before the estimator."""
+
+import numpy as np
+import pytest
+import reference
+
+import fohw
+from fohw.model.sensitivity import simulation_jacobian
+from fohw.model.system import simulate_parameters
+
+STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
+
+
+def tanh(x):
+    return np.tanh(x)
+
+
+def central_difference(fun, x, rel=1e-6):
+    """Columns ``(fun(x + h e_i) - fun(x - h e_i)) / 2h``, ``h = rel * max(|x_i|, 0.01)``."""
+    x = np.asarray(x, dtype=float)
+    cols = []
+    for i in range(x.size):
+        step = rel * max(abs(x[i]), 1e-2)
+        e = np.zeros_like(x)
+        e[i] = step
+        cols.append((fun(x + e) - fun(x - e)) / (2 * step))
+    return np.column_stack(cols)
+
+
+# ---- the mapping theta(a, b, p, q) ------------------------------------------------------------
+
+def test_theta_jacobian_matches_finite_differences_and_inverts_the_recovery():
+    layout = fohw.ThetaLayout(na=3, nb=2, n_g=3, n_f=2)
+    eta = np.random.default_rng(0).normal(size=layout.n_model_params)
+    jac = layout.theta_jacobian(eta)
+    fd = central_difference(layout.theta_of_model_vector, eta)
+    np.testing.assert_allclose(jac, fd, rtol=0, atol=1e-9)    # theta is bilinear: fd exact
+    theta = layout.theta_of_model_vector(eta)
+    np.testing.assert_allclose(layout.recover_vector(theta), eta, rtol=1e-13)
+    np.testing.assert_allclose(layout.rank_one_recovery(theta), eta, rtol=1e-12)
+    np.testing.assert_allclose(layout.recover_jacobian(theta) @ jac, np.eye(eta.size),
+                               atol=1e-12)
+
+
+def test_rank_one_recovery_is_the_best_rank_one_fit_of_each_block():
+    """On a perturbed theta, the recovered blocks are the leading SVD term of each block."""
+    layout = fohw.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    rng = np.random.default_rng(1)
+    theta = fohw.datasets.paper_model().theta + 0.01 * rng.standard_normal(10)
+    rebuilt = layout.blocks(layout.theta_of_model_vector(layout.rank_one_recovery(theta)))
+    for block, fit in zip(layout.blocks(theta), rebuilt):
+        u, s, vt = np.linalg.svd(block)
+        np.testing.assert_allclose(fit, s[0] * np.outer(u[:, 0], vt[0]), atol=1e-14)
+
+
+def test_rank_one_recovery_names_a_block_it_cannot_normalise():
+    layout = fohw.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+    with pytest.raises(fohw.ParameterError, match="output"):
+        layout.rank_one_recovery([0.0, 0.5, 1.0])
+
+
+def test_structure_mapping_with_offset_and_several_orders():
+    s = fohw.Structure.make(na=2, nb=1, f_basis=2, g_basis=2, orders="mixed", offset=True)
+    assert s.structured_names[-2:] == ("offset", "alpha")
+    x = np.random.default_rng(2).normal(size=len(s.structured_names))
+    fd = central_difference(lambda z: np.r_[s.from_structured(z)], x)
+    np.testing.assert_allclose(s.structured_jacobian(x), fd, atol=1e-9)
+    np.testing.assert_allclose(s.to_structured(*s.from_structured(x)), x, rtol=1e-12)
+
+
+# ---- the sensitivity of the free run ----------------------------------------------------------
+
+@pytest.mark.parametrize("case", ["paper", "general"])
+def test_simulation_jacobian_matches_finite_differences(case):
+    rng = np.random.default_rng(3)
+    if case == "paper":
+        model = fohw.datasets.paper_model()
+        n = 700                         # above the 128-sample leaves: the FFT merges run
+    else:                               # several orders, order 0, offset, dt, a non-polynomial g
+        model = fohw.HammersteinWiener(
+            [0.3, -0.2, 0.1, 0.05], [0.6, 0.2], [1, 0.4], [1, 0.5], {"alpha": 0.5},
+            g_basis={"y": lambda x: x, "tanh": tanh}, orders="mixed", offset=0.1, dt=0.5)
+        n = 300
+    u = rng.uniform(-1, 1, n)
+    s = model.structure
+    nl = s.n_linear
+    y, S = simulation_jacobian(s, model.linear, model.nonlinear, u)
+    np.testing.assert_allclose(y, fohw.simulate(model, u), rtol=0, atol=1e-12)
+    fd = central_difference(lambda x: simulate_parameters(s, x[:nl], x[nl:], u),
+                            np.r_[model.linear, model.nonlinear])
+    np.testing.assert_allclose(S, fd, rtol=0, atol=1e-7 * np.abs(S).max())
+
+
+# ---- the bounds against literal implementations -----------------------------------------------
+
+def _small_model():
+    return fohw.HammersteinWiener([0.3, 0.15], [-0.5, 0.2], [1, 0.4], [1, 0.5], 0.6)
+
+
+def _structured_vector(model):
+    return np.r_[model.a, model.b, model.p[1:], model.q[1:], model.alpha]
+
+
+def _model_of(x):
+    return fohw.HammersteinWiener(x[:2], x[2:4], [1, x[4]], [1, x[5]], x[6])
+
+
+def test_structured_equation_noise_bound_matches_a_literal_computation():
+    """Eq. (19) written out (tests/reference.py) on the same noise realisations, differentiated
+    numerically with respect to (a, b, p2, q2, alpha)."""
+    model = _small_model()
+    n, sigma2 = 60, 0.01
+    u = np.random.default_rng(4).uniform(-1, 1, n)
+    rng = np.random.default_rng(5)
+    info = np.zeros((7, 7))
+    for _ in range(2):
+        v = np.sqrt(sigma2) * rng.standard_normal(n)
+        y = reference.simulate_general(model, u, v)
+
+        def predictor(x, y=y):
+            m = _model_of(x)
+            return reference.one_step_prediction(u, y, m.theta, x[6], na=2, nb=2, f_basis=2,
+                                                 g_basis=2)
+        G = central_difference(predictor, _structured_vector(model))
+        info += G.T @ G
+    literal = np.linalg.inv(info / (2 * sigma2))
+    bound = fohw.crb(model, u, sigma2, parametrisation="structured", n_realizations=2,
+                     random_state=5)
+    assert bound.estimate_names == ("a1", "a2", "b1", "b2", "p2", "q2", "alpha")
+    np.testing.assert_allclose(bound.covariance, literal, rtol=1e-5)
+    assert bound.parametrisation == "structured" and bound.noise == "equation"
+    assert "structured" in bound.description and "equation" in bound.description
+
+
+def test_output_noise_bound_matches_a_literal_computation():
+    """Literal simulation (tests/reference.py) differentiated numerically, in both
+    parametrisations: (S^T S / sigma^2)^{-1}."""
+    model = _small_model()
+    n, sigma2 = 60, 0.04
+    u = np.random.default_rng(6).uniform(-1, 1, n)
+
+    def run(x):
+        return reference.simulate_general(_model_of(x), u, np.zeros(n))
+    S = central_difference(run, _structured_vector(model))
+    bound = fohw.crb(model, u, sigma2, parametrisation="structured", noise="output")
+    np.testing.assert_allclose(bound.covariance, np.linalg.inv(S.T @ S / sigma2), rtol=1e-5)
+
+    # theta parametrisation: the free run of an unstructured theta is Eq. (19) written out
+    # (tests/reference.py) applied to its own past outputs, one sample at a time.
+    def free_run(x):
+        y = np.zeros(n)
+        for k in range(n):
+            y[k] = reference.one_step_prediction(u[:k + 1], y[:k + 1], x[:8], x[8], na=2, nb=2,
+                                                 f_basis=2, g_basis=2)[k]
+        return y
+    x0 = np.r_[model.theta, model.alpha]
+    St = central_difference(free_run, x0)
+    theta_bound = fohw.crb(model, u, sigma2, noise="output")
+    np.testing.assert_allclose(theta_bound.covariance, np.linalg.inv(St.T @ St / sigma2),
+                               rtol=1e-5)
+    assert theta_bound.parametrisation == "theta" and theta_bound.noise == "output"
+
+
+@pytest.mark.parametrize("noise", ["equation", "output"])
+def test_structured_bound_is_never_above_the_unstructured_one(noise):
+    """A bound under constraints is below the free one (Loewner order), for theta and alpha."""
+    data = fohw.datasets.paper_example(3000, random_state=0)
+    kw = dict(random_state=1) if noise == "equation" else {}
+    free = fohw.crb(data.model, data.u, 0.01, noise=noise, **kw)
+    tight = fohw.crb(data.model, data.u, 0.01, parametrisation="structured", noise=noise, **kw)
+    n = data.model.theta.size
+    diff = free.covariance[:n, :n] - tight.theta_covariance
+    assert np.linalg.eigvalsh(diff).min() > -1e-12 * np.abs(diff).max()
+    assert tight.rms_relative_error < free.rms_relative_error
+    assert tight.alpha_std <= free.alpha_std
+
+
+def test_crb_names_what_it_does_not_take():
+    data = fohw.datasets.paper_example(300, random_state=0)
+    with pytest.raises(fohw.ParameterError, match="parametrisation.*'thetas'"):
+        fohw.crb(data.model, data.u, 0.01, parametrisation="thetas")
+    with pytest.raises(fohw.ParameterError, match="noise.*'measurement'"):
+        fohw.crb(data.model, data.u, 0.01, noise="measurement")
+    with pytest.raises(fohw.ParameterError, match="n_realizations.*got 4"):
+        fohw.crb(data.model, data.u, 0.01, noise="output", n_realizations=4)
