@@ -287,3 +287,18 @@ def test_structured_intervals_cover_at_their_nominal_level():
         assert abs(h / n_seeds - 0.95) < 3 * se, (k, h / n_seeds)
     pooled = sum(hits.values()) / (n_seeds * len(hits))
     assert abs(pooled - 0.95) < 3 * se, pooled
+
+
+def test_output_error_standard_errors_are_those_of_the_free_run_sensitivity():
+    """s^2 (S^T S)^{-1}, S by central differences of the simulation at the estimate."""
+    model = fohw.datasets.paper_model()
+    rng = np.random.default_rng(11)
+    u = rng.uniform(-np.sqrt(3), np.sqrt(3), 400)
+    y = fohw.simulate(model, u) + 0.1 * rng.standard_normal(400)
+    r = fohw.identify(u, y, method="output_error", **STRUCT)
+    s = r.structure
+    S = central_difference(lambda x: simulate_parameters(s, x[:10], x[10:], u),
+                           np.r_[r.linear, r.nonlinear])
+    resid = y - simulate_parameters(s, r.linear, r.nonlinear, u)
+    cov = resid @ resid / (400 - 11) * np.linalg.inv(S.T @ S)
+    np.testing.assert_allclose(np.sqrt(np.diag(r.covariance)), np.sqrt(np.diag(cov)), rtol=1e-5)
