@@ -105,6 +105,9 @@ class IdentificationResult:
         :attr:`estimate_names` order (the paper's model: ``(theta, alpha)``, ``alpha`` last),
         with ``G`` the Jacobian of the fitted residual (one-step predictor for ``"varpro"``,
         free-run simulation for ``"output_error"``); only for these least-squares estimates.
+        For ``"structured"`` it is the covariance ``C`` of the structured parameters mapped to
+        ``(theta, nonlinear)``, ``M C M^T`` (:meth:`fohw.Structure.structured_jacobian`; rank
+        deficient), so that :meth:`standard_errors` gives ``C``'s own entries for ``a, b, p, q``.
         ``None`` where the estimator is not a least-squares optimum, since standard errors
         would then be meaningless.
     noise_variance : float or None
@@ -431,7 +434,9 @@ class IdentificationResult:
                         f"{ci[n][1]:>14.6g}")
             lines += [row(n) for n in names]
             if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
-                lines += ["", "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]
+                lines += ["", "  p and q estimated directly (structured least squares):"
+                          if self.method == "structured" else
+                          "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]
                 lines += [row(n) for n in self.layout.model_parameter_names
                           if n[0] in "pq"]
             lines += ["", f"  noise variance estimate s^2 = {self.noise_variance:.6g}"]

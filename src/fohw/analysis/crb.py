@@ -11,6 +11,23 @@ For the general model class (:class:`fohw.Structure`: an order per term, an offs
 levels) the parameters are the structure's linear ones (theta, then ``offset``) and its
 nonlinear ones (the free orders, then ``u_past``, ``y_past``), and ``G`` is the same
 one-step-predictor Jacobian with a column per nonlinear parameter.
+
+Two choices say which bound is computed (:attr:`CRBResult.description`):
+
+* ``parametrisation="theta"`` (default): the unstructured linear parameters, theta treated as
+  ``n_g * na + n_f * nb`` free numbers; the bound that separable least squares (``"varpro"``)
+  reaches. ``"structured"``: the model's own parameters ``(a, b, p_2.., q_2.., offset,
+  nonlinear)`` (:attr:`fohw.Structure.structured_names`), with ``theta = [q ⊗ a, p ⊗ b]``
+  (Eq. 20). If ``M = d(theta, ...)/d(a, b, p, q, ...)`` (:meth:`fohw.Structure.structured_jacobian`),
+  the Jacobian becomes ``G M`` and the bound ``(M^T I M)^{-1}``; mapped back to theta it is
+  ``M (M^T I M)^{-1} M^T``, never larger than the unstructured bound, and that is what
+  :attr:`CRBResult.rms_relative_error` and :attr:`CRBResult.theta_std` report.
+* ``noise="equation"`` (default): white Gaussian noise ``v[k]`` in the equation (Eq. 16), as
+  above. ``"output"``: the system runs noise-free and white Gaussian noise ``e[k]`` of variance
+  ``sigma^2`` is added to the *measured* output, ``y = ysim(x) + e``. The log-likelihood is
+  then ``-||y - ysim(x)||^2 / (2 sigma^2)`` and the Fisher information ``S^T S / sigma^2``
+  with ``S = d ysim / dx`` the sensitivity of the free-run simulation
+  (:func:`fohw.model.sensitivity.simulation_jacobian`): deterministic, no averaging.
 """
 
 from __future__ import annotations
@@ -22,6 +39,7 @@ import numpy as np
 from .._validation import check_array, check_int, check_random_state, check_scalar
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
+from ..model.sensitivity import simulation_jacobian
 from ..model.system import HammersteinWiener, simulate
 
 __all__ = ["crb", "CRBResult"]
@@ -33,11 +51,15 @@ class CRBResult:
 
     Attributes
     ----------
-    covariance : ndarray, shape (n_linear + n_nonlinear,) * 2
-        Lower bound on the covariance of any unbiased estimator of the structure's linear
-        then nonlinear parameters (for the paper's model ``(theta, alpha)``, ``alpha`` last).
+    covariance : ndarray, shape (d, d)
+        Lower bound on the covariance of any unbiased estimator of the parameters in
+        :attr:`estimate_names` order: the structure's linear then nonlinear parameters
+        (``parametrisation="theta"``; for the paper's model ``(theta, alpha)``, ``alpha``
+        last), or its structured ones (``"structured"``: ``a, b, p_2.., q_2..``, offset,
+        nonlinear).
     theta_std : ndarray, shape (n,)
-        Square roots of the theta diagonal.
+        Square roots of the diagonal of the bound on theta (for ``"structured"``, of
+        :attr:`theta_covariance`, the structured bound mapped to theta).
     alpha_std : float
         Square root of the entry of the first free order (``nan`` when every order is fixed).
     rms_relative_error : float
@@ -48,7 +70,13 @@ class CRBResult:
     n_realizations : int
         Noise realisations averaged in the Fisher information.
     estimate_names : tuple of str
-        Names of the rows of :attr:`covariance` (linear, then nonlinear parameters).
+        Names of the rows of :attr:`covariance`.
+    parametrisation : {"theta", "structured"}
+        Which parameters the bound is for.
+    noise : {"equation", "output"}
+        Where the white Gaussian noise enters (the equation, or the measured output).
+    theta_covariance : ndarray, shape (n, n) or None
+        The bound on theta's covariance (for ``"structured"``, ``M C M^T``; rank deficient).
     """
 
     covariance: np.ndarray
@@ -58,6 +86,19 @@ class CRBResult:
     parameter_names: tuple
     n_realizations: int
     estimate_names: tuple = ()
+    parametrisation: str = "theta"
+    noise: str = "equation"
+    theta_covariance: np.ndarray | None = None
+
+    @property
+    def description(self) -> str:
+        """Which bound this is, in words."""
+        what = ("the structured parameters " + ", ".join(self.estimate_names)
+                if self.parametrisation == "structured" else
+                "the unstructured parameters " + ", ".join(self.estimate_names))
+        where = ("white Gaussian equation noise (Eq. 16)" if self.noise == "equation" else
+                 "white Gaussian noise on the measured output (noise-free system)")
+        return f"Cramér–Rao bound of {what}, under {where}"
 
     @property
     def std(self) -> dict:
@@ -65,15 +106,18 @@ class CRBResult:
         return dict(zip(self.estimate_names, np.sqrt(np.diag(self.covariance))))
 
     def __repr__(self):
-        return (f"CRBResult(rms_relative_error={self.rms_relative_error:.4g}, "
+        return (f"CRBResult(parametrisation={self.parametrisation!r}, noise={self.noise!r}, "
+                f"rms_relative_error={self.rms_relative_error:.4g}, "
                 f"alpha_std={self.alpha_std:.4g}, n_realizations={self.n_realizations})")
 
 
-def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
-    """Cramér–Rao bound of a model's parameters for an input and a noise level.
+PARAMETRISATIONS = ("theta", "structured")
+NOISE_MODELS = ("equation", "output")
 
-    The parameters are the structure's linear then nonlinear ones
-    (:attr:`CRBResult.estimate_names`): for the paper's model ``(theta, alpha)``.
+
+def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
+        n_realizations=None, random_state=None):
+    """Cramér–Rao bound of a model's parameters for an input and a noise level.
 
     Parameters
     ----------
@@ -82,20 +126,43 @@ def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
     u : array_like, shape (N,)
         The input of the experiment.
     noise_variance : float
-        Variance ``sigma^2 > 0`` of the white Gaussian equation noise.
+        Variance ``sigma^2 > 0`` of the white Gaussian noise.
+    parametrisation : {"theta", "structured"}, optional
+        ``"theta"`` (default): the structure's linear then nonlinear parameters, theta
+        unstructured (for the paper's model ``(theta, alpha)``). ``"structured"``: the model's
+        own parameters :attr:`fohw.Structure.structured_names` (``a, b, p_2.., q_2..``, then
+        the offset and the nonlinear ones), with ``theta = [q ⊗ a, p ⊗ b]``.
+    noise : {"equation", "output"}, optional
+        ``"equation"`` (default): the noise enters the equation (Eq. 16), the setting of the
+        paper. ``"output"``: the system runs noise-free and the noise is added to the measured
+        output.
     n_realizations : int, optional
-        Noise realisations over which ``G^T G`` is averaged (default 4).
+        Equation noise: realisations over which ``G^T G`` is averaged (default 4). Output
+        noise: not used (the information is deterministic); giving it is an error.
     random_state : None, int or numpy.random.Generator, optional
-        Source of the noise realisations.
+        Equation noise: source of the realisations. Output noise: not used; giving it is an
+        error.
 
     Returns
     -------
     CRBResult
+        Its :attr:`~CRBResult.parametrisation`, :attr:`~CRBResult.noise` and
+        :attr:`~CRBResult.description` say which bound it is.
 
     Raises
     ------
+    ParameterError
+        An unknown ``parametrisation`` or ``noise``, or ``n_realizations``/``random_state``
+        with ``noise="output"``.
     SimulationDivergedError
-        A realisation escaped to infinity.
+        A realisation (or the noise-free run) escaped to infinity.
+
+    Notes
+    -----
+    Equation noise: the Fisher information is ``E[G^T G] / sigma^2``, ``G`` the Jacobian of the
+    one-step predictor ``Phi(alpha) theta`` (Eq. 19). Output noise: ``S^T S / sigma^2``, ``S``
+    the sensitivity of the noise-free simulation. Structured: ``G M`` (or ``S M``) with ``M``
+    the derivative of ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20) with respect to ``(a, b, p, q)``.
 
     Examples
     --------
@@ -104,33 +171,69 @@ def crb(model, u, noise_variance, *, n_realizations=4, random_state=None):
     >>> bound = fohw.crb(data.model, data.u, 0.01, random_state=1)
     >>> round(bound.rms_relative_error, 2), round(bound.alpha_std, 3)
     (0.03, 0.004)
+    >>> tight = fohw.crb(data.model, data.u, 0.01, parametrisation="structured",
+    ...                  random_state=1)
+    >>> tight.estimate_names
+    ('a1', 'a2', 'b1', 'b2', 'p2', 'q2', 'q3', 'alpha')
+    >>> round(tight.rms_relative_error, 3), round(tight.alpha_std, 4)
+    (0.019, 0.0037)
     """
     if not isinstance(model, HammersteinWiener):
         raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
+    if parametrisation not in PARAMETRISATIONS:
+        raise ParameterError(f"`parametrisation` must be one of {PARAMETRISATIONS}; got "
+                             f"{parametrisation!r}.")
+    if noise not in NOISE_MODELS:
+        raise ParameterError(f"`noise` must be one of {NOISE_MODELS}; got {noise!r}.")
     u = check_array(u, "u")
     sigma2 = check_scalar(noise_variance, "noise_variance", lower=0.0, lower_inclusive=False)
-    n_realizations = check_int(n_realizations, "n_realizations", minimum=1)
-    rng = check_random_state(random_state)
     structure = model.structure
     linear, nonlinear = model.linear, model.nonlinear
     u0, y0 = model.operating_point
     n_theta = model.theta.shape[0]
-    n = linear.shape[0] + nonlinear.shape[0]
-    info = np.zeros((n, n))
-    for _ in range(n_realizations):
-        v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
-        y = simulate(model, u, noise=v)
-        b = RegressorBuilder(u - u0, y - y0, structure=structure)
-        g = b.jacobian(linear, nonlinear)
-        info += g.T @ g
-    info /= n_realizations * sigma2
-    cov = np.linalg.inv(info)
-    cov = 0.5 * (cov + cov.T)
-    std = np.sqrt(np.diag(cov))
-    n_lin = linear.shape[0]
-    alpha_std = float(std[n_lin]) if structure.orders.free else float("nan")
-    return CRBResult(covariance=cov, theta_std=std[:n_theta], alpha_std=alpha_std,
-                     rms_relative_error=float(np.sqrt(np.trace(cov[:n_theta, :n_theta]))
+    if noise == "equation":
+        n_realizations = check_int(4 if n_realizations is None else n_realizations,
+                                   "n_realizations", minimum=1)
+        rng = check_random_state(random_state)
+        n = linear.shape[0] + nonlinear.shape[0]
+        info = np.zeros((n, n))
+        for _ in range(n_realizations):
+            v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
+            y = simulate(model, u, noise=v)
+            b = RegressorBuilder(u - u0, y - y0, structure=structure)
+            g = b.jacobian(linear, nonlinear)
+            info += g.T @ g
+        info /= n_realizations * sigma2
+    else:
+        for name, value in (("n_realizations", n_realizations), ("random_state", random_state)):
+            if value is not None:
+                raise ParameterError(f"`{name}` is not used with noise='output' (the bound is "
+                                     f"deterministic: no noise realisations); got {value!r}.")
+        n_realizations = 0
+        _, sens = simulation_jacobian(structure, linear, nonlinear, u - u0)
+        info = sens.T @ sens / sigma2
+    names = structure.linear_names + structure.nonlinear_names
+    if parametrisation == "structured":
+        x = np.r_[model.a, model.b, model.p[1:], model.q[1:], linear[n_theta:], nonlinear]
+        M = structure.structured_jacobian(x)
+        cov = _inverse(M.T @ info @ M)
+        full = M @ cov @ M.T
+        names = structure.structured_names
+    else:
+        cov = full = _inverse(info)
+    theta_cov = full[:n_theta, :n_theta]
+    free = structure.orders.free
+    alpha_std = float(np.sqrt(cov[names.index(free[0]), names.index(free[0])])) if free \
+        else float("nan")
+    return CRBResult(covariance=cov, theta_std=np.sqrt(np.diag(theta_cov)), alpha_std=alpha_std,
+                     rms_relative_error=float(np.sqrt(np.trace(theta_cov))
                                               / np.linalg.norm(model.theta)),
                      parameter_names=model.parameter_names, n_realizations=n_realizations,
-                     estimate_names=structure.linear_names + structure.nonlinear_names)
+                     estimate_names=names, parametrisation=parametrisation, noise=noise,
+                     theta_covariance=theta_cov)
+
+
+def _inverse(info):
+    """Inverse of a symmetric information matrix, symmetrised."""
+    cov = np.linalg.inv(info)
+    return 0.5 * (cov + cov.T)

@@ -26,6 +26,7 @@ from .hybrid import (
 )
 from .output_error import OutputErrorOptions, output_error_result
 from .rls import RlsOptions, rls_result
+from .structured import StructuredOptions, structured_result
 from .varpro import VarproOptions, varpro_result
 
 __all__ = ["identify", "METHODS", "OPTIONS"]
@@ -59,6 +60,10 @@ def _output_error(builder, options, bounds, operating_point):
     return output_error_result(builder, options, bounds, operating_point=operating_point)
 
 
+def _structured(builder, options, bounds, operating_point):
+    return structured_result(builder, options, bounds, operating_point=operating_point)
+
+
 def _rls(builder, options, bounds, operating_point):
     return rls_result(builder, options, _paper_bounds("rls", builder, bounds),
                       operating_point=operating_point)
@@ -68,6 +73,7 @@ def _rls(builder, options, bounds, operating_point):
 _TABLE = {
     "varpro": (VarproOptions, _varpro),
     "output_error": (OutputErrorOptions, _output_error),
+    "structured": (StructuredOptions, _structured),
     "hybrid": (HybridOptions, _alternation("hybrid")),
     "single_innovation_gradient": (SingleInnovationGradientOptions,
                                    _alternation("single_innovation_gradient")),

@@ -9,9 +9,13 @@ simulation error instead:
 ``min over (theta, alpha)  sum_{k >= n_init} (y[k] - ysim[k; theta, alpha])**2``
 
 with a trust-region reflective least-squares solver (finite-difference Jacobian), started from
-the equation-error estimate. Candidate models whose simulation escapes (beyond ten times the
-largest measured ``|y|``) get a large constant residual, so the solver steps back from them; an
-unstable starting model is first made stable by shrinking its output-feedback block.
+the equation-error estimate. The standard errors are ``s^2 (S^T S)^{-1}`` with ``S`` the exact
+sensitivity of the free run at the estimate (:func:`fohw.model.sensitivity.simulation_jacobian`),
+the Jacobian of the output-noise Cramér–Rao bound (:func:`fohw.crb` with ``noise="output"``),
+which the fit reaches when the noise is added to the measured output. Candidate models whose
+simulation escapes (beyond ten times the largest measured ``|y|``) get a large constant
+residual, so the solver steps back from them; an unstable starting model is first made stable
+by shrinking its output-feedback block.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import scipy.optimize
 from .. import _linalg
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from ..model.sensitivity import simulation_jacobian
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
 from ._common import bound_note, finish, rms_scale
@@ -156,8 +161,15 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
         x[n_lin + j] = _on_active_bound(x[n_lin + j], ls.active_mask[n_lin + j], lower[j],
                                         upper[j])
     fun = ls.fun * y_scale
-    jac = ls.jac * y_scale / scale
     sse = float(fun @ fun)
+    # Standard errors from the exact sensitivity of the free run at the estimate (the
+    # Jacobian of the output-noise bound, fohw.crb(noise="output")), not the solver's
+    # finite-difference one.
+    try:
+        _, sens = simulation_jacobian(s, x[:n_lin], x[n_lin:], u)
+        jac = sens[window]
+    except SimulationDivergedError:
+        jac = ls.jac * y_scale / scale
     cov, s2 = parameter_covariance(jac, sse, m)
     status = Status.CONVERGED if ls.status > 0 else Status.MAX_ITER if ls.status == 0 else \
         Status.FAILED

@@ -179,6 +179,92 @@ class ThetaLayout:
             rows.append(r)
         return np.array(rows)
 
+    @property
+    def n_model_params(self) -> int:
+        """Number of free structural parameters, ``na + nb + (n_f - 1) + (n_g - 1)``."""
+        return self.na + self.nb + self.n_f - 1 + self.n_g - 1
+
+    def split_model_vector(self, eta):
+        """``a, b, p, q`` (with ``p_1 = q_1 = 1``) from ``[a, b, p_2.., q_2..]``.
+
+        ``eta`` is in :attr:`model_parameter_names` order, the inverse of
+        :meth:`recover_vector` on a theta of the form ``[q ⊗ a, p ⊗ b]``.
+        """
+        eta = check_array(eta, "eta")
+        if eta.shape[0] != self.n_model_params:
+            raise DimensionError(f"`eta` must have {self.n_model_params} entries "
+                                 f"{self.model_parameter_names}; got {eta.shape[0]}.")
+        na, nb, nf = self.na, self.nb, self.n_f
+        a, b = eta[:na], eta[na:na + nb]
+        p = np.r_[1.0, eta[na + nb:na + nb + nf - 1]]
+        q = np.r_[1.0, eta[na + nb + nf - 1:]]
+        return a, b, p, q
+
+    def theta_of_model_vector(self, eta) -> np.ndarray:
+        """``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20) from ``eta = [a, b, p_2.., q_2..]``."""
+        return self.to_theta(*self.split_model_vector(eta))
+
+    def theta_jacobian(self, eta) -> np.ndarray:
+        """Jacobian ``d theta / d eta`` of :meth:`theta_of_model_vector` (Eq. 20).
+
+        ``d(q ⊗ a)/da = q ⊗ I``, ``d(q ⊗ a)/dq_j = e_j ⊗ a`` and likewise for ``p ⊗ b``. It maps
+        a covariance of the structural parameters to theta's (``M C M^T``, the delta method)
+        and the Jacobian of any function of theta to the structural parameters (``G M``).
+        Since :meth:`recover_vector` inverts :meth:`theta_of_model_vector`,
+        ``recover_jacobian(theta) @ theta_jacobian(eta)`` is the identity.
+
+        Returns
+        -------
+        jac : ndarray, shape (n, na + nb + n_f - 1 + n_g - 1)
+
+        Examples
+        --------
+        >>> import fohw
+        >>> layout = fohw.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+        >>> layout.theta_jacobian([0.5, -1.0, 0.5])     # theta = [a, q2 a, b]
+        array([[1. , 0. , 0. ],
+               [0.5, 0. , 0.5],
+               [0. , 1. , 0. ]])
+        """
+        a, b, p, q = self.split_model_vector(eta)
+        na, nb, nf, ng, k = self.na, self.nb, self.n_f, self.n_g, self.n_output_params
+        jac = np.zeros((self.n_params, self.n_model_params))
+        jac[:k, :na] = np.kron(q[:, None], np.eye(na))
+        jac[k:, na:na + nb] = np.kron(p[:, None], np.eye(nb))
+        for j in range(1, nf):
+            jac[k + j * nb:k + (j + 1) * nb, na + nb + j - 1] = b
+        for j in range(1, ng):
+            jac[j * na:(j + 1) * na, na + nb + nf - 1 + j - 1] = a
+        return jac
+
+    def rank_one_recovery(self, theta):
+        """``[a, b, p_2.., q_2..]`` from any theta by the best rank-one fits of its blocks.
+
+        The ``(n_g, na)`` block ``[q_j a_i]`` and the ``(n_f, nb)`` block ``[p_j b_i]`` of an
+        estimated theta are not exactly rank one; the leading singular triple ``s u v^T`` of
+        each is its best rank-one approximation in the Frobenius norm, and the normalisation
+        ``q_1 = 1`` gives ``q = u / u_1``, ``a = s u_1 v`` (likewise ``p``, ``b``). Unlike the
+        mean of ratios of Eqs. (39)–(40) it weights every entry of the block alike and needs
+        no ``a_i`` to be non-zero.
+
+        Raises
+        ------
+        ParameterError
+            The first row of a block's leading singular vector is zero (``q_1 = 1`` cannot be
+            imposed: the first basis function does not enter that block).
+        """
+        out = []
+        for block, name in zip(self.blocks(theta), ("output (q ⊗ a)", "input (p ⊗ b)")):
+            u, s, vt = np.linalg.svd(block, full_matrices=False)
+            lead = u[0, 0]
+            if lead == 0.0 or s[0] == 0.0:
+                raise ParameterError(f"cannot normalise the {name} block of theta to a first "
+                                     f"coefficient of 1: its rank-one part has a zero first row "
+                                     f"(block {block.tolist()}).")
+            out.append((s[0] * lead * vt[0], u[:, 0] / lead))
+        (a, q), (b, p) = out
+        return np.concatenate([a, b, p[1:], q[1:]])
+
     def _check_blocks(self, a, b, p, q):
         a = check_array(a, "a")
         b = check_array(b, "b")

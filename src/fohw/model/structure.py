@@ -31,8 +31,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import numpy as np
+
 from .._validation import check_scalar
-from ..exceptions import ParameterError
+from ..exceptions import DimensionError, ParameterError
 from .basis import Basis, as_basis
 from .orders import Orders
 from .params import ThetaLayout
@@ -134,6 +136,60 @@ class Structure:
     def n_nonlinear(self) -> int:
         """Number of nonlinear parameters."""
         return len(self.nonlinear_names)
+
+    @property
+    def structured_names(self) -> tuple[str, ...]:
+        """Names of the structured parametrisation: ``a, b, p_2.., q_2..``, offset, nonlinear.
+
+        The model's own parameters (:attr:`ThetaLayout.model_parameter_names`) in place of
+        theta's ``n_g * na + n_f * nb`` entries; ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20).
+        """
+        return (self.layout.model_parameter_names + (("offset",) if self.offset else ())
+                + self.nonlinear_names)
+
+    def from_structured(self, x):
+        """``(linear, nonlinear)`` from a vector in :attr:`structured_names` order."""
+        x = np.asarray(x, dtype=np.float64)
+        m = self.layout.n_model_params
+        if x.ndim != 1 or x.shape[0] != len(self.structured_names):
+            raise DimensionError(f"the structured parameters {self.structured_names} need "
+                                 f"{len(self.structured_names)} values; got shape {x.shape}.")
+        k = m + int(self.offset)
+        theta = self.layout.theta_of_model_vector(x[:m])
+        return np.r_[theta, x[m:k]], x[k:].copy()
+
+    def structured_jacobian(self, x) -> np.ndarray:
+        """``d (linear, nonlinear) / d x`` at ``x`` (:attr:`structured_names` order).
+
+        Block diagonal: :meth:`ThetaLayout.theta_jacobian` for theta, the identity for the
+        offset and the nonlinear parameters. A Jacobian ``G`` with respect to
+        ``(linear, nonlinear)`` becomes ``G @ M`` with respect to the structured parameters,
+        and a covariance ``C`` of the structured parameters becomes ``M C M^T`` (Eq. 20 and
+        the delta method).
+
+        Returns
+        -------
+        M : ndarray, shape (n_linear + n_nonlinear, len(structured_names))
+        """
+        x = np.asarray(x, dtype=np.float64)
+        self.from_structured(x)                    # checks the length
+        m, n = self.layout.n_model_params, self.layout.n_params
+        rest = x.shape[0] - m
+        M = np.zeros((n + rest, m + rest))
+        M[:n, :m] = self.layout.theta_jacobian(x[:m])
+        M[n:, m:] = np.eye(rest)
+        return M
+
+    def to_structured(self, linear, nonlinear) -> np.ndarray:
+        """Structured parameters from any ``(linear, nonlinear)`` (rank-one recovery of theta).
+
+        Exact when theta is of the form ``[q ⊗ a, p ⊗ b]``; otherwise the best rank-one fit of
+        each block (:meth:`ThetaLayout.rank_one_recovery`).
+        """
+        linear = np.asarray(linear, dtype=np.float64)
+        n = self.layout.n_params
+        return np.r_[self.layout.rank_one_recovery(linear[:n]), linear[n:],
+                     np.atleast_1d(np.asarray(nonlinear, dtype=np.float64))]
 
     def split_nonlinear(self, params):
         """``({free order: value}, (u_past, y_past))`` from a vector of nonlinear parameters."""

@@ -1,0 +1,176 @@
+"""Least squares over the model's own parameters (a, b, p, q, orders) — beyond the paper.
+
+Theta is not free: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20) has ``na + nb + (n_f - 1) + (n_g - 1)``
+free numbers, not ``n_g na + n_f nb``. Separable least squares (``"varpro"``) fits theta
+unconstrained and recovers ``a, b, p, q`` afterwards (Eqs. 39–40); it reaches the Cramér–Rao
+bound of the unstructured theta, which is larger than the bound of the structured parameters
+(:func:`fohw.crb` with ``parametrisation="structured"``). This estimator
+
+1. runs ``"varpro"`` (:func:`~fohw.estimators.varpro.separable_least_squares`, polish included),
+2. recovers ``a, b, p, q`` from its theta by the best rank-one fit of the blocks ``[q_j a_i]``
+   and ``[p_j b_i]`` (their leading singular triples, :meth:`fohw.ThetaLayout.rank_one_recovery`)
+   rather than by the mean of ratios of Eqs. (39)–(40), and
+3. minimises the one-step prediction error (Eq. 41)
+   ``||y - Phi(nonlinear) theta(a, b, p, q) - offset||^2`` over
+   ``x = (a, b, p_2.., q_2.., offset, nonlinear)`` (:attr:`fohw.Structure.structured_names`)
+   with :func:`scipy.optimize.least_squares` (trust-region reflective, ``x_scale="jac"``, the
+   free orders bounded) and the exact Jacobian ``G M``: ``G = [Phi, dPhi/dnu @ theta, …]``
+   (:meth:`fohw.RegressorBuilder.jacobian`, GL weight derivatives for the orders) times
+   ``M = d(theta, …)/dx`` (:meth:`fohw.Structure.structured_jacobian`).
+
+Under white Gaussian equation noise the result is the conditional maximum-likelihood estimate
+of the structured parameters. Its covariance ``s^2 ((G M)^T G M)^{-1}`` is reported mapped to
+``(theta, nonlinear)`` as ``M C M^T`` (rank deficient: theta lies on the rank-one set), so that
+:meth:`fohw.IdentificationResult.standard_errors` gives theta's and, through the delta method of
+Eqs. (39)–(40) (which inverts the mapping exactly), ``C``'s own entries for ``a, b, p, q``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize
+
+from .._validation import check_int, check_scalar
+from ..exceptions import ParameterError
+from ..results import Status
+from ._common import bound_note, finish, rms_scale
+from .options import MethodOptions
+from .varpro import (
+    VarproOptions,
+    _bounds_record,
+    _on_active_bound,
+    parameter_covariance,
+    separable_least_squares,
+)
+
+__all__ = ["StructuredOptions", "structured_result"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class StructuredOptions(MethodOptions):
+    """Options of ``method="structured"``.
+
+    Attributes
+    ----------
+    n_grid : int
+        Points of the coarse alpha scan of the ``"varpro"`` start (default 41, at least 3).
+    tol : float
+        ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in the start's
+        polish and in the structured fit (default ``1e-10``).
+    max_nfev : int or None
+        Evaluations allowed to the structured fit (default None: scipy's ``100 * (d + 1)``).
+    """
+
+    n_grid: int = 41
+    tol: float = 1e-10
+    max_nfev: int | None = None
+
+    def check(self):
+        """Validated copy."""
+        return self.replace(
+            n_grid=check_int(self.n_grid, "n_grid", minimum=3, maximum=100_000),
+            tol=check_scalar(self.tol, "tol", lower=0.0, lower_inclusive=False),
+            max_nfev=None if self.max_nfev is None else check_int(self.max_nfev, "max_nfev",
+                                                                  minimum=1))
+
+
+def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
+    """Least squares over the structured parameters from ``x0``.
+
+    Parameters
+    ----------
+    builder : RegressorBuilder
+        The record and the model class.
+    x0 : ndarray
+        Start, in :attr:`Structure.structured_names` order.
+    lower, upper : ndarray
+        Bounds of the free orders.
+    tol : float
+        Tolerances of :func:`scipy.optimize.least_squares`.
+    max_nfev : int, optional
+        Evaluation limit.
+
+    Returns
+    -------
+    x : ndarray
+        The estimate (orders put on a bound the solver reports active).
+    rss : float
+        ``||y - Phi theta(x)||^2``.
+    jacobian : ndarray, shape (N, d)
+        ``G M`` at ``x``: the derivative of the one-step prediction.
+    ls : scipy.optimize.OptimizeResult
+    """
+    s = builder.structure
+    y = builder.y
+    y_scale = rms_scale(y)
+    m = len(s.structured_names) - s.n_nonlinear
+    n_free = len(s.orders.free)
+    n_past = s.n_nonlinear - n_free
+
+    def residual(x):
+        linear, params = s.from_structured(x)
+        return (y - builder.matrix(params) @ linear) / y_scale
+
+    def jacobian(x):
+        linear, params = s.from_structured(x)
+        return builder.jacobian(linear, params) @ s.structured_jacobian(x) / -y_scale
+
+    lo = np.r_[np.full(m, -np.inf), lower, np.full(n_past, -np.inf)]
+    hi = np.r_[np.full(m, np.inf), upper, np.full(n_past, np.inf)]
+    ls = scipy.optimize.least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, method="trf",
+                                      bounds=(lo, hi), x_scale="jac", ftol=tol, xtol=tol,
+                                      gtol=tol, max_nfev=max_nfev)
+    x = ls.x.copy()
+    for j in range(n_free):
+        x[m + j] = _on_active_bound(x[m + j], ls.active_mask[m + j], lower[j], upper[j])
+    rss = float(ls.fun @ ls.fun) * y_scale**2
+    linear, params = s.from_structured(x)
+    return x, rss, builder.jacobian(linear, params) @ s.structured_jacobian(x), ls
+
+
+def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
+    """``"varpro"``, rank-one recovery, then least squares over the structured parameters."""
+    s = builder.structure
+    opts = options.check()
+    lower, upper = bounds
+    record = dict(opts.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))
+    vp = separable_least_squares(builder, bounds=(lower, upper),
+                                 options=VarproOptions(n_grid=opts.n_grid, tol=opts.tol))
+    if vp.rank_factor is not None and vp.rank_factor.rank < vp.rank_factor.n_columns:
+        return finish(builder, method="structured", linear=vp.linear, params=vp.params,
+                      status=Status.RANK_DEFICIENT, nit=vp.nit, nfev=vp.nfev,
+                      rank_factor=vp.rank_factor, options=record,
+                      operating_point=operating_point,
+                      message="no structured fit: the varpro start is rank deficient.")
+    try:
+        x0 = s.to_structured(vp.linear, vp.params)
+    except ParameterError as exc:
+        raise ParameterError(f"fohw.identify('structured'): cannot start from the varpro "
+                             f"estimate: {exc}") from None
+    x, rss, jac, ls = fit_structured(builder, x0, lower=lower, upper=upper, tol=opts.tol,
+                                     max_nfev=opts.max_nfev)
+    linear, params = s.from_structured(x)
+    cov_x, s2 = parameter_covariance(jac, rss, builder.n_samples)
+    covariance = None
+    if cov_x is not None:
+        M = s.structured_jacobian(x)
+        covariance = M @ cov_x @ M.T
+        covariance = 0.5 * (covariance + covariance.T)
+    status = (Status.CONVERGED if ls.status > 0 else
+              Status.MAX_ITER if ls.status == 0 else Status.FAILED)
+    n_free = len(s.orders.free)
+    m = len(s.structured_names) - s.n_nonlinear
+    active = ls.active_mask[m:m + n_free]
+    message = (f"structured least squares over {', '.join(s.structured_names)} from the varpro "
+               f"estimate (rank-one recovery of q⊗a and p⊗b; varpro: {vp.message}); "
+               f"scipy.optimize.least_squares: {ls.message}")
+    for j, name in enumerate(s.orders.free):
+        if active[j]:
+            message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0)
+    record["start"] = "varpro (rank-one recovery)"
+    return finish(builder, method="structured", linear=linear, params=params, status=status,
+                  nit=vp.nit + int(ls.njev), nfev=vp.nfev + int(ls.nfev), message=message,
+                  alpha_at_bound=bool(np.any(active != 0)), options=record,
+                  covariance=covariance, noise_variance=s2, operating_point=operating_point)

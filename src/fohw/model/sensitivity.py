@@ -1,0 +1,164 @@
+"""Sensitivity of the free-run simulation to the parameters — beyond the paper.
+
+The noise-free output ``y = ysim(x)`` of a model (SPEC §3, Eq. 16; Eq. 14 for a general
+:class:`fohw.Structure`) with parameters ``x = (linear, nonlinear)`` satisfies
+``y = Phi(y; x_nl) @ linear`` exactly, where ``Phi`` is the information matrix built from the
+simulated output itself. Differentiating this identity with respect to ``x`` gives the
+sensitivity ``S = d ysim / d x`` as the solution of a linear recursion,
+
+.. math:: S[k] = E[k] + \\sum_t h^{-\\nu_t} \\sum_{m \\le k - i_t}
+          \\beta_{\\nu_t}[k - i_t - m] \\, c_t[m] \\, S[m],
+          \\qquad c_t[m] = \\sum_j (q_j a_t)\\, g_j'(y[m]),
+
+where ``E = [Phi, dPhi/dx_nl @ linear]`` is the one-step-predictor Jacobian
+(:meth:`fohw.RegressorBuilder.jacobian`) evaluated on the simulated output, and the sum runs
+over the output terms ``t`` (lag ``i_t >= 1``, order ``nu_t``, coefficient ``q_j a_t`` of basis
+function ``g_j``). Because every lag is at least 1, ``S[k]`` depends on ``S[0..k-1]`` only, and
+the recursion is solved exactly by the divide-and-conquer scheme of the simulator
+(:func:`fohw.simulate`): finished halves enter later samples through FFT convolutions,
+``O(N log^2 N)``.
+
+``S`` is the Jacobian of the simulation-error residual (:mod:`fohw.estimators.output_error`),
+and ``S^T S / sigma^2`` is the Fisher information when white Gaussian noise of variance
+``sigma^2`` is added to the measured output (:func:`fohw.crb` with ``noise="output"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.signal
+
+from .._validation import check_array
+from ..exceptions import DimensionError
+from .gl import gl_weights
+from .regressors import RegressorBuilder
+from .structure import Structure
+from .system import simulate_parameters
+
+__all__ = ["simulation_jacobian", "basis_derivative"]
+
+_LEAF = 128
+
+
+def basis_derivative(basis, x):
+    """Derivatives ``g_j'(x)`` of every basis function, shape ``(len(basis), len(x))``.
+
+    Exact for :func:`fohw.polynomial_basis` (``d/dx x**n = n x**(n-1)``); other functions by a
+    central difference with step ``1e-6 * max(|x|, rms(x))`` (relative error about ``1e-10``
+    for smooth functions).
+    """
+    x = np.asarray(x, dtype=np.float64)
+    if basis.is_polynomial:
+        return np.array([n * x ** (n - 1) for n in range(1, len(basis) + 1)])
+    scale = float(np.sqrt(np.mean(x * x))) if x.size else 1.0
+    step = 1e-6 * np.maximum(np.abs(x), max(scale, 1e-300))
+    return (basis.evaluate(x + step) - basis.evaluate(x - step)) / (2.0 * step)
+
+
+def simulation_jacobian(structure, linear, params, u):
+    """Free-run output of a structure and its exact derivative with respect to the parameters.
+
+    Parameters
+    ----------
+    structure : Structure
+        The model class.
+    linear : array_like
+        The linear parameters (theta, then the offset; :attr:`Structure.linear_names`), any
+        theta (not only ``[q ⊗ a, p ⊗ b]``).
+    params : array_like
+        The nonlinear parameters (:attr:`Structure.nonlinear_names`).
+    u : array_like, shape (N,)
+        The input, as a deviation from the operating point.
+
+    Returns
+    -------
+    y : ndarray, shape (N,)
+        The noise-free simulated output (deviation from the operating point).
+    S : ndarray, shape (N, n_linear + n_nonlinear)
+        ``d y / d (linear, params)``, columns in :attr:`Structure.linear_names` then
+        :attr:`Structure.nonlinear_names` order.
+
+    Raises
+    ------
+    SimulationDivergedError
+        The model's free run escapes.
+
+    Notes
+    -----
+    The recursion in the module notes (the derivative of Eq. 16 through the output feedback).
+    It equals central finite differences of :func:`fohw.simulate_parameters` to their
+    truncation error (``tests/test_structured.py``).
+
+    Examples
+    --------
+    >>> import numpy as np, fohw
+    >>> from fohw.model.sensitivity import simulation_jacobian
+    >>> m = fohw.datasets.paper_model()
+    >>> u = np.random.default_rng(0).uniform(-1, 1, 300)
+    >>> y, S = simulation_jacobian(m.structure, m.linear, m.nonlinear, u)
+    >>> S.shape, bool(np.allclose(y, fohw.simulate(m, u)))
+    ((300, 11), True)
+    """
+    if not isinstance(structure, Structure):
+        raise DimensionError(f"`structure` must be a fohw.Structure; got "
+                             f"{type(structure).__name__}.")
+    linear = check_array(linear, "linear")
+    params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+    u = check_array(u, "u")
+    y = simulate_parameters(structure, linear, params, u)
+    builder = RegressorBuilder(u, y, structure=structure)
+    E = builder.jacobian(linear, params)
+    layout = structure.layout
+    qa, _ = layout.blocks(linear[:layout.n_params])
+    out_nu, _, _ = builder._term_orders(params)
+    dg = basis_derivative(structure.g_basis, y)             # (n_g, N)
+    h = structure.dt
+    lags, betas, coefs = [], [], []
+    n = y.shape[0]
+    for t, (term, nu) in enumerate(zip(structure.orders.output, out_nu)):
+        lags.append(term.lag)
+        betas.append(gl_weights(nu, n))
+        coefs.append((qa[:, t] @ dg) * (1.0 if h == 1.0 else h**-nu))
+    return y, _solve_feedback(E, lags, betas, coefs)
+
+
+def _solve_feedback(E, lags, betas, coefs):
+    """``S[k] = E[k] + sum_t (beta_t * (c_t S))[k - lag_t]`` for all ``k`` (lags >= 1).
+
+    Divide and conquer over time, as :func:`fohw.model.system._recursion`: ``D[t]`` gathers
+    ``beta_t * z_t`` with ``z_t = c_t S``; a leaf finishes its samples one by one (a dot product
+    per term and sample for the leaf's own past), and once the first half of ``[lo, hi)`` is
+    finished its ``z`` enters ``D`` on the second half by one FFT convolution per term.
+    """
+    n, d = E.shape
+    T = len(lags)
+    S = E.copy()
+    Z = np.zeros((T, n, d))
+    D = np.zeros((T, n, d))
+    leaf = min(_LEAF, n)
+    rev = [b[:leaf][::-1].copy() for b in betas]
+
+    def run_leaf(lo, hi):
+        for k in range(lo, hi):
+            s = S[k]
+            for t in range(T):
+                j = k - lags[t]
+                if j >= 0:
+                    s += D[t, j]
+            for t in range(T):
+                Z[t, k] = coefs[t][k] * s
+                D[t, k] += rev[t][leaf - (k - lo + 1):] @ Z[t, lo:k + 1]
+
+    def solve(lo, hi):
+        if hi - lo <= leaf:
+            run_leaf(lo, hi)
+            return
+        mid = (lo + hi) // 2
+        solve(lo, mid)
+        for t in range(T):
+            conv = scipy.signal.fftconvolve(Z[t, lo:mid], betas[t][:hi - lo, None], axes=0)
+            D[t, mid:hi] += conv[mid - lo:hi - lo]
+        solve(mid, hi)
+
+    solve(0, n)
+    return S
