@@ -109,6 +109,14 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
             linear least squares for each alpha, alpha by a grid scan and a bounded search, then
             a joint least-squares polish. Reaches the Cramér–Rao bound of theta; reports
             standard errors. Options: :class:`~fohw.estimators.varpro.VarproOptions`.
+        ``"structured"``
+            Beyond the paper: least squares over the model's own parameters
+            ``(a, b, p2.., q2.., offset, orders)`` with exact Jacobians, started from the
+            ``"varpro"`` estimate by a rank-one (SVD) recovery of ``q⊗a`` and ``p⊗b``
+            (:mod:`fohw.estimators.structured`). Reaches the *structured* Cramér–Rao bound
+            (``fohw.crb(..., parametrisation="structured")``), lower than the bound of the
+            unstructured theta that ``"varpro"`` reaches; standard errors of ``a, b, p, q``.
+            Options: :class:`~fohw.estimators.structured.StructuredOptions`.
         ``"output_error"``
             Beyond the paper: minimises the free-run *simulation* error over
             ``(theta, alpha)`` (:mod:`fohw.estimators.output_error`), started from the
