@@ -297,3 +297,15 @@ def test_a_diverging_free_run_is_said_loudly():
 
 def test_the_python_default_is_the_recommended_method(paper):
     assert fohw.identify(paper[0].u, paper[0].y, **S).method == "varpro"
+
+
+def test_select_prints_warnings_as_single_lines():
+    """The refit of the winner used to print Python's two-line warnings on tank data."""
+    from importlib import resources
+
+    status, _, err = run_cli(["select", resources.files("fohw") / "data" / "cascaded_tanks.csv",
+                              "--columns", "uEst,yEst", "--na", 1, "--f-basis", 1, "--g-basis", 1])
+    assert status == 0
+    lines = err.splitlines()
+    assert lines and all(line.startswith("fohw: warning: ") for line in lines), err
+    assert len(lines) == len(set(lines))

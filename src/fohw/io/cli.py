@@ -416,6 +416,7 @@ def _fit_text(check):
 
 
 def _select(args):
+    import warnings
     from concurrent.futures import ProcessPoolExecutor
 
     from ..analysis.selection import expand_candidates, select_structure
@@ -436,13 +437,18 @@ def _select(args):
         candidates = [dict(c, nb=c["na"]) for c in candidates]
     pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
     try:
-        sel = select_structure(u, y, candidates, validation=args.validation,
-                               method=args.method, offset=args.offset,
-                               operating_point=args.operating_point, dt=args.dt,
-                               executor=pool)
+        with warnings.catch_warnings(record=True) as caught:
+            for category in _fohw_warnings():
+                warnings.simplefilter("always", category)
+            sel = select_structure(u, y, candidates, validation=args.validation,
+                                   method=args.method, offset=args.offset,
+                                   operating_point=args.operating_point, dt=args.dt,
+                                   executor=pool)
     finally:
         if pool is not None:
             pool.shutdown()
+    for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
+        print(f"fohw: warning: {message}", file=sys.stderr)
     print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
     print(sel.to_markdown(top=args.top))
     if sel.best is None:
