@@ -309,3 +309,67 @@ def test_select_prints_warnings_as_single_lines():
     lines = err.splitlines()
     assert lines and all(line.startswith("fohw: warning: ") for line in lines), err
     assert len(lines) == len(set(lines))
+
+
+# --- found by review ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("field, value, message", [
+    ("offset", "1", "field 'offset' must be a finite number or null"),
+    ("orders", {"alpha": "x"}, "field 'orders' must be an object of finite numbers"),
+    ("past", [0.0, None], "field 'past' must be a pair of finite numbers"),
+    ("operating_point", "ab", "field 'operating_point' must be a pair of finite numbers"),
+    ("input_range", "ab", "field 'input_range' must be a pair of finite numbers or null"),
+])
+def test_every_field_of_a_result_file_is_checked(old_file, field, value, message):
+    path, _ = old_file
+    d = json.loads(path.read_text())
+    d[field] = value
+    path.write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match=message):
+        fohw.load_result(path)
+
+
+def test_data_in_extreme_units_are_not_called_rank_deficient(paper):
+    """Equilibration squared the columns: at 1e+-100 the regressors looked rank deficient."""
+    d = paper[0]
+    S2 = dict(na=2, nb=2, f_basis=2, g_basis=2)
+    ref = fohw.identify(d.u, d.y, **S2)
+    for scale in (1e-100, 1e100):
+        res = fohw.identify(scale * d.u, scale * d.y, **S2)
+        assert res.status == ref.status == fohw.Status.CONVERGED
+        assert res.alpha == pytest.approx(ref.alpha, abs=1e-7)
+
+
+def test_saving_onto_the_data_file_is_refused(paper, tmp_path):
+    data = tmp_path / "d.dat"
+    data.write_bytes(paper[1].read_bytes())
+    before = data.read_bytes()
+    status, _, err = run_cli(["identify", data, "--na", 2, "--nb", 2, "--save", data])
+    assert status == 2 and "is the file this run reads" in err
+    assert data.read_bytes() == before
+
+
+def test_a_symlink_is_written_through_and_a_read_only_file_refused(old_file, paper, tmp_path):
+    path, before = old_file
+    link = tmp_path / "link.json"
+    link.symlink_to(path)
+    res = fohw.identify(paper[0].u, paper[0].y, method="structured", **S)
+    res.to_json(link)
+    assert link.is_symlink() and path.read_bytes() != before
+    assert fohw.load_result(link).method == "structured"
+    path.chmod(0o444)
+    try:
+        if os.access(path, os.W_OK):            # root writes anything: nothing to refuse
+            pytest.skip("the tests run as root, for whom no file is read-only")
+        with pytest.raises(fohw.DataFileError, match="is read-only"):
+            res.to_json(path)
+    finally:
+        path.chmod(0o644)
+
+
+def test_numbers_python_alone_would_accept_are_refused(tmp_path):
+    for text in ("1_000 2\n3 4\n", "\u0661 2\n3 4\n"):
+        path = tmp_path / "n.dat"
+        path.write_text(text, encoding="utf-8")
+        with pytest.raises(fohw.DataFileError, match="line 1: .* is not a number"):
+            text_io.read_table(path)

@@ -63,6 +63,12 @@ def factor(a, *, rcond=None, with_q=True) -> Factor:
     a = np.asarray(a, dtype=np.float64)
     n_rows, n_cols = a.shape
     scale = np.sqrt(np.einsum("ij,ij->j", a, a))
+    tiny = np.finfo(float).tiny ** 0.5
+    redo = ~np.isfinite(scale) | (scale < tiny)      # squares overflowed or underflowed
+    if np.any(redo):                                  # data in units of 1e+-100 and beyond
+        peak = np.max(np.abs(a[:, redo]), axis=0)
+        peak[peak == 0] = 1.0
+        scale[redo] = peak * np.sqrt(np.einsum("ij,ij->j", a[:, redo] / peak, a[:, redo] / peak))
     scale[scale == 0] = 1.0
     if rcond is None:
         rcond = max(n_rows, n_cols) * np.finfo(float).eps

@@ -286,9 +286,10 @@ def _warn_levels(u, y):
         mean, sd = float(np.mean(x / scale)), float(np.std(x / scale))   # no overflow
         if abs(mean) > sd:
             mean *= scale
-            ratio = f"{abs(mean) / sd:.1f} times" if sd > 0 else "and it is constant, infinitely"
+            ratio = (f"{abs(mean) / sd:.1f} times its standard deviation" if sd > 0
+                     else "and it is constant")
             warnings.warn(
-                f"fohw.identify: `{name}` has mean {mean:.4g}, {ratio} its standard deviation, "
+                f"fohw.identify: `{name}` has mean {mean:.4g}, {ratio}, "
                 "and the model has neither `offset` nor `operating_point`: it then assumes the "
                 "signals rested at 0 before k = 0 and must explain the level with its dynamics, "
                 "which commonly drives the fractional orders to 0. Pass operating_point='mean' "

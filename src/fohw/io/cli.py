@@ -132,24 +132,31 @@ def _basis_arg(text):
     return degree
 
 
-def _check_file_out(path, flag):
-    """Check an output file before the run: not a folder, in a folder that exists."""
+def _check_file_out(path, flag, inputs=()):
+    """Check an output file before the run.
+
+    Not a folder, in a folder that exists, and not one of the files the run reads.
+    """
     from ..exceptions import DataFileError
     from .jsonio import check_output_path
 
     if path is None:
         return
+    for source in inputs:
+        if os.path.exists(path) and os.path.exists(source) and os.path.samefile(path, source):
+            raise UsageError(f"{flag} {path!r} is the file this run reads ({source!r}); give "
+                             "another file name.")
     try:
         check_output_path(path, flag)
     except DataFileError as exc:
         raise UsageError(str(exc)) from None
 
 
-def _check_plot_out(path, flag):
+def _check_plot_out(path, flag, inputs=()):
     """As :func:`_check_file_out`, and the extension is a format matplotlib writes."""
     if path is None:
         return
-    _check_file_out(path, flag)
+    _check_file_out(path, flag, inputs)
     from matplotlib.backend_bases import FigureCanvasBase
 
     formats = FigureCanvasBase.get_supported_filetypes()
@@ -335,8 +342,8 @@ def _identify(args):
     from ..analysis.validation import compare
     from ..exceptions import FohwError
 
-    _check_file_out(args.save, "--save")
-    _check_plot_out(args.plot, "--plot")
+    _check_file_out(args.save, "--save", [args.data])
+    _check_plot_out(args.plot, "--plot", [args.data])
     data, names = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     options = {name: value for name, value in (("schedule", args.schedule),
@@ -349,21 +356,20 @@ def _identify(args):
     start = time.perf_counter()
     _progress(f"identifying with {args.method} on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
-        for category in _fohw_warnings():
-            warnings.simplefilter("always", category)
+        warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
                        offset=args.offset, operating_point=args.operating_point, dt=args.dt)
-    _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run ...")
-    for w in caught:
-        print(f"fohw: warning: {w.message}", file=sys.stderr)
-    check = None
-    if res.model is not None:
-        try:
-            check = compare(res, u, y)
-        except FohwError as exc:        # e.g. a constant output: no fit index
-            print(f"fohw: warning: no free-run fit on the estimation record: {exc}",
-                  file=sys.stderr)
+        _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
+                  "...")
+        check = None
+        if res.model is not None:
+            try:
+                check = compare(res, u, y)
+            except FohwError as exc:        # e.g. a constant output: no fit index
+                warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
+    for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
+        print(f"fohw: warning: {message}", file=sys.stderr)
     if args.json:
         out = {"alpha": res.alpha, "theta": dict(zip(res.parameter_names, res.theta.tolist())),
                "J": res.J, "converged": res.converged, "status": res.status.name,
@@ -423,9 +429,9 @@ def _select(args):
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
-    _check_file_out(args.save, "--save")
-    _check_file_out(args.csv, "--csv")
-    _check_plot_out(args.plot, "--plot")
+    _check_file_out(args.save, "--save", [args.data])
+    _check_file_out(args.csv, "--csv", [args.data])
+    _check_plot_out(args.plot, "--plot", [args.data])
     data, names = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
@@ -487,7 +493,7 @@ def _simulate(args):
 
     from ..model.system import _noise, simulate
 
-    _check_file_out(args.output, "--output")
+    _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
     data, names = read_table(args.input, _decimal(args))
     (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")

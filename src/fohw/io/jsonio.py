@@ -206,10 +206,14 @@ def _write_text(text, path):
 
     The text goes to a temporary file in the same folder, flushed to disk, which then replaces
     ``path`` in one step (:func:`os.replace`), so an interrupted or failed save never truncates
-    a file: an existing one survives byte for byte.
+    a file: an existing one survives byte for byte. A symbolic link is written through (its
+    target is replaced, the link kept); a read-only file is refused.
     """
     path = check_output_path(path, "the output file")
-    folder, name = os.path.split(os.path.abspath(path))
+    path = os.path.realpath(path)             # write through a symbolic link, not over it
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise DataFileError(f"{path!r} is read-only; fohw does not replace it.")
+    folder, name = os.path.split(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
@@ -339,6 +343,26 @@ def _check_fields(d, path, version):
         integer("nfev", 0)
         if isinstance(d.get("status"), bool) or d.get("status") not in {int(s) for s in Status}:
             bad("status", f"one of {sorted(int(s) for s in Status)} (fohw.Status)")
+        number("offset", optional=True)
+        orders = d.get("orders")
+        if not isinstance(orders, dict) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+                for v in orders.values()):
+            bad("orders", "an object of finite numbers (the estimated orders)")
+        for key in ("past", "operating_point"):
+            _finite_pair(d, key, path, optional=False)
+    _finite_pair(d, "input_range", path, optional=True)
+
+
+def _finite_pair(d, key, path, optional):
+    value = d.get(key)
+    if value is None and optional:
+        return
+    if not isinstance(value, list) or len(value) != 2 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+            for v in value):
+        raise DataFileError(f"{path}: field {key!r} must be a pair of finite numbers"
+                            + (" or null" if optional else "") + f"; got {value!r}.")
 
 
 def _array_field(d, key, path):
@@ -382,8 +406,9 @@ def _check_covariance(cov, n_estimates, path):
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     """Inverse of :func:`result_to_dict`.
 
-    Every field is checked for its type and, for numbers, finiteness before use (a covariance
-    must also be symmetric with a non-negative diagonal): a file edited or damaged by hand is a
+    Every field is checked for its type and, for numbers, finiteness before use (the estimates,
+    orders, offset, past levels, operating point and input range included; a covariance must
+    also be symmetric with a non-negative diagonal): a file edited or damaged by hand is a
     :class:`~fohw.DataFileError` naming the field, never a result that fails later.
     """
     from ..results import IdentificationResult, Status, recover_model

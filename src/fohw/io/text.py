@@ -62,6 +62,12 @@ class Table:
 
 
 def _number(text):
+    """A number as written in data files: ASCII, no digit separators.
+
+    ``float`` alone would take ``1_000`` and non-ASCII digits, which numpy's reader refuses.
+    """
+    if "_" in text or not text.isascii():
+        return None
     try:
         return float(text)
     except ValueError:
@@ -120,7 +126,8 @@ def read_table(path, *, decimal=".") -> Table:
     A clean file (one header at most, no comment marks after it, the same number of fields on
     every line) is parsed by :func:`numpy.loadtxt`'s compiled reader; anything else, and every
     error, goes through a line-by-line reader that names the line. Both give the same numbers
-    (``tests/test_text_io.py``).
+    and names (``tests/test_reliability.py``); only the line reader counts blank lines inside
+    the data in ``Table.skipped``.
     """
     path = os.fspath(path)
     if decimal not in (".", ","):

@@ -1,6 +1,6 @@
 """Sensitivity of the free-run simulation to the parameters — beyond the paper.
 
-The noise-free output ``y = ysim(x)`` of a model (SPEC §3, Eq. 16; Eq. 14 for a general
+The noise-free output ``y = ysim(x)`` of a model (Eq. 16; Eq. 14 for a general
 :class:`fohw.Structure`) with parameters ``x = (linear, nonlinear)`` satisfies
 ``y = Phi(y; x_nl) @ linear`` exactly, where ``Phi`` is the information matrix built from the
 simulated output itself. Differentiating this identity with respect to ``x`` gives the
