@@ -326,6 +326,7 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     n = theta.shape[0]
     theta_path = np.empty((n_samples, n))
     alpha_path = np.empty(n_samples)
+    inner_lo, inner_hi = bounds.inner
     if not reference:
         windows = _expanded_windows(builder, bounds, P, sensitivity, delta_alpha)
         expansion = windows.expansion
@@ -356,7 +357,8 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
                                       lm_lambda=lm_lambda)
         if not (math.isfinite(alpha) and math.isfinite(theta @ theta)):    # exact check if not
             check_finite_estimate(method, theta, alpha, f" at sample k = {k}")
-        alpha = bounds(alpha)
+        if not inner_lo <= alpha <= inner_hi:
+            alpha = bounds(alpha)
         theta_path[k] = theta
         alpha_path[k] = alpha
     return theta, alpha, r, theta_path, alpha_path

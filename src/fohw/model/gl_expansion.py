@@ -115,6 +115,7 @@ class GLExpansion:
         self.error_bound = self._bound(log_k, self.degree)
         self.derivative_error_bound = self._bound(log_k, self.degree, derivative=True)
         self._m = np.arange(self.degree + 1, dtype=np.float64)
+        self._angles = np.empty((2, 1))
         self._coefficients = None
 
     # ---- the bound ------------------------------------------------------------------------------
@@ -202,11 +203,11 @@ class GLExpansion:
             out[0] = self.basis(alpha)
             out[1] = self.basis_derivative(alpha)
             return out
-        np.multiply(self._m, math.acos(self._tau(alpha)), out=out[0])
-        np.multiply(self._m, math.acos(self._tau(alpha + delta_alpha, "alpha + delta_alpha")),
-                    out=out[1])
-        np.cos(out, out=out)
-        out[1] -= out[0]
+        angles = self._angles
+        angles[0, 0] = math.acos(self._tau(alpha))
+        angles[1, 0] = math.acos(self._tau(alpha + delta_alpha, "alpha + delta_alpha"))
+        np.cos(np.multiply(self._m, angles, out=out), out=out)
+        np.subtract(out[1], out[0], out=out[1])
         out[1] *= 1.0 / delta_alpha
         return out
 
