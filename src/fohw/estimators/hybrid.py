@@ -318,7 +318,7 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     With ``joint=True`` (the single-innovation LM baseline) both are updated together by the
     step of Eq. (48) applied to ``(theta, alpha)``. The windows come from the GL weights
     expanded in alpha (``O(M N log N)`` per pass); ``reference=True`` rebuilds them from the
-    weights at every sample instead (``O(N^2)``, the implementation before fohw 0.2, kept to
+    weights at every sample instead (``O(N^2)``, the implementation before the expansion, kept to
     test that both give the same path).
     """
     y = builder.y
