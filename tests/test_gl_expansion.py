@@ -23,7 +23,7 @@ from fohw.estimators.hybrid import (
 )
 from fohw.exceptions import ParameterError
 from fohw.model.gl import _weights
-from fohw.model.gl_expansion import ExpandedWindows, GLExpansion
+from fohw.model.gl_expansion import ExpandedWindows, GLExpansion, StreamedWindows
 from fohw.model.regressors import WindowKernel
 
 U = np.finfo(float).eps / 2
@@ -155,3 +155,51 @@ def test_recursive_methods_follow_the_reference_alpha_path(method, options):
                                atol=1e-12)
     np.testing.assert_allclose(fast.theta_history, slow.theta_history, rtol=0,
                                atol=1e-12 * np.abs(slow.theta_history).max())
+
+
+@pytest.mark.parametrize("chunks", [[300], [1, 2, 61, 64, 172], [17] * 17 + [11]])
+def test_streamed_windows_equal_literal_sums_at_every_sample(chunks):
+    d = fohw.datasets.paper_example(300, random_state=2)
+    b = fohw.RegressorBuilder(d.u, d.y, na=3, nb=2, f_basis=2, g_basis=3)
+    lags = [3, 3, 3, 2, 2]
+    sw = StreamedWindows(lags, 0.0, 1.0, 3, leaf=8)        # leaf 8: many levels in 300 samples
+    ex = sw.expansion
+    beta, dbeta = exact_weights(Fraction(2, 5), 300)
+    lit = [[np.convolve(row, w)[:300] for row in b.signals] for w in (beta, dbeta)]
+    atol = 1e-12 * np.abs(b.signals).max()        # as for the FFT GL difference (test_gl.py)
+    v = np.vstack([ex.basis(0.4), ex.basis_derivative(0.4)])
+    start = 0
+    for c in chunks:
+        sw.append(b.signals[:, start:start + c])
+        for k in range(start, start + c):
+            got = sw.rows(k, v)
+            np.testing.assert_allclose(got[0], literal_window(lit[0], lags, k, 3), rtol=0,
+                                       atol=atol)
+            np.testing.assert_allclose(got[1], literal_window(lit[1], lags, k, 3), rtol=0,
+                                       atol=10 * atol)
+        start += c
+
+
+@pytest.mark.parametrize("P", [1, 3])
+def test_rls_follows_the_reference_path_within_its_rounding_sensitivity(P):
+    # MI-RLS from S(0) = 1e6 I amplifies rounding: perturbing u by one unit in the last place
+    # moves the reference's own path by the amount measured here. The expanded windows must
+    # stay within a small multiple of it (a wrong window moves alpha by 1e-2 or more).
+    d = fohw.datasets.paper_example(2000, random_state=3)
+    STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3, innovation_length=P)
+
+    def run(u, reference):
+        est = fohw.MultiInnovationRLS(**STRUCT)
+        est._reference = reference
+        return est.fit(u, d.y)
+
+    ref = run(d.u, True)
+    fast = run(d.u, False)
+    ulp = d.u * (1 + U * np.random.default_rng(0).choice([-1.0, 1.0], d.u.shape[0]))
+    wobble = run(ulp, True)
+    assert np.ptp(ref.alpha_history_) > 1e-2
+    sens_alpha = np.abs(wobble.alpha_history_ - ref.alpha_history_).max()
+    sens_theta = np.abs(wobble.theta_history_ - ref.theta_history_).max()
+    assert 0 < sens_alpha < 1e-10
+    assert np.abs(fast.alpha_history_ - ref.alpha_history_).max() <= 20 * sens_alpha
+    assert np.abs(fast.theta_history_ - ref.theta_history_).max() <= 20 * sens_theta

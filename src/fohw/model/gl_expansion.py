@@ -303,3 +303,142 @@ class ExpandedWindows:
         S = self.n_signals
         win = self._D[(k - self.width - self._t0) * S:(k - self._t0) * S]
         return np.dot(vectors, win.T).ravel()[self._index[min(self.P, k + 1) - 1]]
+
+
+def _window_index(lags, innovation_length):
+    """Flat gather index of the window rows (see :class:`ExpandedWindows`), per row count."""
+    n_signals = len(lags)
+    width = innovation_length + max(lags) - 1
+    sig_idx = np.repeat(np.arange(n_signals), lags)
+    lag_idx = np.concatenate([np.arange(1, m + 1) for m in lags])
+    size = width * n_signals
+    out = []
+    for n_rows in range(1, innovation_length + 1):
+        r = np.arange(n_rows)[:, None]
+        one = (width - r - lag_idx[None, :]) * n_signals + sig_idx[None, :]
+        out.append(np.stack([one, one + size]))
+    return width, out
+
+
+class StreamedWindows:
+    """:class:`ExpandedWindows` for signals that arrive in chunks (MI-RLS ``partial_fit``).
+
+    ``D_m[t] = sum_j c[m, j] x[t - j]`` is built sample by sample as the signals arrive, by a
+    partitioned convolution whose grid is fixed in absolute time: the first ``leaf`` weights
+    directly at each sample, the weights ``[L, 2L)`` (``L = leaf * 2**l``) by one FFT per
+    output block ``[b, b + L)`` (``b`` a multiple of ``L``) as soon as ``x[b - 1]`` is known.
+    Every ``D_m[t]`` is therefore computed by the same operations in the same order however the
+    record is cut into chunks: streaming gives exactly the numbers of one pass. The
+    coefficients are formed by an explicit cosine sum, one weight at a time, for the same
+    reason. Cost ``O(M N log^2 N)``; memory ``8 M S N`` bytes (``M = degree + 1``).
+
+    Parameters
+    ----------
+    lags : sequence of int
+        Lags of each stacked signal.
+    lo, hi : float
+        Interval of orders.
+    innovation_length : int
+        ``P``.
+    leaf : int, optional
+        Weights applied directly (default 64; a power of two).
+    """
+
+    def __init__(self, lags, lo, hi, innovation_length, *, leaf=64):
+        self.lags = list(lags)
+        self.n_signals = len(self.lags)
+        self.expansion = _stream_expansion(float(lo), float(hi))
+        self.terms = self.expansion.degree + 1
+        self.P = int(innovation_length)
+        self.width, self._index = _window_index(self.lags, self.P)
+        self.leaf = int(leaf)
+        self._x = np.zeros((self.n_signals, self.leaf - 1 + 1024))   # leaf - 1 zeros first
+        self._n_x = 0
+        self._D = np.zeros((self.width + 1024, self.n_signals, self.terms))   # width zeros first
+        self._n_done = 0                    # D final for t < _n_done
+        self._c = np.zeros((self.terms, 0))
+        self._spectra = {}
+
+    def append(self, x):
+        """Add the next samples of the signals, shape ``(S, m)``."""
+        m = x.shape[1]
+        need = self.leaf - 1 + self._n_x + m
+        if need > self._x.shape[1]:
+            grown = np.zeros((self.n_signals, max(need, 2 * self._x.shape[1])))
+            grown[:, :self._x.shape[1]] = self._x
+            self._x = grown
+        self._x[:, self.leaf - 1 + self._n_x:need] = x
+        self._n_x += m
+
+    def _coefficients(self, n):
+        """``c[:, :n]``, each column by the same explicit sum whatever ``n`` (see above)."""
+        have = self._c.shape[1]
+        if n <= have:
+            return self._c
+        n = max(n, 2 * have)
+        deg = self.expansion.degree
+        nodes = self.expansion.nodes()
+        values = np.array([_weights(a, n) for a in nodes])
+        k = np.arange(deg + 1)
+        c = np.zeros((deg + 1, n))
+        for m in range(deg + 1):
+            w = np.cos(np.pi * m * k / deg) * (2.0 / deg)
+            w[0] *= 0.5
+            w[deg] *= 0.5
+            if m in (0, deg):
+                w *= 0.5
+            for j in range(deg + 1):
+                c[m] += w[j] * values[j]
+        self._c = c
+        self._spectra = {}
+        self._near = np.ascontiguousarray(c[:, self.leaf - 1::-1])    # reversed first weights
+        return c
+
+    def _grow_D(self, t_end):
+        need = self.width + t_end
+        if need > self._D.shape[0]:
+            grown = np.zeros((max(need, 2 * self._D.shape[0]), self.n_signals, self.terms))
+            grown[:self._D.shape[0]] = self._D
+            self._D = grown
+
+    def _finish(self, t):
+        """Make ``D[t]`` final (needs ``x[t]``)."""
+        B, S, W = self.leaf, self.n_signals, self.width
+        L = B
+        while t >= L and t % L == 0:             # output block [t, t + L) of weights [L, 2L)
+            c = self._coefficients(2 * L)
+            spec = self._spectra.get(L)
+            if spec is None:
+                spec = self._spectra[L] = scipy.fft.rfft(c[:, L:2 * L], n=2 * L, axis=-1)
+            lo = t - 2 * L + 1
+            xin = np.zeros((S, 2 * L - 1))
+            xin[:, max(-lo, 0):] = self._x[:, B - 1 + max(lo, 0):B - 1 + t]
+            X = scipy.fft.rfft(xin, n=2 * L, axis=-1)
+            out = scipy.fft.irfft(spec[:, None, :] * X[None, :, :], n=2 * L, axis=-1)
+            self._grow_D(t + L)
+            self._D[W + t:W + t + L] += out[:, :, L - 1:2 * L - 1].transpose(2, 1, 0)
+            L *= 2
+        if self._c.shape[1] < B:
+            self._coefficients(B)
+        if W + t >= self._D.shape[0]:
+            self._grow_D(t + 1)
+        self._D[W + t] += np.dot(self._x[:, t:t + B], self._near.T)
+
+    def rows(self, k, vectors):
+        """Window and sensitivity at sample ``k`` (``x`` known up to ``k - 1`` at least)."""
+        while self._n_done < k:
+            self._finish(self._n_done)
+            self._n_done += 1
+        win = self._D[k:k + self.width].reshape(self.width * self.n_signals, self.terms)
+        return np.dot(vectors, win.T).ravel()[self._index[min(self.P, k + 1) - 1]]
+
+
+_STREAM_EXPANSIONS = {}
+
+
+def _stream_expansion(lo, hi):
+    """One expansion per interval: degree with bound <= 1e-17 at 2**17 weights (cached)."""
+    key = (lo, hi)
+    if key not in _STREAM_EXPANSIONS:
+        _STREAM_EXPANSIONS[key] = GLExpansion(lo, hi, 2**17, tol=1e-17)
+    return _STREAM_EXPANSIONS[key]
