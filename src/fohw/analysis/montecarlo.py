@@ -24,6 +24,7 @@ import warnings
 import numpy as np
 
 from .._parallel import TaskError, run_tasks
+from .._threads import thin_solves
 from ..datasets import paper_example
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, FohwError, ParameterError, SimulationDivergedError
@@ -35,6 +36,7 @@ def _paper_data(seed, n_samples=10_000, **kwargs):
     return paper_example(n_samples, random_state=seed, **kwargs)
 
 
+@thin_solves
 def _run_task(make_data, methods, seed, setting):
     rows = []
     try:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._parallel import TaskError, run_tasks
+from .._threads import thin_solves
 from .._validation import check_array, check_same_length
 from ..exceptions import ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
@@ -100,6 +101,7 @@ def _blank_row(**changes):
                      seconds=np.nan, reason=""), **changes)
 
 
+@thin_solves
 def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
     """One candidate: fit on the estimation part, free-run over ``u_sim``, score the tail.
 

@@ -61,11 +61,11 @@ def migd_update(theta, window, outputs, r_prev, *, normalisation="window", forge
     """
     innovation = outputs - window @ theta
     if normalisation == "window":
-        increment = float(np.sum(window * window))
+        increment = float(np.vdot(window, window))
     else:
         increment = float(window[0] @ window[0])
     r = forgetting * r_prev + increment
-    return theta + window.T @ innovation / r, r, innovation
+    return theta + (innovation @ window) / r, r, innovation
 
 
 def migd_pass(Phi, y, *, innovation_length, theta0, r0=1.0, normalisation="window",

@@ -26,6 +26,7 @@ import numpy as np
 import scipy.optimize
 
 from .. import _linalg
+from .._threads import thin_solves
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
@@ -240,6 +241,7 @@ def _start(builder, options, lower, upper):
     return np.array(linear0, dtype=float), np.array(params0, dtype=float), J0, "the given start"
 
 
+@thin_solves
 def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     """Equation-error start (varpro) or a given one, then the simulation-error fit."""
     s = builder.structure

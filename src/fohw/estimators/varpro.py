@@ -37,6 +37,7 @@ import scipy.ndimage
 import scipy.optimize
 
 from .. import _linalg
+from .._threads import thin_solves
 from .._validation import check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError
 from ..results import Status
@@ -433,6 +434,7 @@ def _on_active_bound(value, active, lo, hi):
     return lo if active < 0 else hi if active > 0 else value
 
 
+@thin_solves
 def varpro_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     """Run separable least squares and wrap it as an IdentificationResult.
 
