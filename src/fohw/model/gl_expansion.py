@@ -51,7 +51,7 @@ from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 from .gl import _weights
 
-__all__ = ["GLExpansion", "ExpandedWindows"]
+__all__ = ["GLExpansion", "ExpandedWindows", "StreamedWindows"]
 
 _RHOS = np.geomspace(1.25, 400.0, 48)     # ellipse parameters tried in the bound
 _MAX_DEGREE = 96
