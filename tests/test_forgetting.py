@@ -43,7 +43,7 @@ def test_forgetting_below_one_changes_the_run_and_says_so(tmp_path, default_tabl
     default_csv, default_md = default_table
     csv, md = _table2_csv(tmp_path, "lam", "--forgetting", "0.95")
     assert csv != default_csv
-    assert "not in the paper" not in default_md
+    assert "Forgetting factor" not in default_md and "no forgetting factor" not in default_md
     assert "Forgetting factor lambda = 0.95" in md and "no forgetting factor" in md
     # The option reaches the estimator: the same numbers as identify with forgetting=0.95.
     data = fohw.datasets.paper_example(2000, random_state=0)

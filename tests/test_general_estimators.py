@@ -70,10 +70,12 @@ def test_the_mixed_model_has_the_static_gain_its_estimate_implies():
     assert est.static_gain(0.7) == pytest.approx(want, rel=1e-6)
     step = fohw.simulate(est, np.full(20_000, 0.7))
     # The step settles there, and the alpha-terms' memory of the jump decays like k^-alpha:
-    # doubling k multiplies the distance to the static gain by 2^-alpha (to O(1/k)).
+    # doubling k multiplies the distance to the static gain by 2^-alpha, up to a correction
+    # that itself decays like k^-alpha (measured relative error of the ratio: 2.1e-3, 1.6e-3,
+    # 1.2e-3 at k = 2500, 5000, 10 000; 3e-3 bounds it with the trend).
     d10, d20 = step[9_999] - want, step[19_999] - want
     assert 0 < abs(d20) < abs(d10) < 0.05 * abs(want)
-    assert d20 / d10 == pytest.approx(2.0 ** -est.alpha, rel=0.01)
+    assert d20 / d10 == pytest.approx(2.0 ** -est.alpha, rel=3e-3)
 
 
 @pytest.mark.parametrize("method", ["varpro", "output_error"])
@@ -160,16 +162,18 @@ def test_a_result_with_the_general_structure_survives_json(tmp_path):
 
 @pytest.mark.parametrize("kwargs, match", [
     (dict(alpha_bounds={"alpha": (0, 1), "beta": (0, 1)}), "unknown \\['beta'\\]"),
-    (dict(alpha_bounds={"alpha_a1": (0, 1)}, orders="per_lag"), "missing"),
-    (dict(alpha_bounds=(0.0, 2.5)), "alpha_bounds"),
-    (dict(dt=0.0), "dt"),
-    (dict(orders="fractional"), "orders"),
+    (dict(alpha_bounds={"alpha_a1": (0, 1)}, orders="per_lag"),
+     "must give exactly the free orders \\['alpha_a1', 'alpha_b1'\\]; unknown \\[\\], "
+     "missing \\['alpha_b1'\\]"),
+    (dict(alpha_bounds=(0.0, 2.5)), "`alpha_bounds` must satisfy 0 <= low < high <= 2"),
+    (dict(dt=0.0), "`dt` must be in \\(0, inf\\]; got 0.0"),
+    (dict(orders="fractional"), "`orders` must be one of \\('commensurate', 'per_lag', 'mixed'\\)"),
     (dict(orders={"a": [0.5]}), "keys 'a' and 'b'"),
     (dict(orders={"a": [0.5, 0.5], "b": [0.5]}), "na = 1"),
-    (dict(method="hybrid", orders="mixed"), "commensurate"),
-    (dict(method="rls", offset=True), "commensurate"),
-    (dict(past="guess"), "past"),
-    (dict(operating_point="median"), "operating_point"),
+    (dict(method="hybrid", orders="mixed"), "method 'hybrid' implements the paper's commensurate"),
+    (dict(method="rls", offset=True), "method 'rls' implements the paper's commensurate"),
+    (dict(past="guess"), "`past` must be one of \\('rest', 'estimate'\\); got 'guess'"),
+    (dict(operating_point="median"), "`operating_point` must be None, one of .*; got 'median'"),
 ])
 def test_bad_structure_specifications_name_the_argument(kwargs, match):
     u, y = record(fohw.HammersteinWiener([0.5], [1.0], [1.0], [1.0], 0.3))

@@ -56,10 +56,11 @@ def test_weights_and_derivative_equal_exact_values_within_the_bound(lo, hi, alph
     deg = ex.degree
     # Rounding allowance (not part of the proven bound): each node weight carries at most
     # (2j + 1) roundings of relative size u, the Chebyshev interpolant amplifies node errors by
-    # its Lebesgue constant (<= 3 for deg <= 100), and evaluating sum_m c_m T_m adds at most
+    # its Lebesgue constant (<= 2/pi log(deg + 1) + 1), and evaluating sum_m c_m T_m adds at most
     # 2 (deg + 1)^2 u of the largest node weight (derivative: one more factor deg^2 2/(hi - lo)).
     scale = np.max(np.abs([_weights(a, n) for a in ex.nodes()]), axis=0)
-    allowance = (3 * (2 * j + 1) + 2 * (deg + 1) ** 2) * U * scale
+    lebesgue = 2 / np.pi * np.log(deg + 1) + 1
+    allowance = (lebesgue * (2 * j + 1) + 2 * (deg + 1) ** 2) * U * scale
     err = np.abs(ex.weights(float(alpha)) - beta)
     assert np.all(err <= ex.error_bound + allowance)
     assert err.sum() <= ex.error_bound + allowance.sum()
@@ -108,26 +109,30 @@ def test_windows_equal_literal_sums_at_every_sample(max_bytes):
     if max_bytes < 2**28:
         assert windows.block < 300
     alphas = [Fraction(3, 5), Fraction(1, 7)]
-    ref = {}
+    ref, ref_dsum = {}, {}
     for a in alphas:
         beta, dbeta = exact_weights(a, 300)
         lit = lambda w: [np.convolve(row, w)[:300] for row in b.signals]   # noqa: E731
         ref[a] = (lit(beta), lit(dbeta))
+        ref_dsum[a] = np.abs(np.array(dbeta, dtype=float)).sum()
     atol = 1e-12 * np.abs(b.signals).max()        # as for the FFT GL difference (test_gl.py)
     for k in range(300):
         a = alphas[k % 2]
         got = windows.rows(k, ex.basis_pair(float(a), sensitivity="exact"))
         np.testing.assert_allclose(got[0], literal_window(ref[a][0], lags, k, 4), rtol=0,
                                    atol=atol)
+        # the derivative window sums |d beta_j| times the signal: its rounding scales with it
         np.testing.assert_allclose(got[1], literal_window(ref[a][1], lags, k, 4), rtol=0,
-                                   atol=atol * 10)   # sum_j |d beta_j| is about 10 here
+                                   atol=atol * max(1.0, float(np.abs(ref_dsum[a]))))
         fd = windows.rows(k, ex.basis_pair(float(a) * 0.999, delta_alpha=1e-3))
         direct = WindowKernel(lags).rows(b.signals, k, 4, [
             _weights(float(a) * 0.999, max(k, 1)),
             (_weights(float(a) * 0.999 + 1e-3, max(k, 1))
              - _weights(float(a) * 0.999, max(k, 1))) / 1e-3])
         np.testing.assert_allclose(fd[0], direct[0], rtol=0, atol=atol)
-        np.testing.assert_allclose(fd[1], direct[1], rtol=0, atol=atol / 1e-3)
+        # both sides difference weights that agree to about 1e-16 * sum|beta| (<= 2e-16 for
+        # alpha <= 1); over the step 1e-3 that is <= 2e-13 * max|x|, inside atol (measured 0.24)
+        np.testing.assert_allclose(fd[1], direct[1], rtol=0, atol=atol)
 
 
 @pytest.mark.parametrize("method, options", [
@@ -167,6 +172,7 @@ def test_streamed_windows_equal_literal_sums_at_every_sample(chunks):
     beta, dbeta = exact_weights(Fraction(2, 5), 300)
     lit = [[np.convolve(row, w)[:300] for row in b.signals] for w in (beta, dbeta)]
     atol = 1e-12 * np.abs(b.signals).max()        # as for the FFT GL difference (test_gl.py)
+    dsum = float(np.abs(np.array(dbeta, dtype=float)).sum())   # rounding of the d-window
     v = np.vstack([ex.basis(0.4), ex.basis_derivative(0.4)])
     start = 0
     for c in chunks:
@@ -176,7 +182,7 @@ def test_streamed_windows_equal_literal_sums_at_every_sample(chunks):
             np.testing.assert_allclose(got[0], literal_window(lit[0], lags, k, 3), rtol=0,
                                        atol=atol)
             np.testing.assert_allclose(got[1], literal_window(lit[1], lags, k, 3), rtol=0,
-                                       atol=10 * atol)
+                                       atol=atol * max(1.0, dsum))
         start += c
 
 
@@ -195,11 +201,15 @@ def test_rls_follows_the_reference_path_within_its_rounding_sensitivity(P):
 
     ref = run(d.u, True)
     fast = run(d.u, False)
-    ulp = d.u * (1 + U * np.random.default_rng(0).choice([-1.0, 1.0], d.u.shape[0]))
-    wobble = run(ulp, True)
     assert np.ptp(ref.alpha_history_) > 1e-2
-    sens_alpha = np.abs(wobble.alpha_history_ - ref.alpha_history_).max()
-    sens_theta = np.abs(wobble.theta_history_ - ref.theta_history_).max()
+    sens_alpha = sens_theta = 0.0
+    for seed in range(4):           # the largest of four one-ulp perturbations of u
+        ulp = d.u * (1 + U * np.random.default_rng(seed).choice([-1.0, 1.0], d.u.shape[0]))
+        wobble = run(ulp, True)
+        sens_alpha = max(sens_alpha, np.abs(wobble.alpha_history_ - ref.alpha_history_).max())
+        sens_theta = max(sens_theta, np.abs(wobble.theta_history_ - ref.theta_history_).max())
     assert 0 < sens_alpha < 1e-10
-    assert np.abs(fast.alpha_history_ - ref.alpha_history_).max() <= 20 * sens_alpha
-    assert np.abs(fast.theta_history_ - ref.theta_history_).max() <= 20 * sens_theta
+    # The expanded windows are a rounding-level change like those: measured ratios <= 1.06
+    # (P = 1 and 3); 3x leaves room for other platforms' rounding, not for a wrong window.
+    assert np.abs(fast.alpha_history_ - ref.alpha_history_).max() <= 3 * sens_alpha
+    assert np.abs(fast.theta_history_ - ref.theta_history_).max() <= 3 * sens_theta

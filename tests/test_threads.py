@@ -17,6 +17,28 @@ def test_without_threadpoolctl_blas_is_left_as_configured(monkeypatch):
     assert np.isfinite(fohw.identify(d.u, d.y, method="varpro", **STRUCT).alpha)
 
 
+def test_the_solves_ask_threadpoolctl_for_one_blas_thread(monkeypatch):
+    """With a stand-in for threadpoolctl (not installed in CI): varpro's solves ask for exactly
+    one BLAS thread, through the controller, and the numbers do not change."""
+    from contextlib import nullcontext
+
+    calls = []
+
+    class Controller:
+        def limit(self, **kwargs):
+            calls.append(kwargs)
+            return nullcontext()
+
+    d = fohw.datasets.paper_example(500, random_state=0)
+    monkeypatch.setattr(threads, "ThreadpoolController", None)
+    free = fohw.identify(d.u, d.y, method="varpro", **STRUCT)
+    monkeypatch.setattr(threads, "ThreadpoolController", Controller)
+    monkeypatch.setattr(threads, "_controller", None)
+    limited = fohw.identify(d.u, d.y, method="varpro", **STRUCT)
+    assert calls and all(c == {"limits": 1, "user_api": "blas"} for c in calls)
+    np.testing.assert_array_equal(limited.theta, free.theta)
+
+
 def test_with_threadpoolctl_solves_run_on_one_blas_thread_and_give_the_same_numbers(monkeypatch):
     threadpoolctl = pytest.importorskip("threadpoolctl")
 
