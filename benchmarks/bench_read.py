@@ -5,7 +5,8 @@ the same number of fields on every line) to :func:`numpy.loadtxt`, and everythin
 line-by-line reader, which is the reader fohw used for every file before (it names the line of
 any error). This script writes a two-column file of ``--rows`` rows (default 5 000 000, the
 file of issue 14) and times each reader in a fresh process, with its peak resident memory
-(``ru_maxrss``) beside the memory of a process that only imports fohw.
+(``VmHWM``, as ``benchmarks/run.py`` measures it) beside the memory of the process after its
+imports.
 
     python benchmarks/bench_read.py [--rows 5000000] [--repeats 1]
 """
@@ -21,10 +22,12 @@ import tempfile
 import numpy as np
 
 CHILD = """
-import resource, sys, time
+import sys, time
+sys.path.insert(0, sys.argv[3])
+from run import high_water_mb           # VmHWM: ru_maxrss keeps the parent's mark across exec
 import fohw
 from fohw.io import text
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+before = high_water_mb()
 start = time.perf_counter()
 if sys.argv[2] == "fast":
     table = text.read_table(sys.argv[1])
@@ -34,15 +37,15 @@ else:
     table = None
 seconds = time.perf_counter() - start
 rows = 0 if table is None else table.data.shape[0]
-print(seconds, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, before, rows)
+print(seconds, high_water_mb(), before, rows)
 """
 
 
 def measure(path, reader):
-    out = subprocess.run([sys.executable, "-c", CHILD, path, reader], capture_output=True,
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = subprocess.run([sys.executable, "-c", CHILD, path, reader, here], capture_output=True,
                          text=True, check=True).stdout.split()
-    seconds, peak_kb, import_kb, rows = float(out[0]), int(out[1]), int(out[2]), int(out[3])
-    return seconds, peak_kb / 1024, import_kb / 1024, rows
+    return float(out[0]), float(out[1]), float(out[2]), int(out[3])
 
 
 def main(argv=None):

@@ -27,31 +27,12 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
-
-
-def identity(x):
-    return x
-
-
-def cube(x):
-    return x**3
+from fohw.paper.accuracy import system_b, system_c  # noqa: E402  (systems B and C)
 
 
 def paper():
     """The paper's example: alpha = 0.6, na = nb = 2, f = [u, u^2], g = [y, y^2, y^3]."""
     return fohw.datasets.paper_model()
-
-
-def system_b():
-    """B: alpha = 0.3, na = 1, nb = 3, f = [u, u^3], g = [y, y^2]."""
-    return fohw.HammersteinWiener([0.4], [0.5, -0.3, 0.2], [1, -0.2], [1, 0.3], 0.3,
-                                  f_basis={"u": identity, "u^3": cube}, g_basis=2)
-
-
-def system_c():
-    """C: alpha = 1.4, na = 2, nb = 1, f = [u, tanh u], g = [y]."""
-    return fohw.HammersteinWiener([0.2, -0.1], [0.8], [1, 0.5], [1], 1.4,
-                                  f_basis={"u": identity, "tanh": np.tanh}, g_basis=1)
 
 
 SYSTEMS = {"paper": (paper, (0.0, 1.0)), "B": (system_b, (0.0, 1.0)),

@@ -14,6 +14,7 @@ import numpy as np
 
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
+from .io.text import _number
 from .model.system import HammersteinWiener, simulate
 from .record import Benchmark, Record
 
@@ -181,11 +182,10 @@ def _parse_daisy(path, *, n_columns=None):
             if not text or text[0] in "%#":
                 continue
             fields = text.split()
-            try:
-                values = [float(f) for f in fields]
-            except ValueError:
-                bad = next(f for f in fields if not _is_float(f))
-                raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.") from None
+            values = [_number(f) for f in fields]
+            if None in values:
+                bad = fields[values.index(None)]
+                raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.")
             if n_columns is None:
                 n_columns = len(values)
             if len(values) != n_columns:
@@ -197,14 +197,6 @@ def _parse_daisy(path, *, n_columns=None):
     if not rows:
         raise DataFileError(f"{path}: no data lines found.")
     return np.array(rows, dtype=np.float64)
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 #: sha256 of the files shipped in ``fohw/data`` (see ``fohw/data/README.md``).

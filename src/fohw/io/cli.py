@@ -475,11 +475,11 @@ def _select(args):
 
 def _load_model_or_result(path):
     """A fohw-model file's model, or a fohw-result file's result (``(kind, object)``)."""
-    from .jsonio import _read_json, load_result, model_from_dict
+    from .jsonio import _read_json, model_from_dict, result_from_dict
 
-    d = _read_json(path)
+    d = _read_json(path)                       # read once; the format says which it is
     if isinstance(d, dict) and d.get("format") == "fohw-result":
-        return "result", load_result(path)
+        return "result", result_from_dict(d, path=os.fspath(path))
     if isinstance(d, dict) and d.get("format") != "fohw-model":
         raise UsageError(f"{path} is neither a fohw-model file (fohw.save_model) nor a "
                          "fohw-result file (fohw identify --save, result.to_json).")

@@ -91,6 +91,17 @@ def _split(text, delimiter):
     return [f.strip() for f in (text.split(delimiter) if delimiter else text.split())]
 
 
+def _header(fields, decimal):
+    """The column names if no field of the line is a number (a header line), else None."""
+    if any(_number(_decimal(f, decimal)) is not None for f in fields if f):
+        return None
+    return [f.strip('"').strip("'") for f in fields]
+
+
+def _header_note(line, names):
+    return f"header on line {line} ({', '.join(n for n in names if n)})"
+
+
 def _decimal(field, decimal):
     return field.replace(",", ".") if decimal == "," else field
 
@@ -153,9 +164,9 @@ def _head(path, decimal):
                 continue
             if delimiter == "unset":
                 delimiter = _delimiter(line, decimal)
-            fields = _split(line, delimiter)
-            if names is None and all(_number(_decimal(f, decimal)) is None for f in fields if f):
-                names, header_line = [f.strip('"').strip("'") for f in fields], lineno
+            header = _header(_split(line, delimiter), decimal) if names is None else None
+            if header is not None:
+                names, header_line = header, lineno
                 continue
             return delimiter, names, header_line
     return None
@@ -185,7 +196,7 @@ def _read_fast(path, decimal):
     if data.size == 0 or not np.all(np.isfinite(data)) \
             or (names is not None and len(names) != data.shape[1]):
         return None
-    skipped = [f"header on line {header_line} ({', '.join(names)})"] if names else []
+    skipped = [_header_note(header_line, names)] if names else []
     if header_line > 1:
         skipped.append(f"{header_line - 1} comment or blank line(s)")
     return Table(data=data, names=names, scalars={}, path=path, skipped=skipped)
@@ -226,19 +237,19 @@ def _read_lines(path, decimal):
         if delimiter == "unset":
             delimiter = _delimiter(text, decimal)
         fields = _split(text, delimiter)
-        no_number = all(_number(_decimal(f, decimal)) is None for f in fields if f)
-        if names is None and not rows and no_number:
-            names, header_line = [f.strip('"').strip("'") for f in fields], lineno
-            continue
-        if no_number and decimal == "." and names is not None and not rows:
+        if not rows and _header(fields, decimal) is not None:
+            if names is None:
+                names, header_line = _header(fields, decimal), lineno
+                continue
+            # a second line without numbers: decimal commas, or a second header
             commas = [f for f in fields if _number(f.replace(",", ".")) is not None]
-            if commas:
+            if commas and decimal == ".":
                 raise _field_error(path, lineno, commas[0], fields.index(commas[0]), decimal)
-        if names is not None and not rows and no_number \
-                and not all(f.lower() in MISSING for f in fields):
-            raise DataFileError(f"{path}: line {lineno} looks like a second header line (no "
-                                f"field is a number) after the header on line {header_line}; "
-                                "fohw reads one header line: start the others with '#'.")
+            if not all(f.lower() in MISSING for f in fields):
+                raise DataFileError(f"{path}: line {lineno} looks like a second header line "
+                                    f"(no field is a number) after the header on line "
+                                    f"{header_line}; fohw reads one header line: start the "
+                                    "others with '#'.")
         rows.append(fields)
         linenos.append(lineno)
     if not rows:
@@ -250,8 +261,7 @@ def _read_lines(path, decimal):
     cells = [r + [""] * (width - len(r)) for r in rows]
     keep = [j for j in range(width)
             if any(c[j] for c in cells) or (names is not None and j < len(names) and names[j])]
-    skipped = [f"header on line {header_line} ({', '.join(n for n in names if n)})"] \
-        if names else []
+    skipped = [_header_note(header_line, names)] if names else []
     if n_comments:
         skipped.append(f"{n_comments} comment or blank line(s)")
     if len(keep) < width:
@@ -275,7 +285,7 @@ def _read_lines(path, decimal):
         col = []
         for i, v in enumerate(values):
             x = _number(v)
-            if x is None or not v:
+            if x is None:                       # an empty field included
                 raise _field_error(path, linenos[i], cells[i][j], label, decimal)
             if not np.isfinite(x):
                 raise DataFileError(f"{path}: line {linenos[i]} holds a non-finite value: "

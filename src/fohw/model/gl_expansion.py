@@ -249,26 +249,12 @@ class ExpandedWindows:
         self.n_signals, self.n = signals.shape
         self.expansion = expansion
         self.lags = list(lags)
-        self.max_lag = max(self.lags)
         self.P = int(innovation_length)
-        self.n_params = sum(self.lags)
-        self.width = self.P + self.max_lag - 1          # times one window needs
+        # times one window needs, and the flat gather index of each row count's rows
+        self.width, self._index = _window_index(self.lags, self.P)
         terms = expansion.degree + 1
         per_time = self.n_signals * terms * 8
         self.block = max(int(max_bytes) // per_time - self.width, 64)
-        sig_idx = np.repeat(np.arange(len(self.lags)), self.lags)
-        lag_idx = np.concatenate([np.arange(1, m + 1) for m in self.lags])
-        # Flat index into the (width, S) window of each row count: row r (phi[k - r]) needs
-        # time k - r - lag, at position width - 1 - (r + lag - 1) of the window ending at k - 1.
-        # The product of two weight rows with the window is (2, width * S); ``_index`` gathers
-        # both rows' (n_rows, n) blocks from it in one flat take.
-        self._index = []
-        size = self.width * self.n_signals
-        for n_rows in range(1, self.P + 1):
-            r = np.arange(n_rows)[:, None]
-            pos = self.width - r - lag_idx[None, :]
-            one = pos * self.n_signals + sig_idx[None, :]
-            self._index.append(np.stack([one, one + size]))
         self._t0 = self._t1 = None
         self._D = None
 
@@ -306,7 +292,13 @@ class ExpandedWindows:
 
 
 def _window_index(lags, innovation_length):
-    """Flat gather index of the window rows (see :class:`ExpandedWindows`), per row count."""
+    """The window width and the flat gather index of the window rows, per row count.
+
+    Row ``r`` (``phi[k - r]``) needs time ``k - r - lag``, at position
+    ``width - 1 - (r + lag - 1)`` of the window ending at ``k - 1``. The product of two weight
+    rows with the window is ``(2, width * S)``; the index gathers both rows' ``(n_rows, n)``
+    blocks from it in one flat take.
+    """
     n_signals = len(lags)
     width = innovation_length + max(lags) - 1
     sig_idx = np.repeat(np.arange(n_signals), lags)
