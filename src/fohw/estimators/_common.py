@@ -7,7 +7,12 @@ import warnings
 import numpy as np
 
 from .. import _linalg
-from ..exceptions import ConvergenceWarning, EstimationDivergedError, RankDeficiencyWarning
+from ..exceptions import (
+    ConvergenceWarning,
+    DimensionError,
+    EstimationDivergedError,
+    RankDeficiencyWarning,
+)
 from ..results import IdentificationResult, Status, recover_model
 
 __all__: list[str] = []
@@ -17,6 +22,22 @@ def rms_scale(x):
     """The RMS of a signal, or 1 for a zero signal: a scale for residuals and parameters."""
     value = float(np.sqrt(np.mean(x * x)))
     return value if value > 0 else 1.0
+
+
+def check_enough_samples(n_equations, structure, *, after=""):
+    """Least squares needs more equations than parameters: a DimensionError naming both.
+
+    Called by every least-squares entry (varpro on the record; output_error on the part its
+    criterion covers, ``after`` naming what was left out), so a short record is refused before
+    any solve, never a singular matrix or a division by ``N - d = 0`` later.
+    """
+    n_params = structure.n_linear + structure.n_nonlinear
+    if n_equations <= n_params:
+        raise DimensionError(
+            f"least squares needs more samples than parameters: the record has {n_equations} "
+            f"samples{after} for {n_params} parameters ({structure.n_linear} linear, "
+            f"{structure.n_nonlinear} nonlinear: orders, levels); use a longer record, or fewer "
+            "lags or basis functions.")
 
 
 def dependent_columns_note(fac, names):

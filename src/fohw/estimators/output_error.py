@@ -32,7 +32,7 @@ from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
-from ._common import bound_note, finish, rms_scale
+from ._common import bound_note, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
@@ -246,6 +246,8 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0))
     """Equation-error start (varpro) or a given one, then the simulation-error fit."""
     s = builder.structure
     options = options.check(builder.n_samples)
+    check_enough_samples(builder.n_samples - options.n_init, s,
+                         after=f" after n_init = {options.n_init}" if options.n_init else "")
     lower, upper = bounds
     linear0, params0, J0, origin = _start(builder, options, lower, upper)
     record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))

@@ -39,9 +39,9 @@ import scipy.optimize
 from .. import _linalg
 from .._threads import thin_solves
 from .._validation import check_int, check_scalar
-from ..exceptions import DimensionError, ParameterError
+from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, finish, rms_scale
+from ._common import bound_note, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
 
 __all__ = ["VarproOptions", "profile_theta", "separable_least_squares", "parameter_covariance"]
@@ -215,12 +215,7 @@ def separable_least_squares(builder, *, bounds, options=None):
     """
     opts = (options or VarproOptions()).check()
     s = builder.structure
-    n_params = s.n_linear + s.n_nonlinear
-    if builder.n_samples <= n_params:
-        raise DimensionError(f"least squares needs more samples than parameters: the record has "
-                             f"{builder.n_samples} samples for {n_params} parameters "
-                             f"({s.n_linear} linear, {s.n_nonlinear} nonlinear: orders, levels); use a "
-                             "longer record, or fewer lags or basis functions.")
+    check_enough_samples(builder.n_samples, s)
     lo = np.atleast_1d(np.asarray(bounds[0], dtype=float))
     hi = np.atleast_1d(np.asarray(bounds[1], dtype=float))
     profile = _Profile(builder)
