@@ -146,3 +146,15 @@ def test_cli_default_columns_never_guess(tmp_path, capsys):
     assert main(["identify", str(unnamed), *args]) == 2
     err = capsys.readouterr().err
     assert "has 3 columns: say which to use with --columns" in err and err.count("\n") == 1
+
+
+def test_the_cli_takes_the_sampling_time_the_file_gives(tmp_path, capsys):
+    """The tanks file gives Ts = 4 once: identify uses it unless --dt says otherwise."""
+    args = ["identify", TANKS, "--columns", "uEst,yEst", "--na", "1", "--nb", "1",
+            "--operating-point", "mean"]
+    assert main(args + ["--save", str(tmp_path / "a.json")]) == 0
+    assert fohw.load_result(tmp_path / "a.json").structure.dt == fohw.read_record(
+        TANKS, u="uEst", y="yEst").dt == 4.0
+    assert main(args + ["--dt", "1", "--save", str(tmp_path / "b.json")]) == 0
+    assert fohw.load_result(tmp_path / "b.json").structure.dt == 1.0
+    capsys.readouterr()

@@ -1,8 +1,10 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
 * ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
-  [--json] [--plot FILE] [--save FILE]`` — identify from a whitespace- or comma-separated file;
-  prints a summary (or, with ``--json``, the estimates as JSON).
+  [--offset] [--operating-point mean] [--dt 4] [--decimal-comma] [--option NAME=VALUE]
+  [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
+  whitespace-separated file (the sampling time a ``Ts`` column gives is the default ``--dt``);
+  prints a summary and the free-run fit on the record (or, with ``--json``, both as JSON).
 * ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
   [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
@@ -65,10 +67,14 @@ def read_table(path, decimal="."):
         The signal columns (a column given once, such as ``Ts``, is not among them).
     names : list of str or None
         The header's column names, if the file has a header.
+    dt : float or None
+        The sampling time the file gives once (a ``Ts`` column, as the cascaded-tanks file), or
+        None.
     """
     import time
 
     from .text import read_table as parse
+    from .text import sampling_time
 
     start = time.perf_counter()
     _progress(f"reading {path} ...")
@@ -76,7 +82,7 @@ def read_table(path, decimal="."):
     _progress(f"read {table.data.shape[0]} rows x {table.data.shape[1]} columns in "
               f"{time.perf_counter() - start:.1f} s" + (f" ({'; '.join(table.skipped)})"
                                                          if table.skipped else ""))
-    return table.data, table.names
+    return table.data, table.names, sampling_time(table)
 
 
 def _pick_columns(data, names, spec, count, path, flag="--columns"):
@@ -251,7 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting (and add them "
                      "back when simulating)")
-    ide.add_argument("--dt", type=float, default=1.0, help="sampling time (default 1)")
+    ide.add_argument("--dt", type=float, default=None,
+                     help="sampling time (default: the file's Ts, else 1)")
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
                      help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
     ide.add_argument("--schedule", choices=SCHEDULES, default=None,
@@ -288,7 +295,8 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("--offset", action="store_true", help="a constant term in every model")
     sel.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting")
-    sel.add_argument("--dt", type=float, default=1.0, help="sampling time (default 1)")
+    sel.add_argument("--dt", type=float, default=None,
+                     help="sampling time (default: the file's Ts, else 1)")
     sel.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     sel.add_argument("--top", type=int, default=10, help="rows to print (default 10)")
     sel.add_argument("--csv", help="write every row to this CSV file")
@@ -330,6 +338,13 @@ def _fohw_warnings():
                  if name.endswith("Warning"))
 
 
+def _dt(given, from_file):
+    """``--dt`` if given, else the sampling time the file gives, else 1."""
+    if given is not None:
+        return given
+    return 1.0 if from_file is None else from_file
+
+
 def _decimal(args):
     return "," if args.decimal_comma else "."
 
@@ -344,7 +359,7 @@ def _identify(args):
 
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
-    data, names = read_table(args.data, _decimal(args))
+    data, names, file_dt = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     options = {name: value for name, value in (("schedule", args.schedule),
                                                ("innovation_length", args.innovation_length),
@@ -359,7 +374,7 @@ def _identify(args):
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=args.dt)
+                       offset=args.offset, operating_point=args.operating_point, dt=_dt(args.dt, file_dt))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -432,7 +447,7 @@ def _select(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_file_out(args.csv, "--csv", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
-    data, names = read_table(args.data, _decimal(args))
+    data, names, file_dt = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
@@ -448,7 +463,7 @@ def _select(args):
                 warnings.simplefilter("always", category)
             sel = select_structure(u, y, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
-                                   operating_point=args.operating_point, dt=args.dt,
+                                   operating_point=args.operating_point, dt=_dt(args.dt, file_dt),
                                    executor=pool)
     finally:
         if pool is not None:
@@ -495,7 +510,7 @@ def _simulate(args):
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
-    data, names = read_table(args.input, _decimal(args))
+    data, names, _ = read_table(args.input, _decimal(args))
     (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():

@@ -298,6 +298,12 @@ def _read_lines(path, decimal):
                  path=path, skipped=skipped)
 
 
+def sampling_time(table):
+    """The sampling time a file gives once (a column named ``Ts``, ``dt``, ... ; any case)."""
+    found = [k for k in table.scalars if isinstance(k, str) and k.lower() in SAMPLING_TIME_NAMES]
+    return table.scalars[found[0]] if found else None
+
+
 def _column(table, spec, what):
     if isinstance(spec, bool):
         raise ParameterError(f"`{what}` must be a column number or a header name; got {spec!r}.")
@@ -379,9 +385,7 @@ def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", outp
         else:
             raise ParameterError(f"`dt` = {key!r} is not a column of {table.path}.")
     elif dt is None:
-        found = [k for k in table.scalars if isinstance(k, str)
-                 and k.lower() in SAMPLING_TIME_NAMES]
-        dt = table.scalars[found[0]] if found else None
+        dt = sampling_time(table)
     names = table.names or []
     return Record(u=table.data[:, iu], y=table.data[:, iy], dt=dt,
                   name=name if name is not None else os.path.basename(table.path),
