@@ -413,9 +413,10 @@ def markdown():
              "`AttributeError`, `SimulationDivergedError` an `ArithmeticError`). The command line "
              "prints one line `fohw: error: …` and exits with status 2, operating-system errors "
              "(permissions, a folder given as a file) included; Ctrl-C prints one line and "
-             "exits with status 130. Output paths are checked before a run starts, and files are "
-             "written atomically, so a failed or interrupted save leaves an existing file byte "
-             "for byte (`tests/test_reliability.py`). Rows marked #N are the cases of issue 14.",
+             "exits with status 130. Output paths are checked before a run starts, and results, "
+             "models, tables and outputs are written atomically, so a failed or interrupted save "
+             "leaves an existing file byte for byte (`tests/test_reliability.py`; figures are "
+             "written directly). Rows marked #N are the cases of issue 14.",
              "",
              "This page is generated from `tests/test_bad_input.py`, which checks every row.", "",
              "## Python API", "", "| entry point | bad input | exception | message contains |",

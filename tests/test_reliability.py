@@ -403,3 +403,21 @@ def test_numbers_python_alone_would_accept_are_refused(tmp_path):
         path.write_text(text, encoding="utf-8")
         with pytest.raises(fohw.DataFileError, match="line 1: .* is not a number"):
             text_io.read_table(path)
+
+
+def test_the_selection_csv_is_saved_atomically(tmp_path, monkeypatch):
+    """Selection.to_csv goes through the same writer: a failed rename keeps the old file."""
+    path = tmp_path / "rows.csv"
+    path.write_text("old\n")
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    y = np.convolve(u, [0.0, 0.5, 0.25])[:300] + 0.01 * rng.standard_normal(300)
+    sel = fohw.select_structure(u, y, [dict(na=1)], nb=1, f_basis=1, g_basis=1)
+
+    def fail(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(jsonio.os, "replace", fail)
+    with pytest.raises(OSError, match="No space left"):
+        sel.to_csv(path)
+    assert path.read_text() == "old\n" and os.listdir(tmp_path) == ["rows.csv"]

@@ -23,6 +23,7 @@ from .estimators.identify import identify
 from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
+from .estimators.structured import StructuredOptions
 from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
@@ -108,6 +109,7 @@ __all__ = [
     "RankDeficiencyWarning",
     "RegressorBuilder",
     "RlsOptions",
+    "StructuredOptions",
     "SingleInnovationGradientOptions",
     "SingleInnovationLMOptions",
     "SimulationDivergedError",

@@ -258,8 +258,9 @@ class Selection:
             writer.writerow({k: _describe(v) if k in extra else v for k, v in r.items()})
         text = buf.getvalue()
         if path is not None:
-            with open(path, "w", encoding="utf-8", newline="") as fh:
-                fh.write(text)
+            from ..io.jsonio import _write_text
+
+            _write_text(text, path)          # atomic, as every fohw save
         return text
 
     def to_frame(self):

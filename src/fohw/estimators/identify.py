@@ -1,9 +1,9 @@
 """The one-call entry point :func:`fohw.identify` and its table of methods (dispatch only).
 
 The paper's alternating method lives in :mod:`fohw.estimators.hybrid`; the estimators beyond
-the paper in :mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.output_error` and
-:mod:`~fohw.estimators.rls`. Each method's settings are its own options class
-(:mod:`fohw.estimators.options`).
+the paper in :mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.structured`,
+:mod:`~fohw.estimators.output_error` and :mod:`~fohw.estimators.rls`. Each method's settings
+are its own options class (:mod:`fohw.estimators.options`).
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def _paper_bounds(method, builder, bounds):
         raise ParameterError(
             f"method {method!r} implements the paper's commensurate model (Eq. 16: one order for "
             "every term, no offset, rest before k = 0, dt = 1); this structure is "
-            f"{s.describe()}. Use method='varpro' or 'output_error' for it.")
+            f"{s.describe()}. Use method='varpro', 'structured' or 'output_error' for it.")
     lo, hi = bounds
     return AlphaBounds((float(lo[0]), float(hi[0])))
 
@@ -150,7 +150,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
         ``"rest"`` (default): the signals were at the operating point before ``k = 0`` (zero
         GL memory of the unseen past). ``"estimate"``: the system rested at constant levels
         ``u_past``, ``y_past`` (relative to the operating point) before ``k = 0``, estimated
-        with the other parameters (``"varpro"``, ``"output_error"``).
+        with the other parameters (``"varpro"``, ``"structured"``, ``"output_error"``).
     dt : float, optional
         Sampling time ``h > 0`` (Eq. 4): coefficients and orders then have a continuous-time
         reading. Default 1.

@@ -61,8 +61,9 @@ class OutputErrorOptions(MethodOptions):
     n_grid : int
         Points of the coarse alpha scan of the ``"varpro"`` start (default 41).
     max_nfev : int
-        Simulations allowed to :func:`scipy.optimize.least_squares`, the finite-difference
-        Jacobians included (default 100 residual evaluations, as scipy counts them).
+        Residual evaluations allowed to :func:`scipy.optimize.least_squares` (default 100,
+        as scipy counts them: its finite-difference Jacobians come on top, one simulation per
+        parameter each).
     """
 
     renamed = {"max_iter": "max_nfev"}

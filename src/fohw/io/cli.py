@@ -19,8 +19,9 @@
 Usage errors, bad input and operating-system errors (permissions, a folder given as a file)
 print one line ``fohw: error: …`` and exit with status 2; Ctrl-C prints one line and exits with
 status 130. Output paths (``--save``, ``--plot``, ``--csv``, ``--output``, ``--outdir``) are
-checked before the run, and files are written atomically: a failed or interrupted save leaves an
-existing file as it was.
+checked before the run. Results, models, tables and outputs (``--save``, ``--csv``,
+``--output``) are written atomically: a failed or interrupted save leaves an existing file as it
+was (figures and the files of ``reproduce`` are written directly).
 """
 
 from __future__ import annotations
