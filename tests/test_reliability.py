@@ -421,3 +421,10 @@ def test_the_selection_csv_is_saved_atomically(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="No space left"):
         sel.to_csv(path)
     assert path.read_text() == "old\n" and os.listdir(tmp_path) == ["rows.csv"]
+
+
+def test_an_unknown_divergence_cause_is_not_renamed():
+    """An unknown `cause` used to become 'growth' silently."""
+    with pytest.raises(ValueError, match="`cause` must be one of"):
+        fohw.SimulationDivergedError(3, 1.0, 1.0, "overflow")
+    assert fohw.SimulationDivergedError(3, 1.0, 1.0, "output_basis").cause == "output_basis"

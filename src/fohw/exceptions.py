@@ -57,7 +57,9 @@ class SimulationDivergedError(FohwError, ArithmeticError):
         self.sample = int(sample)
         self.value = float(value)
         self.threshold = float(threshold)
-        self.cause = cause if cause in self.CAUSES else "growth"
+        if cause not in self.CAUSES:            # a programming error inside fohw: say so
+            raise ValueError(f"`cause` must be one of {self.CAUSES}; got {cause!r}.")
+        self.cause = cause
         k = self.sample
         if self.cause == "output_basis":
             text = (f"the output basis g returned a non-finite value at sample k = {k} "
