@@ -244,6 +244,9 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
     alpha_hist, J_hist = [], []
     status = Status.MAX_ITER
     Phi = None              # the information matrix at the current alpha, once built
+    windows = None          # the recursive schedule's expanded windows, built once for all passes
+    if o.schedule == "recursive" and not _reference:
+        windows = _expanded_windows(builder, bounds, o.P, o.sensitivity, o.delta_alpha)
     for m in range(1, o.max_iter + 1):
         if getattr(o, "restart_r", False):
             r = 1.0
@@ -251,7 +254,7 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
             theta, alpha, r, theta_path, alpha_path = _recursive_pass(
                 builder, theta, alpha, r, bounds, method=method, joint=lm, P=o.P,
                 normalisation=normalisation, forgetting=forgetting, lm_lambda=o.lm_lambda,
-                delta_alpha=o.delta_alpha, sensitivity=o.sensitivity, reference=_reference)
+                delta_alpha=o.delta_alpha, sensitivity=o.sensitivity, windows=windows)
             Phi = builder.matrix(alpha)
         else:
             k_now = 0 if m == 1 else n_samples - 1
@@ -312,14 +315,15 @@ def _expanded_windows(builder, bounds, P, sensitivity, delta_alpha):
 
 
 def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, normalisation,
-                    forgetting, lm_lambda, delta_alpha, sensitivity, reference=False):
+                    forgetting, lm_lambda, delta_alpha, sensitivity, windows=None):
     """One pass of Table 1: at each k, theta by Eq. (29) then alpha by Eq. (48).
 
     With ``joint=True`` (the single-innovation LM baseline) both are updated together by the
     step of Eq. (48) applied to ``(theta, alpha)``. The windows come from the GL weights
-    expanded in alpha (``O(M N log N)`` per pass); ``reference=True`` rebuilds them from the
-    weights at every sample instead (``O(N^2)``, the implementation before the expansion, kept to
-    test that both give the same path).
+    expanded in alpha (``windows``, an :class:`ExpandedWindows` built once for all passes:
+    ``O(M N log N)``); ``windows=None`` rebuilds them from the weights at every sample instead
+    (``O(N^2)``, the implementation before the expansion, kept to test that both give the same
+    path).
     """
     y = builder.y
     n_samples = builder.n_samples
@@ -327,8 +331,8 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     theta_path = np.empty((n_samples, n))
     alpha_path = np.empty(n_samples)
     inner_lo, inner_hi = bounds.inner
+    reference = windows is None
     if not reference:
-        windows = _expanded_windows(builder, bounds, P, sensitivity, delta_alpha)
         expansion = windows.expansion
         vectors = np.empty((2, expansion.degree + 1))
     for k in range(n_samples):
