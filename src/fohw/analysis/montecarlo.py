@@ -23,7 +23,7 @@ import warnings
 
 import numpy as np
 
-from .._parallel import TaskError, run_tasks
+from .._parallel import TaskError, _progress_bar, run_tasks
 from .._threads import thin_solves
 from ..datasets import paper_example
 from ..estimators.identify import identify
@@ -105,44 +105,48 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
     """
     make_data = _paper_data if make_data is None else make_data
     tasks = [(seed, dict(setting)) for setting in settings for seed in seeds]
+    calls = [(make_data, methods, seed, setting) for seed, setting in tasks]
     if progress is None:
         progress = sys.stderr.isatty()
-    if executor is not None:
-        if n_jobs != 1:
-            raise ParameterError("give `executor` or `n_jobs`, not both; got n_jobs="
-                                 f"{n_jobs!r} with an executor.")
-        parts = run_tasks(_run_task, [(make_data, methods, seed, setting)
-                                      for seed, setting in tasks],
-                          executor=executor, progress=progress, label="monte_carlo")
-        rows = []
-        for (seed, setting), part in zip(tasks, parts):
-            if isinstance(part, TaskError):
-                raise FohwError(f"monte_carlo: the record of seed {seed} (setting {setting}) "
-                                f"could not be run on the executor: {part.message}") \
-                    from part.exception
-            rows.extend(part)
-        return rows
-    use_joblib = n_jobs != 1
-    if use_joblib:
+    if executor is not None and n_jobs != 1:
+        raise ParameterError("give `executor` or `n_jobs`, not both; got n_jobs="
+                             f"{n_jobs!r} with an executor.")
+    joblib = None
+    if executor is None and n_jobs != 1:
         try:
             import joblib
         except ImportError:
             warnings.warn("joblib is not installed (pip install 'fohw[parallel]'); running "
                           "serially.", RuntimeWarning, stacklevel=2)
-            use_joblib = False
-    if use_joblib:
-        results = joblib.Parallel(n_jobs=n_jobs, return_as="generator")(
-            joblib.delayed(_run_task)(make_data, methods, seed, setting) for seed, setting in tasks)
+    if joblib is not None:
+        parts = _joblib_tasks(joblib, calls, n_jobs, progress)
     else:
-        results = (_run_task(make_data, methods, seed, setting) for seed, setting in tasks)
+        parts = run_tasks(_run_task, calls, executor=executor, progress=progress,
+                          label="monte_carlo")
     rows = []
-    for i, part in enumerate(results, start=1):
+    for (seed, setting), part in zip(tasks, parts):
+        if isinstance(part, TaskError):
+            raise FohwError(f"monte_carlo: the record of seed {seed} (setting {setting}) "
+                            f"could not be run on the executor: {part.message}") \
+                from part.exception
         rows.extend(part)
-        if progress:
-            print(f"\rmonte_carlo: {i}/{len(tasks)} records", end="", file=sys.stderr, flush=True)
-    if progress:
-        print(file=sys.stderr)
     return rows
+
+
+def _joblib_tasks(joblib, calls, n_jobs, progress):
+    """``[_run_task(*call) for call in calls]`` on joblib's workers, in order, with progress."""
+    bar = _progress_bar(len(calls), "monte_carlo", progress)
+    out = []
+    try:
+        for part in joblib.Parallel(n_jobs=n_jobs, return_as="generator")(
+                joblib.delayed(_run_task)(*call) for call in calls):
+            out.append(part)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    return out
 
 
 def summarise(rows, *, by=("method",), value="delta"):
