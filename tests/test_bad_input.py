@@ -293,6 +293,10 @@ API = [
      lambda t: fohw.read_record(_bad_file(t, "u;y\n0,5;1,25\n-0,25;0,5\n", "r.csv")),
      fohw.DataFileError, "line 2: '0,5' is not a number (column 0). It looks like a decimal "
      "comma: pass decimal=','"),
+    ("read_record", "decimal=',' on a comma-separated file (rows 1,2 would read as 1.2)",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n1,2\n3,4\n", "r.csv"), decimal=","),
+     fohw.DataFileError, "line 1: the header 'u,y' is separated by commas, but decimal=',' "
+     "makes commas decimal marks"),
     ("read_record", "#30 two header lines",
      lambda t: fohw.read_record(_bad_file(t, "u,y\nV,m\n1,2\n3,4\n", "r.csv")),
      fohw.DataFileError, "line 2 looks like a second header line"),
@@ -355,6 +359,9 @@ CLI = [
     ("fohw identify", "#30 ';' and decimal commas without --decimal-comma",
      lambda t: ["identify", _bad_file(t, "u;y\n0,5;1,25\n-0,25;0,5\n"), "--na", "1", "--nb", "1"],
      "pass decimal=',' (fohw: --decimal-comma)"),
+    ("fohw identify", "--decimal-comma on a comma-separated file",
+     lambda t: ["identify", _bad_file(t, "u,y\n1,2\n3,4\n", "r.csv"), "--na", "1", "--nb", "1",
+                "--decimal-comma"], "is separated by commas, but decimal=',' makes commas"),
     ("fohw identify", "#30 one column",
      lambda t: ["identify", _bad_file(t, "1\n2\n3\n"), "--na", "1", "--nb", "1"],
      "has 1 signal column(s); this command needs 2 (the input and the output)"),

@@ -98,6 +98,22 @@ def _header(fields, decimal):
     return [f.strip('"').strip("'") for f in fields]
 
 
+def _comma_separated_header(text, delimiter, decimal):
+    """True for a header split at whitespace that holds commas while commas are decimal marks.
+
+    ``u,y`` read with ``decimal=","`` is one column named "u,y" whose rows ``1,2`` read as 1.2:
+    a comma-separated file given the wrong decimal mark, refused rather than misread.
+    """
+    return decimal == "," and delimiter is None and "," in text
+
+
+def _comma_header_error(path, lineno, text):
+    return DataFileError(f"{path}: line {lineno}: the header {text!r} is separated by commas, "
+                         "but decimal=',' makes commas decimal marks (1,5 = 1.5), so its rows "
+                         "would be misread; with decimal commas separate the columns by ';' or "
+                         "whitespace, or read a comma-separated file with decimal='.'.")
+
+
 def _header_note(line, names):
     return f"header on line {line} ({', '.join(n for n in names if n)})"
 
@@ -129,8 +145,8 @@ def read_table(path, *, decimal=".") -> Table:
     DataFileError
         A directory, an unreadable file, text that is not UTF-8, a field that is not a number
         (with a hint when it looks like a decimal comma), a missing value (``NA``, empty, ...)
-        named by line and column, a second header line, a row with another number of fields, a
-        non-finite value, or no data.
+        named by line and column, a second header line, a header separated by commas while
+        ``decimal=","``, a row with another number of fields, a non-finite value, or no data.
 
     Notes
     -----
@@ -166,6 +182,8 @@ def _head(path, decimal):
                 delimiter = _delimiter(line, decimal)
             header = _header(_split(line, delimiter), decimal) if names is None else None
             if header is not None:
+                if _comma_separated_header(line, delimiter, decimal):
+                    return None                  # the line reader names the error
                 names, header_line = header, lineno
                 continue
             return delimiter, names, header_line
@@ -182,7 +200,7 @@ def _read_fast(path, decimal):
     """
     try:
         head = _head(path, decimal)
-        if head is None:                         # no data line
+        if head is None:                         # no data line, or a header the line reader refuses
             return None
         delimiter, names, header_line = head
         source = path
@@ -239,6 +257,8 @@ def _read_lines(path, decimal):
         fields = _split(text, delimiter)
         if not rows and _header(fields, decimal) is not None:
             if names is None:
+                if _comma_separated_header(text, delimiter, decimal):
+                    raise _comma_header_error(path, lineno, text)
                 names, header_line = _header(fields, decimal), lineno
                 continue
             # a second line without numbers: decimal commas, or a second header
