@@ -111,6 +111,45 @@ def test_weights_match_exact_rational_binomials():
                                atol=0)
 
 
+def _exact_weights_and_derivative(alpha, n):
+    """beta_j and d beta_j / d alpha in rational arithmetic at the double ``alpha``."""
+    a = Fraction(alpha)
+    beta, dbeta = [Fraction(1)], [Fraction(0)]
+    for j in range(1, n):
+        c = (j - 1 - a) / j                       # beta_j = beta_{j-1} c_j, dc_j/dalpha = -1/j
+        beta.append(beta[-1] * c)
+        dbeta.append(dbeta[-1] * c - beta[-2] / j)
+    return beta, dbeta
+
+
+@pytest.mark.parametrize("alpha", [1e-12, -1e-9, 0.999999, 1 - 1e-10, 1 + 1e-10, 2 + 3e-13, 0.6])
+def test_weights_near_integer_orders_have_no_cancellation(alpha):
+    # Each factor (j - 1 - alpha)/j costs at most 2 roundings (the subtraction, the division)
+    # and the product one more: |beta_j - exact| <= 3 j eps |exact|. The old factors
+    # 1 - (alpha + 1)/j lost up to 4e11 eps at alpha = 1e-12 (beta_1 = -alpha to 1e-4).
+    n = 60
+    exact, dexact = _exact_weights_and_derivative(alpha, n)
+    beta = fohw.gl_weights(alpha, n)
+    eps = np.finfo(float).eps
+    for j in range(n):
+        assert abs(Fraction(float(beta[j])) - exact[j]) <= 3 * j * eps * abs(exact[j]), j
+    # d beta_j / d alpha = sum_i (prod_{k != i} c_k) (-1/i): each term is within a few j roundings
+    # of itself, so the error is bounded by j eps times the sum of the terms' magnitudes (4 j eps:
+    # the products, the 1/(i - 1 - alpha) and the running sum).
+    a = Fraction(alpha)
+    c = [abs((k - 1 - a) / k) for k in range(1, n)]
+    dbeta = fohw.gl_weights_derivative(alpha, n)
+    for j in range(1, n):
+        size = Fraction(0)
+        for i in range(1, j + 1):
+            others = Fraction(1)
+            for k in range(1, j + 1):
+                if k != i:
+                    others *= c[k - 1]
+            size += others / i
+        assert abs(Fraction(float(dbeta[j])) - dexact[j]) <= 4 * j * eps * size, j
+
+
 @pytest.mark.parametrize("alpha", ALPHAS + [0.0, 2.0, -0.5])
 def test_weights_match_scipy_binom(alpha):
     j = np.arange(200)

@@ -38,13 +38,15 @@ def gl_weights(alpha, n):
     Returns
     -------
     beta : ndarray, shape (n,)
-        ``beta[0] = 1`` and ``beta[j] = beta[j-1] * (1 - (alpha + 1) / j)``.
+        ``beta[0] = 1`` and ``beta[j] = beta[j-1] * (j - 1 - alpha) / j``.
 
     Notes
     -----
     Eq. (3) of the paper, evaluated as the cumulative product of the factors
-    ``1 - (alpha + 1) / j``. For a non-negative integer ``alpha`` the factor at
-    ``j = alpha + 1`` is exactly zero, so all later weights are exactly zero.
+    ``(j - 1 - alpha) / j`` (the same as ``1 - (alpha + 1) / j``, but without its cancellation:
+    near an integer order ``j - 1 - alpha`` is exact, so each weight is within ``3 j`` rounding
+    errors of the exact one, relative to itself). For a non-negative integer ``alpha`` the factor
+    at ``j = alpha + 1`` is exactly zero, so all later weights are exactly zero.
 
     Examples
     --------
@@ -61,7 +63,8 @@ def _weights(alpha, n):
     """:func:`gl_weights` without validation (for per-sample loops)."""
     beta = np.empty(n)
     beta[0] = 1.0
-    np.cumprod(1.0 - (alpha + 1.0) / np.arange(1.0, n), out=beta[1:])
+    j = np.arange(1.0, n)
+    np.cumprod((j - 1.0 - alpha) / j, out=beta[1:])
     return beta
 
 
@@ -82,7 +85,7 @@ def gl_weights_derivative(alpha, n):
 
     Notes
     -----
-    The product ``beta[j] = prod_{i<=j} c_i`` with ``c_i = 1 - (alpha + 1)/i`` has one factor
+    The product ``beta[j] = prod_{i<=j} c_i`` with ``c_i = (i - 1 - alpha)/i`` has one factor
     that can vanish, ``c_{m+1}`` at the integer ``m`` nearest to ``alpha``. That factor is kept
     apart: with ``R_j`` the product of the other factors and ``S_j`` the sum of their logarithmic
     derivatives, ``dbeta[j] = R_j S_j`` before it and ``R_j (c_{m+1} S_j - 1/(m+1))`` from it on.
@@ -99,9 +102,9 @@ def gl_weights_derivative(alpha, n):
     alpha = check_scalar(alpha, "alpha")
     n = check_int(n, "n", minimum=1)
     i = np.arange(1, n, dtype=np.float64)
-    c = 1.0 - (alpha + 1.0) / i
+    c = (i - 1.0 - alpha) / i
     with np.errstate(divide="ignore"):
-        dlog = 1.0 / (alpha + 1.0 - i)
+        dlog = -1.0 / (i - 1.0 - alpha)
     l0 = int(np.rint(alpha)) + 1          # index of the factor that may vanish
     dbeta = np.zeros(n)
     if l0 < 1 or l0 > n - 1:              # no such factor among the first n - 1
