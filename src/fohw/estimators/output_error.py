@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from .. import _linalg
 from .._threads import thin_solves
@@ -32,12 +31,11 @@ from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
-from ._common import bound_note, check_enough_samples, finish, rms_scale
+from ._common import bound_note, bounded_least_squares, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
     _bounds_record,
-    _on_active_bound,
     parameter_covariance,
     separable_least_squares,
 )
@@ -155,13 +153,10 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     # so that its finite-difference steps and tolerances mean the same in every unit.
     scale = _parameter_scale(x0, s, u, y)
     y_scale = rms_scale(y)
-    ls = scipy.optimize.least_squares(
-        lambda z: residual(z * scale) / y_scale, x0 / scale, method="trf", x_scale="jac",
-        max_nfev=max_nfev, bounds=(bound_lo / scale, bound_hi / scale))
-    x = ls.x * scale
-    for j in range(n_free):
-        x[n_lin + j] = _on_active_bound(x[n_lin + j], ls.active_mask[n_lin + j], lower[j],
-                                        upper[j])
+    z, status, ls = bounded_least_squares(
+        lambda z: residual(z * scale) / y_scale, x0 / scale, jac="2-point", lower=bound_lo / scale,
+        upper=bound_hi / scale, max_nfev=max_nfev)
+    x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
     # Standard errors from the exact sensitivity of the free run at the estimate (the
@@ -173,8 +168,6 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     except SimulationDivergedError:
         jac = ls.jac * y_scale / scale
     cov, s2 = parameter_covariance(jac, sse, m)
-    status = Status.CONVERGED if ls.status > 0 else Status.MAX_ITER if ls.status == 0 else \
-        Status.FAILED
     active = ls.active_mask[n_lin:n_lin + n_free]
     return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=shrink,
                   status=status, message=f"output-error fit (scipy.optimize.least_squares): "
