@@ -109,7 +109,7 @@ class _SimulationError:
     which says the run escapes exactly when the residual does (the same recursion, the same
     ``guard``). Should the sensitivity's own simulation stop where the residual's did not (its
     default divergence threshold, ``1e8`` times the model's drive, below ``guard``: a gain
-    beyond about 1e7), that column block falls back to forward differences of the residual.
+    beyond about 1e7), the Jacobian falls back to forward differences of the residual.
     :attr:`n_simulations` counts free runs, those inside Jacobians included.
     """
 
