@@ -78,7 +78,8 @@ class IdentificationResult:
     nfev : int
         Evaluations of the model over the whole record: ``J`` (one per pass) for the recursive
         methods, ``J(alpha)`` profiles and polish residuals for ``"varpro"``, free-run
-        simulations (finite-difference Jacobians included) for ``"output_error"``.
+        simulations for ``"output_error"`` (one per residual and one per Jacobian, the exact
+        sensitivity of the free run).
     message : str
         Why the run stopped, and anything the user must know about the estimates.
     alpha_at_bound : bool

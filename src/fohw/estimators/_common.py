@@ -5,6 +5,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import scipy.optimize
 
 from .. import _linalg
 from ..exceptions import (
@@ -22,6 +23,49 @@ def rms_scale(x):
     """The RMS of a signal, or 1 for a zero signal: a scale for residuals and parameters."""
     value = float(np.sqrt(np.mean(x * x)))
     return value if value > 0 else 1.0
+
+
+def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
+    """Bounded nonlinear least squares as every fohw estimator runs it.
+
+    :func:`scipy.optimize.least_squares` (trust-region reflective, ``x_scale="jac"``) from
+    ``x0`` clipped into the bounds; the entries the solver reports on an active bound are put
+    on it (it stops about 1e-10 inside), and its status is mapped to :class:`fohw.Status`.
+    Used by varpro's polish, ``"structured"`` and ``"output_error"``.
+
+    Parameters
+    ----------
+    residual : callable
+        ``x -> r(x)``.
+    x0 : ndarray
+        Start.
+    jac : callable or str
+        The Jacobian of ``residual``, or a finite-difference scheme (``"2-point"``).
+    lower, upper : ndarray
+        Bounds of every entry of ``x`` (``-inf``/``inf`` for unbounded ones).
+    **options
+        ``ftol``, ``xtol``, ``gtol``, ``max_nfev`` of :func:`scipy.optimize.least_squares`.
+
+    Returns
+    -------
+    x : ndarray
+        The solution, active entries on their bound.
+    status : Status
+        ``CONVERGED`` (a tolerance was met), ``MAX_ITER`` (``max_nfev`` reached) or ``FAILED``.
+    ls : scipy.optimize.OptimizeResult
+        The solver's result (``fun``, ``jac``, ``nfev``, ``njev``, ``active_mask``, ``message``).
+    """
+    ls = scipy.optimize.least_squares(residual, np.clip(x0, lower, upper), jac=jac,
+                                      method="trf", bounds=(lower, upper), x_scale="jac",
+                                      **options)
+    x = np.where(ls.active_mask < 0, lower, np.where(ls.active_mask > 0, upper, ls.x))
+    return x, solver_status(ls), ls
+
+
+def solver_status(ls):
+    """:class:`fohw.Status` of a :func:`scipy.optimize.least_squares` result."""
+    return (Status.CONVERGED if ls.status > 0 else Status.MAX_ITER if ls.status == 0 else
+            Status.FAILED)
 
 
 def check_enough_samples(n_equations, structure, *, after=""):

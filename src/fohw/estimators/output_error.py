@@ -8,14 +8,17 @@ simulation error instead:
 
 ``min over (theta, alpha)  sum_{k >= n_init} (y[k] - ysim[k; theta, alpha])**2``
 
-with a trust-region reflective least-squares solver (finite-difference Jacobian), started from
-the equation-error estimate. The standard errors are ``s^2 (S^T S)^{-1}`` with ``S`` the exact
-sensitivity of the free run at the estimate (:func:`fohw.model.sensitivity.simulation_jacobian`),
-the Jacobian of the output-noise Cramér–Rao bound (:func:`fohw.crb` with ``noise="output"``),
-which the fit reaches when the noise is added to the measured output. Candidate models whose
-simulation escapes (beyond ten times the largest measured ``|y|``) get a large constant
-residual, so the solver steps back from them; an unstable starting model is first made stable
-by shrinking its output-feedback block.
+with a trust-region reflective least-squares solver (:func:`scipy.optimize.least_squares`),
+started from the equation-error estimate. Its Jacobian is ``-S``, with ``S`` the exact
+sensitivity of the free run (:func:`fohw.model.sensitivity.simulation_jacobian`: one simulation
+and one linear recursion of the same cost class, instead of the ``d + 1`` simulations of finite
+differences over ``d`` parameters). The standard errors are ``s^2 (S^T S)^{-1}`` at the
+estimate, ``S`` being also the Jacobian of the output-noise Cramér–Rao bound (:func:`fohw.crb`
+with ``noise="output"``), which the fit reaches when the noise is added to the measured output.
+Candidate models whose simulation escapes (beyond ten times the largest measured ``|y|``) get a
+large constant residual, so the solver steps back from them (the Jacobian there is zero, the
+derivative of that constant); an unstable starting model is first made stable by shrinking its
+output-feedback block.
 """
 
 from __future__ import annotations
@@ -23,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from .. import _linalg
 from .._threads import thin_solves
@@ -32,12 +34,11 @@ from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
-from ._common import bound_note, check_enough_samples, finish, rms_scale
+from ._common import bound_note, bounded_least_squares, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
     _bounds_record,
-    _on_active_bound,
     parameter_covariance,
     separable_least_squares,
 )
@@ -62,8 +63,8 @@ class OutputErrorOptions(MethodOptions):
         Points of the coarse alpha scan of the ``"varpro"`` start (default 41).
     max_nfev : int
         Residual evaluations allowed to :func:`scipy.optimize.least_squares` (default 100,
-        as scipy counts them: its finite-difference Jacobians come on top, one simulation per
-        parameter each).
+        as scipy counts them: the Jacobian evaluations, one simulation and its sensitivity
+        each, come on top; :attr:`IdentificationResult.nfev` counts both).
     """
 
     renamed = {"max_iter": "max_nfev"}
@@ -97,7 +98,87 @@ class _OEFit:
     at_upper: np.ndarray
 
 
-def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None):
+class _SimulationError:
+    """The simulation-error residual ``(y - ysim(x))[n_init:]`` and its exact Jacobian.
+
+    ``x`` is ``(linear, params)``. A candidate whose free run escapes (``|ysim|`` beyond
+    ``guard``, ten times the largest measured ``|y|``) gets the constant residual ``2 guard``
+    on every sample, so the solver steps back from it; the Jacobian there is zero, the
+    derivative of that constant. Elsewhere the Jacobian is ``-S[n_init:]`` with ``S`` the
+    exact sensitivity of the free run (:func:`~fohw.model.sensitivity.simulation_jacobian`),
+    which says the run escapes exactly when the residual does (the same recursion, the same
+    ``guard``). Should the sensitivity's own simulation stop where the residual's did not (its
+    default divergence threshold, ``1e8`` times the model's drive, below ``guard``: a gain
+    beyond about 1e7), the Jacobian falls back to forward differences of the residual.
+    :attr:`n_simulations` counts free runs, those inside Jacobians included.
+    """
+
+    def __init__(self, structure, u, y, n_init, lower, upper):
+        self.structure, self.u, self.y = structure, u, y
+        self.guard = 10.0 * float(np.max(np.abs(y)))
+        self.window = slice(n_init, None)
+        self.penalty = np.full(y.shape[0] - n_init, 2.0 * self.guard)
+        self.lower, self.upper = lower, upper
+        self.n_simulations = 0
+        self.n_jacobians = 0
+        self._last = None                   # (x as bytes, residual) of the latest residual
+
+    def simulate(self, x):
+        """Free run at ``x``; :class:`SimulationDivergedError` beyond ``guard``."""
+        self.n_simulations += 1
+        n = self.structure.n_linear
+        return simulate_parameters(self.structure, x[:n], x[n:], self.u,
+                                   divergence_threshold=self.guard)
+
+    def residual(self, x):
+        """``(y - ysim(x))[n_init:]``, or the constant penalty if the run escapes."""
+        try:
+            r = (self.y - self.simulate(x))[self.window]
+        except SimulationDivergedError:
+            r = self.penalty
+        self._last = (x.tobytes(), r)
+        return r
+
+    def jacobian(self, x):
+        """``d residual / dx``: ``-S[n_init:]``, or zeros where the residual is the penalty."""
+        self.n_jacobians += 1
+        self.n_simulations += 1
+        n = self.structure.n_linear
+        try:
+            ysim, sens = simulation_jacobian(self.structure, x[:n], x[n:], self.u)
+        except SimulationDivergedError:
+            ysim = sens = None
+        if ysim is not None and np.max(np.abs(ysim)) <= self.guard:
+            return -sens[self.window]
+        r = self._last[1] if self._last and self._last[0] == x.tobytes() else self.residual(x)
+        if r is self.penalty or ysim is not None:
+            return np.zeros((self.penalty.shape[0], x.shape[0]))
+        return self._forward_difference(x, r)
+
+    def scaled(self, scale, y_scale):
+        """``(residual, jacobian)`` of ``z = x / scale``, the residual divided by ``y_scale``."""
+
+        def residual(z):
+            return self.residual(z * scale) / y_scale
+
+        def jacobian(z):
+            return self.jacobian(z * scale) * (scale / y_scale)
+
+        return residual, jacobian
+
+    def _forward_difference(self, x, r):
+        step = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(x), 1.0)
+        step = np.where(x + step > self.upper, -step, step)
+        cols = []
+        for i in range(x.shape[0]):
+            xi = x.copy()
+            xi[i] += step[i]
+            cols.append((self.residual(xi) - r) / (xi[i] - x[i]))
+        return np.column_stack(cols)
+
+
+def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None,
+                     _jacobian="exact"):
     """Fit the linear and nonlinear parameters to minimise the free-run simulation error.
 
     Parameters
@@ -112,7 +193,12 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
         Leading samples left out of the criterion (start-up transient of a zero-initial-
         condition model on data that did not start at rest).
     max_nfev : int, optional
-        Limit on residual evaluations, passed to :func:`scipy.optimize.least_squares`.
+        Limit on residual evaluations, passed to :func:`scipy.optimize.least_squares`
+        (Jacobian evaluations are not counted).
+    _jacobian : {"exact", "2-point"}
+        The solver's Jacobian: the exact sensitivity of the free run (default), or scipy's
+        forward differences (one simulation per parameter; kept as a reference for tests and
+        ``benchmarks/bench_output_error.py``).
 
     Returns
     -------
@@ -122,64 +208,55 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     u, y = builder.u, builder.y
     n_lin, n_free = s.n_linear, len(s.orders.free)
     n_past = s.n_nonlinear - n_free
-    guard = 10.0 * float(np.max(np.abs(y)))
     window = slice(n_init, None)
     m = y.shape[0] - n_init
-    penalty = np.full(m, 2.0 * guard)
-    count = [0]
-
-    def simulate(x):
-        count[0] += 1
-        return simulate_parameters(s, x[:n_lin], x[n_lin:], u, divergence_threshold=guard)
-
-    def residual(x):
-        try:
-            return (y - simulate(x))[window]
-        except SimulationDivergedError:
-            return penalty
+    bound_lo = np.r_[np.full(n_lin, -np.inf), lower, np.full(n_past, -np.inf)]
+    bound_hi = np.r_[np.full(n_lin, np.inf), upper, np.full(n_past, np.inf)]
+    crit = _SimulationError(s, u, y, n_init, bound_lo, bound_hi)
 
     x0 = np.r_[np.asarray(linear0, dtype=np.float64), np.asarray(params0, dtype=np.float64)]
     k = s.layout.n_output_params
     shrink = 1.0
     for _ in range(60):
         try:
-            simulate(x0)
+            crit.simulate(x0)
             break
         except SimulationDivergedError:
             shrink *= 0.8
             x0[:k] *= 0.8
-    bound_lo = np.r_[np.full(n_lin, -np.inf), lower, np.full(n_past, -np.inf)]
-    bound_hi = np.r_[np.full(n_lin, np.inf), upper, np.full(n_past, np.inf)]
     x0 = np.clip(x0, bound_lo, bound_hi)
     # The solver works on dimensionless z = x / scale and a residual divided by the RMS output,
-    # so that its finite-difference steps and tolerances mean the same in every unit.
+    # so that its steps and tolerances mean the same in every unit.
     scale = _parameter_scale(x0, s, u, y)
     y_scale = rms_scale(y)
-    ls = scipy.optimize.least_squares(
-        lambda z: residual(z * scale) / y_scale, x0 / scale, method="trf", x_scale="jac",
-        max_nfev=max_nfev, bounds=(bound_lo / scale, bound_hi / scale))
-    x = ls.x * scale
-    for j in range(n_free):
-        x[n_lin + j] = _on_active_bound(x[n_lin + j], ls.active_mask[n_lin + j], lower[j],
-                                        upper[j])
+
+    residual, jacobian = crit.scaled(scale, y_scale)
+    if _jacobian not in ("exact", "2-point"):
+        raise ValueError(f"`_jacobian` must be 'exact' or '2-point'; got {_jacobian!r}.")
+    z, status, ls = bounded_least_squares(
+        residual, x0 / scale, jac=jacobian if _jacobian == "exact" else "2-point",
+        lower=bound_lo / scale, upper=bound_hi / scale, max_nfev=max_nfev)
+    x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
     # Standard errors from the exact sensitivity of the free run at the estimate (the
-    # Jacobian of the output-noise bound, fohw.crb(noise="output")), not the solver's
-    # finite-difference one.
+    # Jacobian of the output-noise bound, fohw.crb(noise="output")), at x with the orders put
+    # on an active bound (the solver's last Jacobian is at its own x, ~1e-10 inside).
     try:
         _, sens = simulation_jacobian(s, x[:n_lin], x[n_lin:], u)
         jac = sens[window]
     except SimulationDivergedError:
         jac = ls.jac * y_scale / scale
     cov, s2 = parameter_covariance(jac, sse, m)
-    status = Status.CONVERGED if ls.status > 0 else Status.MAX_ITER if ls.status == 0 else \
-        Status.FAILED
     active = ls.active_mask[n_lin:n_lin + n_free]
+    how = (f"{crit.n_simulations} simulations, {crit.n_jacobians} of them with the exact "
+           "sensitivity" if _jacobian == "exact" else
+           f"{crit.n_simulations} simulations, finite-difference Jacobians included")
     return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=shrink,
                   status=status, message=f"output-error fit (scipy.optimize.least_squares): "
-                  f"{ls.message} ({count[0]} simulations)", covariance=cov, noise_variance=s2,
-                  nit=int(ls.njev), nfev=count[0], at_lower=active < 0, at_upper=active > 0)
+                  f"{ls.message} ({how})", covariance=cov, noise_variance=s2,
+                  nit=int(ls.njev), nfev=crit.n_simulations, at_lower=active < 0,
+                  at_upper=active > 0)
 
 
 def _parameter_scale(x0, structure, u, y):

@@ -30,17 +30,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, finish, rms_scale
+from ._common import bound_note, bounded_least_squares, finish, rms_scale
 from .options import MethodOptions
 from .varpro import (
     VarproOptions,
     _bounds_record,
-    _on_active_bound,
     parameter_covariance,
     separable_least_squares,
 )
@@ -84,7 +82,7 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
     builder : RegressorBuilder
         The record and the model class.
     x0 : ndarray
-        Start, in :attr:`Structure.structured_names` order.
+        Start, in :attr:`Structure.structured_names` order (clipped into the bounds).
     lower, upper : ndarray
         Bounds of the free orders.
     tol : float
@@ -100,6 +98,7 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
         ``||y - Phi theta(x)||^2``.
     jacobian : ndarray, shape (N, d)
         ``G M`` at ``x``: the derivative of the one-step prediction.
+    status : Status
     ls : scipy.optimize.OptimizeResult
     """
     s = builder.structure
@@ -119,15 +118,11 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
 
     lo = np.r_[np.full(m, -np.inf), lower, np.full(n_past, -np.inf)]
     hi = np.r_[np.full(m, np.inf), upper, np.full(n_past, np.inf)]
-    ls = scipy.optimize.least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, method="trf",
-                                      bounds=(lo, hi), x_scale="jac", ftol=tol, xtol=tol,
-                                      gtol=tol, max_nfev=max_nfev)
-    x = ls.x.copy()
-    for j in range(n_free):
-        x[m + j] = _on_active_bound(x[m + j], ls.active_mask[m + j], lower[j], upper[j])
+    x, status, ls = bounded_least_squares(residual, x0, jac=jacobian, lower=lo, upper=hi,
+                                          ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev)
     rss = float(ls.fun @ ls.fun) * y_scale**2
     linear, params = s.from_structured(x)
-    return x, rss, builder.jacobian(linear, params) @ s.structured_jacobian(x), ls
+    return x, rss, builder.jacobian(linear, params) @ s.structured_jacobian(x), status, ls
 
 
 def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
@@ -149,8 +144,8 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     except ParameterError as exc:
         raise ParameterError(f"fohw.identify('structured'): cannot start from the varpro "
                              f"estimate: {exc}") from None
-    x, rss, jac, ls = fit_structured(builder, x0, lower=lower, upper=upper, tol=opts.tol,
-                                     max_nfev=opts.max_nfev)
+    x, rss, jac, status, ls = fit_structured(builder, x0, lower=lower, upper=upper,
+                                             tol=opts.tol, max_nfev=opts.max_nfev)
     linear, params = s.from_structured(x)
     cov_x, s2 = parameter_covariance(jac, rss, builder.n_samples)
     covariance = None
@@ -158,8 +153,6 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
         M = s.structured_jacobian(x)
         covariance = M @ cov_x @ M.T
         covariance = 0.5 * (covariance + covariance.T)
-    status = (Status.CONVERGED if ls.status > 0 else
-              Status.MAX_ITER if ls.status == 0 else Status.FAILED)
     n_free = len(s.orders.free)
     m = len(s.structured_names) - s.n_nonlinear
     active = ls.active_mask[m:m + n_free]

@@ -41,7 +41,7 @@ from .._threads import thin_solves
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, check_enough_samples, finish, rms_scale
+from ._common import bound_note, bounded_least_squares, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
 
 __all__ = ["VarproOptions", "profile_theta", "separable_least_squares", "parameter_covariance"]
@@ -413,20 +413,11 @@ def _polish(builder, linear, params, lo, hi, opts):
 
     lower = np.r_[np.full(n, -np.inf), lo, np.full(n_past, -np.inf)]
     upper = np.r_[np.full(n, np.inf), hi, np.full(n_past, np.inf)]
-    x0 = np.r_[linear, np.clip(params, lower[n:], upper[n:])]
-    ls = scipy.optimize.least_squares(
-        residual, x0, jac=jacobian, method="trf", bounds=(lower, upper), x_scale="jac",
-        ftol=opts.tol, xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
+    x, _, ls = bounded_least_squares(residual, np.r_[linear, params], jac=jacobian, lower=lower,
+                                     upper=upper, ftol=opts.tol, xtol=opts.tol, gtol=opts.tol,
+                                     max_nfev=opts.max_nfev)
     rss = float(ls.fun @ ls.fun) * y_scale**2
-    params = ls.x[n:].copy()
-    for m in range(n_free):
-        params[m] = _on_active_bound(params[m], ls.active_mask[n + m], lo[m], hi[m])
-    return ls.x[:n].copy(), params, rss, ls
-
-
-def _on_active_bound(value, active, lo, hi):
-    """The trust-region solver stays ~1e-10 inside a bound it reports active: put it on it."""
-    return lo if active < 0 else hi if active > 0 else value
+    return x[:n], x[n:], rss, ls
 
 
 @thin_solves
