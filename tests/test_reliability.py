@@ -224,6 +224,17 @@ def test_tiny_data_give_finite_fit_indices():
             np.sqrt(np.mean((y - yhat) ** 2)), rel=1e-12)
 
 
+def test_data_whose_squares_underflow_are_warned_about(paper):
+    """Data x 1e-170: J, the noise variance and the covariance are squares of 1e-170; they came
+    out 0 and NaN without a word (and alpha moved 3e-7 from its value in normal units)."""
+    d = paper[0]
+    lin = dict(na=2, nb=2, f_basis=1, g_basis=1)
+    with pytest.warns(fohw.DataWarning, match=r"`y` has RMS .*e-17\d, whose square is below"):
+        res = fohw.identify(1e-170 * d.u, 1e-170 * d.y, **lin)
+    assert res.J == 0.0                       # what the warning is about
+    fohw.identify(1e-150 * d.u, 1e-150 * d.y, **lin)      # 1e-300 is a normal double: silent
+
+
 def test_narrow_alpha_bounds_work_with_the_paper_method(paper):
     """Case 29: `--alpha-bounds 0.7,0.9 --method hybrid` asked for an --alpha0 that did not
     exist; the default start is now inside any bounds."""

@@ -20,9 +20,19 @@ __all__: list[str] = []
 
 
 def rms_scale(x):
-    """The RMS of a signal, or 1 for a zero signal: a scale for residuals and parameters."""
-    value = float(np.sqrt(np.mean(x * x)))
-    return value if value > 0 else 1.0
+    """The RMS of a signal, or 1 for a zero signal: a scale for residuals and parameters.
+
+    Where ``x * x`` overflows (data of size 1e200) or underflows to 0 (1e-170) it is computed
+    as ``m * rms(x / m)`` with ``m = max|x|``.
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        value = float(np.sqrt(np.mean(x * x)))
+    if not 0 < value < np.inf:
+        m = float(np.max(np.abs(x))) if np.size(x) else 0.0
+        if not 0 < m < np.inf:
+            return 1.0
+        value = m * float(np.sqrt(np.mean(np.square(x / m))))
+    return value
 
 
 def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):

@@ -18,6 +18,7 @@ from .._validation import AlphaBounds, check_array, check_int, check_same_length
 from ..exceptions import DataWarning, ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.structure import Structure
+from ._common import rms_scale
 from .hybrid import (
     HybridOptions,
     SingleInnovationGradientOptions,
@@ -235,6 +236,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     _check_offset(structure, u_dev)
     if operating_point is None and not structure.offset:
         _warn_levels(u, y)
+    _warn_tiny(y_dev)
     builder = RegressorBuilder(u_dev, y_dev, structure=structure)
     # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
     # and criterion for finiteness and raises EstimationDivergedError with the reason.
@@ -275,6 +277,18 @@ def _order_bounds(structure, alpha_bounds):
         b = AlphaBounds(alpha_bounds)
         pairs = [b] * len(free)
     return np.array([b.lo for b in pairs]), np.array([b.hi for b in pairs])
+
+
+def _warn_tiny(y):
+    """Warn when squares of ``y`` underflow: J, the noise variance and the covariance cannot."""
+    scale = rms_scale(y)
+    if np.any(y) and scale * scale < np.finfo(np.float64).tiny:
+        warnings.warn(
+            f"fohw.identify: `y` has RMS {scale:.3g}, whose square is below the smallest normal "
+            "double (2.2e-308): J, the noise variance and the standard errors are squares of "
+            "it and come out 0 or NaN (basis columns such as y**3 may underflow as well). "
+            "Rescale the data (e.g. y * 1e150; fohw's models follow a change of units).",
+            DataWarning, stacklevel=3)
 
 
 def _warn_levels(u, y):

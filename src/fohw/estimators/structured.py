@@ -120,7 +120,7 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
     hi = np.r_[np.full(m, np.inf), upper, np.full(n_past, np.inf)]
     x, status, ls = bounded_least_squares(residual, x0, jac=jacobian, lower=lo, upper=hi,
                                           ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev)
-    rss = float(ls.fun @ ls.fun) * y_scale**2
+    rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
     linear, params = s.from_structured(x)
     return x, rss, builder.jacobian(linear, params) @ s.structured_jacobian(x), status, ls
 

@@ -416,7 +416,7 @@ def _polish(builder, linear, params, lo, hi, opts):
     x, _, ls = bounded_least_squares(residual, np.r_[linear, params], jac=jacobian, lower=lower,
                                      upper=upper, ftol=opts.tol, xtol=opts.tol, gtol=opts.tol,
                                      max_nfev=opts.max_nfev)
-    rss = float(ls.fun @ ls.fun) * y_scale**2
+    rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
     return x[:n], x[n:], rss, ls
 
 
