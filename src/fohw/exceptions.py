@@ -104,7 +104,11 @@ class RankDeficiencyWarning(UserWarning):
 
 
 class DataWarning(UserWarning):
-    """The data look unlike what the model assumes (e.g. a level far from 0 and no offset)."""
+    """The data look unlike what the model assumes or can represent.
+
+    Issued by :func:`fohw.identify` for a level far from 0 with neither offset nor operating
+    point, and for an output so small (RMS below 1.5e-154) that its squares underflow.
+    """
 
 
 class ExtrapolationWarning(UserWarning):
