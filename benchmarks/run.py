@@ -218,6 +218,12 @@ def main(argv=None):
         add("gl_difference (same alpha)", n, t, "2-FFT, cached weights", t2, peak, rep)
 
     model = fohw.datasets.paper_model()
+    from fohw.model import _compiled
+
+    t0 = time.perf_counter()
+    leaf = "compiled" if _compiled.available() and _compiled.load() is not None else "pure"
+    print(f"simulator leaf: {leaf} (loading it took {time.perf_counter() - t0:.2f} s, not timed "
+          "below; benchmarks/bench_simulator.py compares both)")
     for n in sizes:
         rng = np.random.default_rng(n)
         u = rng.uniform(-np.sqrt(3), np.sqrt(3), n)

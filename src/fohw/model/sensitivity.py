@@ -26,10 +26,10 @@ and ``S^T S / sigma^2`` is the Fisher information when white Gaussian noise of v
 from __future__ import annotations
 
 import numpy as np
-import scipy.signal
 
 from .._validation import check_array
 from ..exceptions import DimensionError
+from ._online import HalfMerge, divide_and_conquer
 from .gl import gl_weights
 from .regressors import RegressorBuilder
 from .structure import Structure
@@ -115,9 +115,12 @@ def simulation_jacobian(structure, linear, params, u):
     h = structure.dt
     lags, betas, coefs = [], [], []
     n = y.shape[0]
+    weights = {}                          # one array per distinct order (shared spectra)
     for t, (term, nu) in enumerate(zip(structure.orders.output, out_nu)):
         lags.append(term.lag)
-        betas.append(gl_weights(nu, n))
+        if nu not in weights:
+            weights[nu] = gl_weights(nu, n)
+        betas.append(weights[nu])
         coefs.append((qa[:, t] @ dg) * (1.0 if h == 1.0 else h**-nu))
     return y, _solve_feedback(E, lags, betas, coefs)
 
@@ -125,10 +128,12 @@ def simulation_jacobian(structure, linear, params, u):
 def _solve_feedback(E, lags, betas, coefs):
     """``S[k] = E[k] + sum_t (beta_t * (c_t S))[k - lag_t]`` for all ``k`` (lags >= 1).
 
-    Divide and conquer over time, as :func:`fohw.model.system._recursion`: ``D[t]`` gathers
-    ``beta_t * z_t`` with ``z_t = c_t S``; a leaf finishes its samples one by one (a dot product
-    per term and sample for the leaf's own past), and once the first half of ``[lo, hi)`` is
-    finished its ``z`` enters ``D`` on the second half by one FFT convolution per term.
+    Divide and conquer over time with the simulator's skeleton (:mod:`fohw.model._online`):
+    ``D[t]`` gathers ``beta_t * z_t`` with ``z_t = c_t S``; a leaf finishes its samples one by
+    one (a dot product per term and sample for the leaf's own past), and once the first half of
+    ``[lo, hi)`` is finished its ``z`` enters ``D`` on the second half by FFT
+    (:class:`~fohw.model._online.HalfMerge`: the spectra of the weights once per FFT size, and
+    terms given the same weights array share them).
     """
     n, d = E.shape
     T = len(lags)
@@ -137,6 +142,11 @@ def _solve_feedback(E, lags, betas, coefs):
     D = np.zeros((T, n, d))
     leaf = min(_LEAF, n)
     rev = [b[:leaf][::-1].copy() for b in betas]
+    distinct = {}
+    for b in betas:
+        distinct.setdefault(id(b), (len(distinct), b))
+    merge = HalfMerge([b for _, b in distinct.values()],
+                      [(t, t, distinct[id(b)][0]) for t, b in enumerate(betas)])
 
     def run_leaf(lo, hi):
         for k in range(lo, hi):
@@ -149,16 +159,5 @@ def _solve_feedback(E, lags, betas, coefs):
                 Z[t, k] = coefs[t][k] * s
                 D[t, k] += rev[t][leaf - (k - lo + 1):] @ Z[t, lo:k + 1]
 
-    def solve(lo, hi):
-        if hi - lo <= leaf:
-            run_leaf(lo, hi)
-            return
-        mid = (lo + hi) // 2
-        solve(lo, mid)
-        for t in range(T):
-            conv = scipy.signal.fftconvolve(Z[t, lo:mid], betas[t][:hi - lo, None], axes=0)
-            D[t, mid:hi] += conv[mid - lo:hi - lo]
-        solve(mid, hi)
-
-    solve(0, n)
+    divide_and_conquer(n, leaf, run_leaf, lambda lo, mid, hi: merge(Z, D, lo, mid, hi))
     return S

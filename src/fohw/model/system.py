@@ -24,6 +24,8 @@ from .._validation import (
     check_scalar,
 )
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from . import _compiled
+from ._online import HalfMerge, divide_and_conquer
 from .basis import Basis, as_basis, polynomial_basis
 from .gl import _weights, causal_convolve, gl_weights
 from .orders import Orders
@@ -312,7 +314,11 @@ def _output_terms(g_basis: Basis, Q: np.ndarray):
 #: Below this record length the simulator runs the recursion directly (one dot product per
 #: output signal and sample); above it, by divide and conquer (:func:`_recursion`).
 FAST_SIMULATION_THRESHOLD = 8192
-_LEAF = 128
+#: Leaf sizes of the divide and conquer for the pure-Python and the compiled leaf, chosen by
+#: ``benchmarks/bench_simulator.py --leaves`` (64 to 512 measured at N = 10**5 and 10**6).
+_LEAF = 256
+_LEAF_COMPILED = 512
+_LEAF_REFERENCE = 128             # the simulator before issue 15 (_recursion_reference)
 
 
 def _transient(nu, lag, n, h):
@@ -351,8 +357,157 @@ def _forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, pas
     return w
 
 
-def _recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
+def _recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_fixed=None, *,
+               kernel="auto", leaf_size=None):
     """``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
+
+    ``z_r(y) = sum_j Q[j, r] g_j(y)``: for a model ``Q = q``, ``A = a`` (one signal, gbar);
+    for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``. ``out_terms[t]`` is the
+    ``(lag, order)`` of column ``t`` of ``A``. Every (signal, distinct order) pair has an
+    accumulator of ``Delta^nu z_r``; order-0 accumulators have no memory (``z_r`` itself).
+
+    O(N log^2 N) by divide and conquer over time (:mod:`fohw.model._online`): once the first
+    half of ``[lo, hi)`` is finished, its contribution to the accumulators on the second half
+    is added by FFT (one transform per signal and one inverse per accumulator, the weights'
+    spectra computed once per level). Leaves run the recursion sample by sample, one dot
+    product per accumulator and sample for the leaf's own past. ``method``: ``"direct"`` is one
+    leaf of ``N`` samples (O(N^2)), ``"fast"`` the divide and conquer, ``"auto"`` the latter
+    above :data:`FAST_SIMULATION_THRESHOLD` samples. The first ``len(y_fixed)`` outputs are not
+    computed but taken from ``y_fixed`` (a measured history).
+
+    ``kernel`` chooses the leaf: ``"auto"`` the compiled leaf (:mod:`fohw.model._compiled`,
+    polynomial output bases, numba installed and loaded) or else the pure-Python one;
+    ``"pure"``; ``"compiled"`` (an error if it is not available); ``"reference"`` the
+    simulator before issue 15 (:func:`_recursion_reference`, leaves of 128, for benchmarks);
+    ``"merges"`` a leaf that does nothing, so only the FFT merges run, on the same segments
+    (the floor of the divide and conquer, for benchmarks; the output is then meaningless).
+    ``leaf_size`` overrides the leaf size of the divide and conquer (:data:`_LEAF` for the pure
+    leaf, :data:`_LEAF_COMPILED` for the compiled one).
+    """
+    n = w.shape[0]
+    if method == "auto":
+        method = "fast" if n > FAST_SIMULATION_THRESHOLD else "direct"
+    if kernel == "reference":
+        return _recursion_reference(Q, A, out_terms, g_basis, w, threshold,
+                                    _LEAF_REFERENCE if method == "fast" else n, h, y_fixed)
+    compiled = None
+    if kernel in ("auto", "compiled"):
+        compiled = _compiled.leaf_for(g_basis, n if kernel == "auto" else _compiled.LOAD_AFTER)
+        if compiled is None and kernel == "compiled":
+            raise RuntimeError("the compiled leaf is not available (numba missing or disabled, "
+                               "or a non-polynomial output basis).")
+    if method == "direct":
+        leaf_size = n
+    elif leaf_size is None:
+        leaf_size = _LEAF_COMPILED if compiled is not None else _LEAF
+    leaf_size = max(1, min(leaf_size, n))
+
+    R = Q.shape[1]
+    nus = []
+    for _, nu in out_terms:
+        if nu not in nus:
+            nus.append(nu)
+    acc = [(r, nu) for r in range(R) for nu in nus]          # accumulator index -> (signal, nu)
+    index = {key: a for a, key in enumerate(acc)}
+    terms = [(index[r, nu], lag - 1, float(A[r, t]) * (1.0 if h == 1.0 else h**-nu))
+             for r in range(R) for t, (lag, nu) in enumerate(out_terms)]
+    mem_nus = [nu for nu in nus if nu != 0.0]
+    betas = [gl_weights(nu, n) for nu in mem_nus]
+    memory = [(a, r, mem_nus.index(nu)) for a, (r, nu) in enumerate(acc) if nu != 0.0]
+    memoryless = [(a, r) for a, (r, nu) in enumerate(acc) if nu == 0.0]
+    merge = HalfMerge(betas, memory)
+    y = np.zeros(n)
+    z = np.zeros((R, n))
+    dz = np.zeros((len(acc), n))      # contributions gathered so far
+    rev = np.array([betas[k][:leaf_size][::-1] for _, _, k in memory]).reshape(
+        len(memory), leaf_size)
+    if kernel == "merges":
+        def leaf(lo, hi):
+            pass
+    elif compiled is not None:
+        leaf = _compiled_leaf(compiled, Q, terms, memory, memoryless, rev, w, y, z, dz,
+                              threshold, y_fixed)
+    else:
+        leaf = _pure_leaf(_output_terms(g_basis, Q), terms, memory, memoryless, rev, w, y, z,
+                          dz, threshold, y_fixed)
+        _compiled.count_pure(n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        divide_and_conquer(n, leaf_size, leaf, lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    return y
+
+
+def _pure_leaf(zfun, terms, memory, memoryless, rev, w, y, z, dz, threshold, y_fixed):
+    """The leaf of :func:`_recursion` in Python: ``leaf(lo, hi)`` finishes samples lo..hi-1."""
+    import math
+
+    R = z.shape[0]
+    L = rev.shape[1]
+    w = w.tolist()
+    n_fixed = 0 if y_fixed is None else y_fixed.shape[0]
+    fixed = [] if y_fixed is None else y_fixed.tolist()
+    dz_item = dz.item
+    isfinite = math.isfinite
+    zrows = list(z)                   # 1-D views, one per output signal
+    dzrows = list(dz)
+    dot = np.dot
+    signals = range(R)
+    leaf_memory = [(dzrows[a], r, rev[j]) for j, (a, r, _) in enumerate(memory)]
+    leaf_memoryless = [(dzrows[a], r) for a, r in memoryless]
+
+    def leaf(lo, hi):
+        for k in range(lo, hi):
+            if k < n_fixed:
+                yk = fixed[k]
+            else:
+                yk = w[k]
+                for a, i, c in terms:
+                    if i < k:
+                        yk += c * dz_item(a, k - 1 - i)
+                if not abs(yk) <= threshold:       # also catches nan
+                    raise SimulationDivergedError(k, yk, threshold)
+            zk = zfun(yk)
+            for x in zk:
+                if not isfinite(x):
+                    raise SimulationDivergedError(k, yk, threshold, "output_basis")
+            y[k] = yk
+            for r in signals:
+                zrows[r][k] = zk[r]
+            for row, r, b_rev in leaf_memory:
+                row[k] += dot(zrows[r][lo:k + 1], b_rev[L - (k - lo + 1):])
+            for row, r in leaf_memoryless:
+                row[k] = zk[r]
+    return leaf
+
+
+def _compiled_leaf(kernel, Q, terms, memory, memoryless, rev, w, y, z, dz, threshold, y_fixed):
+    """The leaf of :func:`_recursion` by the compiled ``kernel`` (:mod:`fohw.model._compiled`)."""
+    intp = np.intp
+    args = (w, y, z, dz,
+            np.array([a for a, _, _ in terms], dtype=intp),
+            np.array([i for _, i, _ in terms], dtype=intp),
+            np.array([c for _, _, c in terms], dtype=np.float64),
+            np.array([a for a, _, _ in memory], dtype=intp),
+            np.array([r for _, r, _ in memory], dtype=intp),
+            np.ascontiguousarray(rev),
+            np.array([a for a, _ in memoryless], dtype=intp),
+            np.array([r for _, r in memoryless], dtype=intp),
+            np.array(Q, dtype=np.float64, order="C"), Q.shape[1] == 1,    # writable copies:
+            np.zeros(0) if y_fixed is None else np.array(y_fixed, dtype=np.float64),  # one type
+            float(threshold), np.zeros(Q.shape[0]))
+
+    def leaf(lo, hi):
+        status, k, yk = kernel(lo, hi, *args)
+        if status == _compiled.GROWTH:
+            raise SimulationDivergedError(k, yk, threshold)
+        if status == _compiled.OUTPUT_BASIS:
+            raise SimulationDivergedError(k, yk, threshold, "output_basis")
+    return leaf
+
+
+def _recursion_reference(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
+    """The simulator before issue 15, kept as the benchmarks' reference (``kernel="reference"``).
+
+    ``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
 
     ``z_r(y) = sum_j Q[j, r] g_j(y)``: for a model ``Q = q``, ``A = a`` (one signal, gbar);
     for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``. ``out_terms[t]`` is the
@@ -438,18 +593,12 @@ def _recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed
     return np.array(y)
 
 
-def _leaf_size(n, method):
-    if method == "auto":
-        method = "fast" if n > FAST_SIMULATION_THRESHOLD else "direct"
-    return _LEAF if method == "fast" else n
-
-
 def _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
     """The paper's commensurate model in block form (``auto``/``direct``/``fast``)."""
     out_terms = [(i, alpha) for i in range(1, A.shape[1] + 1)]
     in_terms = [(i, alpha) for i in range(1, pb.shape[1] + 1)]
     w = _forcing(pb, in_terms, None, out_terms, f_basis, g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
-    return _recursion(Q, A, out_terms, g_basis, w, threshold, _leaf_size(u.shape[0], method))
+    return _recursion(Q, A, out_terms, g_basis, w, threshold, method)
 
 
 def _output_representation(qa):
@@ -487,7 +636,7 @@ def _noise(n, noise, noise_std, random_state):
 
 
 def _run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, operating_point,
-         threshold, history, method="auto"):
+         threshold, history, method="auto", kernel="auto", leaf_size=None):
     """Simulate any structure from its coefficient blocks (deviation coordinates inside)."""
     u0, y0 = operating_point
     out_nu, in_nu = structure.orders.values(order_values, check=False)
@@ -507,8 +656,8 @@ def _run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, operating
     if threshold is None:
         threshold = _default_threshold(w, y_fixed)
     try:
-        y = _recursion(Q, A, out_terms, structure.g_basis, w, threshold,
-                       _leaf_size(u.shape[0], method), structure.dt, y_fixed)
+        y = _recursion(Q, A, out_terms, structure.g_basis, w, threshold, method,
+                       structure.dt, y_fixed, kernel=kernel, leaf_size=leaf_size)
     except SimulationDivergedError as err:
         raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold,
                                       err.cause) \
@@ -579,10 +728,13 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     The exact recursion of Eq. (16) (Eq. 14 for a general :class:`fohw.Orders`) with
     full memory: ``y[k]`` uses ``(Delta^nu gbar(y))[k-i]`` for every output term, each the GL
     sum over all of ``gbar(y[0..k-i])``. The input branch is computed once by FFT. Up to
-    ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``, about 0.04 s at
-    ``N = 10**4``); above, finished halves of the record enter later samples through FFT
-    convolutions (``O(N log^2 N)``, about 3.5 s at ``N = 10**6``), equal to the direct
-    recursion to rounding.
+    ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``); above,
+    finished halves of the record enter later samples through FFT convolutions
+    (``O(N log^2 N)``), equal to the direct recursion to rounding: 0.47 s at ``N = 10**5`` and
+    7.4 s at ``10**6`` with the per-sample loop in Python, 0.064 s and 1.3 s when the optional
+    ``fast`` extra (numba) compiles it for a polynomial output basis (same numbers; loaded
+    once per process, for simulations of at least ``2**18`` samples or once that many have
+    run; docs/performance.md).
 
     Examples
     --------

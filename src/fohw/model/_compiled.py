@@ -1,0 +1,163 @@
+"""The simulator's leaf loop compiled with numba (optional extra ``fohw[fast]``; Eqs. 14, 16).
+
+:func:`fohw.model.system._recursion` runs each leaf of its divide and conquer sample by sample:
+``y[k]`` from the forcing and the accumulated GL memory, the output signals ``z_r(y[k])``, then
+the leaf's own past added to the accumulators by one dot product each. :func:`_leaf` is that
+loop for a polynomial output basis, doing the same floating-point operations in the same order
+as the pure-Python leaf (the dot products through BLAS ``ddot``, as ``numpy.dot``), compiled by
+numba. Without numba, with ``FOHW_NO_NUMBA=1`` in the environment, with :data:`ENABLED` set to
+False, or for any other output basis, the simulator runs its pure-Python leaf instead, which
+gives the same numbers to rounding (``tests/test_compiled.py`` compares them at every sample).
+
+Importing numba and loading the compiled leaf from numba's cache costs about 1–3 s once per
+process (compiling it the first time, before the cache exists, a few seconds more), so it is
+loaded lazily: by a simulation of at least :data:`LOAD_AFTER` samples, or once the simulations
+of the process have run that many samples through the pure leaf. From then on every simulation
+long enough for the divide and conquer uses it. :func:`load` loads it at once.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import time
+import warnings
+
+import numpy as np
+
+__all__ = ["ENABLED", "LOAD_AFTER", "available", "load", "leaf_for", "count_pure"]
+
+#: Use the compiled leaf when numba is importable; ``FOHW_NO_NUMBA=1`` in the environment turns
+#: it off at import, and tests and benchmarks flip it to compare both paths in one process.
+ENABLED = os.environ.get("FOHW_NO_NUMBA", "") in ("", "0")
+
+#: Samples of pure-leaf simulation (one simulation, or all of the process so far) after which
+#: the compiled leaf is loaded: about 1 s of pure leaf at 4 µs per sample, comparable to the
+#: one-time cost of importing numba and loading the cached leaf.
+LOAD_AFTER = 2**18
+
+# Status codes returned by the leaf (the caller raises SimulationDivergedError).
+OK, GROWTH, OUTPUT_BASIS = 0, 1, 2
+
+_state = {"kernel": None, "failed": False, "error": None, "pure_samples": 0, "load_seconds": None}
+
+
+def _has_numba():
+    return importlib.util.find_spec("numba") is not None
+
+
+def available():
+    """True when the compiled leaf can be used (enabled, numba installed and importable)."""
+    return ENABLED and not _state["failed"] and (_state["kernel"] is not None or _has_numba())
+
+
+def load():
+    """Import numba and compile (or load from cache) the leaf; return it, or ``None``.
+
+    ``None`` when numba is not installed, or is installed but does not import (for instance a
+    NumPy newer than the numba release supports, or a module of the script's directory
+    shadowing one numba imports, such as a ``coverage.py``): then a ``RuntimeWarning`` says
+    why, once, and the pure leaf is used. The seconds spent are kept in
+    ``_state["load_seconds"]``.
+    """
+    if _state["kernel"] is not None or _state["failed"]:
+        return _state["kernel"]
+    if not _has_numba():
+        _state["failed"] = True
+        return None
+    t0 = time.perf_counter()
+    try:
+        import numba
+    except Exception as err:   # an optional accelerator: any import failure means the pure leaf
+        _state["failed"] = True
+        _state["error"] = err
+        warnings.warn(f"numba is installed but does not import ({type(err).__name__}: {err}); "
+                      "the simulator uses its pure-Python leaf (same numbers, slower).",
+                      RuntimeWarning, stacklevel=2)
+        return None
+    kernel = numba.njit(cache=True, nogil=True)(_leaf)
+    n_g = 2
+    kernel(0, 1, np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1)),
+           np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0), np.zeros(1, np.intp),
+           np.zeros(1, np.intp), np.ones((1, 1)), np.zeros(0, np.intp), np.zeros(0, np.intp),
+           np.ones((n_g, 1)), True, np.zeros(0), 1.0, np.zeros(n_g))   # compile now
+    _state["kernel"] = kernel
+    _state["load_seconds"] = time.perf_counter() - t0
+    return kernel
+
+
+def count_pure(n):
+    """Record ``n`` samples run through the pure leaf (towards :data:`LOAD_AFTER`)."""
+    _state["pure_samples"] += n
+
+
+def leaf_for(g_basis, n):
+    """The compiled leaf for a simulation of ``n`` samples with output basis ``g_basis``.
+
+    ``None`` (use the pure leaf) when the basis is not polynomial, the compiled leaf is not
+    available, or it is not loaded yet and neither ``n`` nor the pure-leaf samples run so far
+    reach :data:`LOAD_AFTER`.
+    """
+    if not g_basis.is_polynomial or not available():
+        return None
+    if _state["kernel"] is None and max(n, _state["pure_samples"]) < LOAD_AFTER:
+        return None
+    return load()
+
+
+def _leaf(lo, hi, w, y, z, dz, term_acc, term_lag, term_coef, mem_acc, mem_sig, rev,
+          ml_acc, ml_sig, Q, horner, fixed, threshold, g):
+    """Samples ``lo .. hi-1`` of the recursion in place; returns ``(status, k, y[k])``.
+
+    ``term_*``: accumulator, ``lag - 1`` and coefficient of every output term (in the pure
+    leaf's order); ``mem_*``: accumulator and signal of every accumulator with memory, ``rev``
+    its first ``L`` weights reversed (one row each); ``ml_*``: the order-0 accumulators;
+    ``Q``: ``(n_g, R)`` coefficients of the polynomial output basis ``g_j(y) = y**j``;
+    ``horner``: ``R == 1`` (Horner's scheme, as the pure leaf); ``fixed``: a measured history
+    of outputs; ``g``: scratch of length ``n_g``. Status :data:`OK`, :data:`GROWTH` (``|y[k]|``
+    beyond ``threshold`` or nan) or :data:`OUTPUT_BASIS` (a non-finite ``z_r(y[k])``).
+    """
+    n_fixed = fixed.shape[0]
+    n_terms = term_acc.shape[0]
+    n_g, n_sig = Q.shape
+    L = rev.shape[1]
+    for k in range(lo, hi):
+        if k < n_fixed:
+            yk = fixed[k]
+        else:
+            yk = w[k]
+            for t in range(n_terms):
+                i = term_lag[t]
+                if i < k:
+                    yk += term_coef[t] * dz[term_acc[t], k - 1 - i]
+            if not abs(yk) <= threshold:                   # also catches nan
+                return GROWTH, k, yk
+        finite = True
+        if horner:
+            acc = 0.0
+            for j in range(n_g - 1, -1, -1):
+                acc = acc * yk + Q[j, 0]
+            zk = acc * yk
+            z[0, k] = zk
+            finite = np.isfinite(zk)
+        else:
+            p = yk
+            for j in range(n_g):
+                g[j] = p
+                p *= yk
+            for r in range(n_sig):
+                s = 0.0
+                for j in range(n_g):
+                    s += Q[j, r] * g[j]
+                z[r, k] = s
+                if not np.isfinite(s):
+                    finite = False
+        if not finite:
+            return OUTPUT_BASIS, k, yk
+        y[k] = yk
+        m = k - lo + 1
+        for a in range(mem_acc.shape[0]):
+            dz[mem_acc[a], k] += np.dot(z[mem_sig[a], lo:k + 1], rev[a, L - m:])
+        for a in range(ml_acc.shape[0]):
+            dz[ml_acc[a], k] = z[ml_sig[a], k]
+    return OK, hi, 0.0
