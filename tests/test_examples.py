@@ -16,7 +16,7 @@ EXAMPLES = {
     "figure_5.py": ["figure_5.png"],
     "figure_6.py": ["figure_6.png"],
     "schedule_variants.py": ["schedule_variants.md"],
-    "coverage.py": ["coverage.md"],
+    "interval_coverage.py": ["coverage.md"],
     "accuracy_noise_models.py": ["accuracy_noise_models.md", "accuracy_noise_models.csv"],
     "accuracy_vs_crb.py": ["accuracy.md", "accuracy.csv", "accuracy_methods.png",
                            "accuracy_vs_n.png"],

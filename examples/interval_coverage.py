@@ -1,6 +1,6 @@
 """Coverage of varpro's 95 % confidence intervals, by Monte Carlo on the paper's example.
 
-    python examples/coverage.py --outdir results [--fast] [--seeds 200] [--n-samples 2000]
+    python examples/interval_coverage.py --outdir results [--fast] [--seeds 200] [--n-samples 2000]
         [--method varpro|structured]
 
 For every seed: simulate, fit with the method (default "varpro"), and check whether each 95 % interval
