@@ -107,12 +107,155 @@ def lstsq(a, b, *, rcond=None):
     return x, float(resid @ resid), fac
 
 
+def triangular(blocks, n_cols):
+    """Triangular factor ``R`` of the QR of row blocks stacked, never holding them all (TSQR).
+
+    Each block (shape ``(rows, n_cols)``, any number of rows; it is overwritten) is reduced
+    to its ``n_cols x n_cols`` triangle by Householder QR, and the stacked triangles are
+    reduced again: ``A = Q R`` with the ``R`` of the QR of the whole ``A`` (up to the signs of
+    its rows), to rounding, in ``O(rows * n_cols)`` memory. Householder QR is columnwise
+    backward stable, so the columns need no scaling first: ``R D`` is the factor of ``A D``.
+
+    Returns
+    -------
+    r : ndarray, shape (n_cols, n_cols)
+        Upper triangular (zero rows if the blocks have fewer rows than columns).
+    """
+    pieces, n_pieces = [], 0
+    for block in blocks:
+        pieces.append(_qr_r(block, n_cols))
+        n_pieces += 1
+        if n_pieces % 256 == 0:                       # keep the stack of triangles small
+            pieces = [_qr_r(np.vstack(pieces), n_cols)]
+    return _qr_r(np.vstack(pieces) if pieces else np.zeros((0, n_cols)), n_cols)
+
+
+def _qr_r(a, n_cols):
+    """Upper triangle ``R`` (``n_cols`` rows, zero-padded) of the unpivoted QR of ``a``."""
+    r = np.zeros((n_cols, n_cols))
+    if a.shape[0]:
+        a = np.asfortranarray(a)
+        geqrf, = scipy.linalg.get_lapack_funcs(("geqrf",), (a,))
+        qr, _, _, info = geqrf(a, overwrite_a=True)
+        if info != 0:                                 # pragma: no cover - LAPACK argument error
+            raise ValueError(f"LAPACK geqrf failed (info = {info}).")
+        k = min(a.shape[0], n_cols)
+        r[:k] = np.triu(qr[:k])
+    return r
+
+
+def factor_triangular(r, n_rows, *, rcond=None) -> Factor:
+    """:func:`factor` of a tall matrix ``A`` (``n_rows`` rows) given only ``R`` of ``A = Q1 R``.
+
+    The column norms of ``R`` are those of ``A``, and pivoted QR of ``R / scale`` gives the
+    pivots and triangle of pivoted QR of ``A / scale`` (``Q1`` is orthonormal): the same rank
+    and condition number to rounding, with the default ``rcond`` of ``A``
+    (``max(n_rows, n) * eps``). The returned ``q`` is the ``n x n`` factor of ``R / scale``:
+    ``A / scale`` permuted is ``(Q1 q) r``.
+
+    When ``A`` is rank deficient, ties are broken by column order: at each step the pivot is
+    the first column (in the original order) whose remaining norm is within :data:`_TIE` of
+    the largest (:func:`_pivoted_qr`; a full-rank ``R`` is factored by LAPACK). Equilibrated
+    columns all have norm 1, so the first pivot is always a tie, and identical columns of
+    ``A`` stay tied through the steps; LAPACK's pivoting (what :func:`factor` uses) breaks
+    such ties by the rounding of the norms, which for an ``R`` assembled by blocks is not that
+    of ``A``. With the rule, of two identical columns the later one is the dependent one, as
+    :func:`factor` finds for the whole ``A``.
+    """
+    a = np.asarray(r, dtype=np.float64)
+    n_cols = a.shape[1]
+    if rcond is None:
+        rcond = max(n_rows, n_cols) * np.finfo(float).eps
+    scale = np.sqrt(np.einsum("ij,ij->j", a, a))
+    tiny = np.finfo(float).tiny ** 0.5
+    redo = ~np.isfinite(scale) | (scale < tiny)      # squares overflowed or underflowed
+    if np.any(redo):
+        peak = np.max(np.abs(a[:, redo]), axis=0)
+        peak[peak == 0] = 1.0
+        scale[redo] = peak * np.sqrt(np.einsum("ij,ij->j", a[:, redo] / peak, a[:, redo] / peak))
+    scale[scale == 0] = 1.0
+    a = a / scale
+    q, rr, perm = scipy.linalg.qr(a, pivoting=True, check_finite=False)
+    rank = _rank(rr, rcond)
+    if rank < n_cols:                # which columns are named dependent: ties to the first
+        q, rr, perm = _pivoted_qr(a)
+        rank = _rank(rr, rcond)
+    return Factor(q=q, r=rr, perm=perm, scale=scale, rank=rank)
+
+
+def _rank(r, rcond):
+    d = np.abs(np.diag(r))
+    return int(np.sum(d > rcond * d[0])) if d.size and d[0] > 0 else 0
+
+
+#: Remaining column norms (of columns of unit norm) this close to the largest are a tie.
+_TIE = 2.0 ** -40
+
+
+def _pivoted_qr(a):
+    """Householder QR with column pivoting of a small square matrix, ties to the first column.
+
+    Returns ``q, r, perm`` with ``a[:, perm] = q @ r``. The remaining norms are recomputed
+    at every step (``O(n^3)`` in all; ``n`` is the number of parameters).
+    """
+    r = np.array(a, dtype=np.float64)
+    m, n = r.shape
+    q = np.eye(m)
+    perm = np.arange(n)
+    for j in range(min(m, n)):
+        norms = np.sqrt(np.einsum("ij,ij->j", r[j:, j:], r[j:, j:]))
+        ties = np.flatnonzero(norms >= norms.max() - _TIE)
+        pick = j + ties[np.argmin(perm[j + ties])]
+        if pick != j:
+            r[:, [j, pick]] = r[:, [pick, j]]
+            perm[[j, pick]] = perm[[pick, j]]
+        x = r[j:, j]
+        alpha = np.linalg.norm(x)
+        if alpha == 0.0:
+            continue
+        v = x.copy()
+        v[0] += np.copysign(alpha, x[0])
+        v /= np.linalg.norm(v)
+        r[j:, j:] -= 2.0 * np.outer(v, v @ r[j:, j:])
+        q[:, j:] -= 2.0 * np.outer(q[:, j:] @ v, v)
+        r[j + 1:, j] = 0.0
+    return q, np.triu(r), perm
+
+
+def lstsq_triangular(r, n_rows, *, rcond=None):
+    """:func:`lstsq` from the triangular factor of ``[a, b]`` (:func:`triangular`).
+
+    ``r`` is the ``(n + 1) x (n + 1)`` factor of ``[a, b]``: ``r[:n, :n]`` is that of ``a``,
+    ``r[:n, n] = Q1^T b`` and ``|r[n, n]|`` the norm of the part of ``b`` outside the range of
+    ``a``. Returns ``(x, rss, fac)`` as :func:`lstsq` does, ``fac`` from
+    :func:`factor_triangular`; ``rss = ||r[:n, n] - r[:n, :n] x||^2 + r[n, n]^2``.
+    """
+    n = r.shape[1] - 1
+    fac = factor_triangular(r[:n, :n], n_rows, rcond=rcond)
+    k = fac.rank
+    z = np.zeros(n)
+    if k:
+        z[fac.perm[:k]] = scipy.linalg.solve_triangular(fac.r[:k, :k], fac.q[:, :k].T @ r[:n, n],
+                                                        check_finite=False)
+    x = z / fac.scale
+    resid = r[:n, n] - r[:n, :n] @ x
+    return x, float(resid @ resid + r[n, n] ** 2), fac
+
+
 def inverse_gram(jacobian, *, rcond=None):
     """``(G^T G)^{-1}`` from the equilibrated, pivoted QR of ``G`` (never the normal equations).
 
     Returns ``(inverse, factor)``; the inverse is ``None`` when ``G`` is rank deficient.
     """
-    fac = factor(jacobian, rcond=rcond, with_q=False)
+    return _inverse_gram(factor(jacobian, rcond=rcond, with_q=False))
+
+
+def inverse_gram_triangular(r, n_rows, *, rcond=None):
+    """:func:`inverse_gram` of a tall ``G`` (``n_rows`` rows) from the ``R`` of ``G = Q1 R``."""
+    return _inverse_gram(factor_triangular(r, n_rows, rcond=rcond))
+
+
+def _inverse_gram(fac):
     n = fac.n_columns
     if fac.rank < n:
         return None, fac

@@ -21,10 +21,14 @@ step 3 follows.
 Every linear solve equilibrates the columns of ``Phi`` and factors it by QR with column
 pivoting, so the estimate does not depend on the units of ``u`` and ``y`` and a rank-deficient
 information matrix is reported (it names the dependent columns) instead of giving huge,
-meaningless estimates. Each ``J(alpha)`` costs one inverse FFT of the stacked basis signals, whose
-FFTs are computed once per record. The result is the equation-error (prediction-error) estimate;
-under white Gaussian equation noise it is the conditional maximum-likelihood estimate and reaches
-the Cramér–Rao bound of the unstructured theta (:func:`fohw.crb`).
+meaningless estimates. Each ``J(alpha)`` costs one inverse FFT of the basis signals, whose FFTs
+are computed once per record, and one solve that never forms the ``N x n`` matrix: the
+triangular factor of ``[Phi, y]`` is accumulated over blocks of rows (TSQR, :class:`_Profile`),
+and so are the Golub–Pereyra Jacobian and the covariance. ``_reference=True`` keeps the
+full-matrix solves (:class:`_FullMatrixProfile`) for comparison. The result is the
+equation-error (prediction-error) estimate; under white Gaussian equation noise it is the
+conditional maximum-likelihood estimate and reaches the Cramér–Rao bound of the unstructured
+theta (:func:`fohw.crb`).
 """
 
 from __future__ import annotations
@@ -165,28 +169,57 @@ class _VarproFit:
     rank_factor: object
 
 
-class _Profile:
-    """``theta(params)`` and ``rss(params)`` of the separable problem.
+#: Rows of ``Phi`` per block of the blocked (TSQR) solves: 16384 x 12 doubles, 1.5 MB.
+_BLOCK_ROWS = 16384
 
-    The information matrix and its factorisation are kept for the latest point only (the
-    solver asks for the residual and then the Jacobian at the same point; a grid of starts
-    would otherwise hold one N x n factor per point); :attr:`count` is the number of distinct
-    points evaluated.
+
+def _row_blocks(columns, extra=(), rows=_BLOCK_ROWS):
+    """Rows of ``[Phi, extra...]`` in Fortran-ordered blocks.
+
+    One buffer is reused: consume each block before asking for the next.
+    """
+    n, k = columns.n_samples, columns.n_columns
+    buffer = np.empty((min(rows, n), k + len(extra)), order="F")
+    for start in range(0, n, rows):
+        stop = min(start + rows, n)
+        block = buffer if stop - start == buffer.shape[0] else \
+            np.empty((stop - start, buffer.shape[1]), order="F")
+        columns.fill(start, stop, block)
+        for j, vector in enumerate(extra):
+            block[:, k + j] = vector[start:stop]
+        yield block
+
+
+class _Profile:
+    """``theta(params)`` and ``rss(params)`` of the separable problem, by blocks of rows.
+
+    ``Phi(params)`` is never formed: its columns are lagged views of the GL differences
+    (:meth:`fohw.RegressorBuilder._columns`), and the triangular factor of ``[Phi, y]`` is
+    accumulated over blocks of :data:`_BLOCK_ROWS` rows (:func:`fohw._linalg.triangular`,
+    TSQR); the solve, its rank decision and ``rss`` come from that ``(n + 1) x (n + 1)``
+    factor (:func:`fohw._linalg.lstsq_triangular`). The columns and the factor are kept for
+    the latest point only (the solver asks for the residual and then the Jacobian at the same
+    point); :attr:`count` is the number of distinct points evaluated.
     """
 
     def __init__(self, builder):
         self.builder = builder
         self.points = set()
-        self.last = None               # (key, matrix, linear, rss, factor)
+        self.last = None               # (key, columns or matrix, linear, rss, factor)
 
     def solve(self, params):
-        """``(matrix, linear, rss, factor)`` at ``params``."""
+        """``(columns, linear, rss, factor)`` at ``params``."""
         key = tuple(np.atleast_1d(params).tolist())
         if self.last is None or self.last[0] != key:
-            matrix = self.builder.matrix(params)
-            self.last = (key, matrix, *_linalg.lstsq(matrix, self.builder.y))
+            self.last = (key, *self._evaluate(params))
             self.points.add(key)
         return self.last[1:]
+
+    def _evaluate(self, params):
+        builder = self.builder
+        columns = builder._columns(builder._params(params))
+        r = _linalg.triangular(_row_blocks(columns, (builder.y,)), columns.n_columns + 1)
+        return (columns, *_linalg.lstsq_triangular(r, builder.n_samples))
 
     def __call__(self, params):
         return self.solve(params)[1:]
@@ -195,8 +228,131 @@ class _Profile:
     def count(self):
         return len(self.points)
 
+    def residual(self, params):
+        """``y - Phi theta(params)``."""
+        columns, linear, _, _ = self.solve(params)
+        return self.builder.y - columns.matvec(linear)
 
-def separable_least_squares(builder, *, bounds, options=None):
+    def golub_pereyra(self, params):
+        """Golub and Pereyra's Jacobian of :meth:`residual`, shape ``(N, n_nonlinear)``.
+
+        ``d/dp P_perp y = -P_perp dPhi theta - (Phi^+)^T dPhi^T r = -v + Q (Q^T v - z)`` with
+        ``v = dPhi theta`` and ``z = R^-T P^T (dPhi^T r / scale)``. ``Q^T v`` comes from the
+        triangular factor of ``[Phi, v...]`` (TSQR again; its ``Phi`` part is the profile's
+        factor), and ``Q t = (Phi / scale)[:, perm[:k]] R_k^-1 t`` is applied through
+        ``Phi``: no ``N x n`` array. Its rounding error is ``eps * cond(R_k)`` relative, against
+        ``eps`` through an explicit ``Q``; it only steers the search (the residual defines the
+        solution).
+        """
+        builder = self.builder
+        columns, linear, _, fac = self.solve(params)
+        params = builder._params(params)
+        resid = builder.y - columns.matvec(linear)
+        k, n = fac.rank, columns.n_columns
+        r_k = fac.r[:k, :k]
+        v, z = [], []
+        for m in range(params.shape[0]):
+            derivative = builder._columns(params, which=m)
+            v.append(derivative.matvec(linear))
+            w = (derivative.rmatvec(resid) / fac.scale)[fac.perm[:k]]
+            z.append(scipy.linalg.solve_triangular(r_k, w, trans="T", check_finite=False))
+        r = _linalg.triangular(_row_blocks(columns, v), n + len(v))
+        qtv = (fac.q.T @ r[:n, n:])[:k]                        # Q^T v, first k entries
+        out = np.empty((builder.n_samples, len(v)))
+        for m in range(len(v)):
+            coef = np.zeros(n)
+            coef[fac.perm[:k]] = scipy.linalg.solve_triangular(r_k, qtv[:, m] - z[m],
+                                                               check_finite=False)
+            out[:, m] = columns.matvec(coef / fac.scale) - v[m]
+        return out
+
+    def covariance(self, linear, params, rss):
+        """:func:`parameter_covariance` of ``(linear, params)`` without the ``N x d`` Jacobian.
+
+        The Jacobian ``[Phi, dPhi/dparams[m] @ linear]`` is factored by blocks of rows; the
+        covariance is computed from its triangular factor as :func:`parameter_covariance`
+        computes it from the QR of the whole.
+        """
+        builder = self.builder
+        params = builder._params(params)
+        columns = builder._columns(params)
+        v = [builder._columns(params, which=m).matvec(linear) for m in range(params.shape[0])]
+        d = columns.n_columns + len(v)
+        r = _linalg.triangular(_row_blocks(columns, v), d)
+        s2 = rss / (builder.n_samples - d)
+        inverse, _ = _linalg.inverse_gram_triangular(r, builder.n_samples)
+        return (None if inverse is None else s2 * inverse), s2
+
+
+def _rank_factor(builder, params):
+    """The rank-revealing factor of ``Phi(params)`` (rank, dependent columns), by blocks."""
+    columns = builder._columns(builder._params(params))
+    r = _linalg.triangular(_row_blocks(columns), columns.n_columns)
+    return _linalg.factor_triangular(r, builder.n_samples)
+
+
+class _FullMatrixProfile(_Profile):
+    """The reference: the whole ``N x n`` matrix and its pivoted QR with ``Q`` at every point.
+
+    What varpro did before the blocked solves (fohw 0.x up to issue 15, item 5); kept so the
+    two can be compared (``separable_least_squares(..., _reference=True)``, the tests and
+    ``benchmarks/bench_varpro.py``).
+    """
+
+    def _evaluate(self, params):
+        matrix = self.builder.matrix(params)
+        return (matrix, *_linalg.lstsq(matrix, self.builder.y))
+
+    def residual(self, params):
+        matrix, linear, _, _ = self.solve(params)
+        return self.builder.y - matrix @ linear
+
+    def golub_pereyra(self, params):
+        # d/dp of P_perp y: -P_perp dPhi theta - (Phi^+)^T dPhi^T r (Golub and Pereyra);
+        # Kaufman's approximation drops the second term, exact only at a zero residual.
+        matrix, linear, _, fac = self.solve(params)
+        k = fac.rank
+        q, r_tri = fac.q[:, :k], fac.r[:k, :k]
+        resid = self.builder.y - matrix @ linear
+        cols = []
+        for d in self.builder.matrix_derivatives(params):
+            v = d @ linear
+            w = ((d.T @ resid) / fac.scale)[fac.perm[:k]]
+            z = scipy.linalg.solve_triangular(r_tri, w, trans="T")
+            cols.append(-(v - q @ (q.T @ v)) - q @ z)
+        return np.column_stack(cols)
+
+    def covariance(self, linear, params, rss):
+        return parameter_covariance(self.builder.jacobian(linear, params), rss,
+                                    self.builder.n_samples)
+
+
+class _FullMatrixBuilder:
+    """A :class:`fohw.RegressorBuilder` whose :meth:`jacobian` is the reference one.
+
+    The reference Jacobian forms ``Phi`` and every ``dPhi/dparams[m]`` in full and multiplies
+    (what :meth:`fohw.RegressorBuilder.jacobian` did before it wrote the columns in place);
+    everything else is the builder's.
+    """
+
+    def __init__(self, builder):
+        self._builder = builder
+
+    def __getattr__(self, name):
+        return getattr(self._builder, name)
+
+    def jacobian(self, linear, params):
+        linear = np.asarray(linear, dtype=np.float64)
+        n = linear.shape[0]
+        derivs = self._builder.matrix_derivatives(params)
+        G = np.empty((self._builder.n_samples, n + len(derivs)))
+        G[:, :n] = self._builder.matrix(params)
+        for m, d in enumerate(derivs):
+            G[:, n + m] = d @ linear
+        return G
+
+
+def separable_least_squares(builder, *, bounds, options=None, _reference=False):
     """Separable least-squares estimate of the linear and nonlinear parameters of one record.
 
     Parameters
@@ -207,6 +363,9 @@ def separable_least_squares(builder, *, bounds, options=None):
         Lower and upper bounds of each free order (past levels are unbounded).
     options : VarproOptions, optional
         Grid, tolerances and polish.
+    _reference : bool, optional
+        Private: the full-matrix solves of fohw before the blocked ones (:class:`_FullMatrixProfile`),
+        for the tests and benchmarks that compare the two.
 
     Returns
     -------
@@ -218,7 +377,9 @@ def separable_least_squares(builder, *, bounds, options=None):
     check_enough_samples(builder.n_samples, s)
     lo = np.atleast_1d(np.asarray(bounds[0], dtype=float))
     hi = np.atleast_1d(np.asarray(bounds[1], dtype=float))
-    profile = _Profile(builder)
+    if _reference:
+        builder = _FullMatrixBuilder(builder)
+    profile = (_FullMatrixProfile if _reference else _Profile)(builder)
     if s.n_nonlinear == 0:
         return _linear_only(builder, profile)
     if s.n_nonlinear == 1 and len(s.orders.free) == 1:
@@ -229,6 +390,7 @@ def separable_least_squares(builder, *, bounds, options=None):
                                                                         hi, opts)
     linear, rss, fac = profile(params)
     nfev = profile.count
+    profile.last = None            # free the differences (40 MB at N = 10^6) for the polish
     n_free = len(s.orders.free)
     edge = 1e-5 * (hi - lo)
     at_lower = params[:n_free] - lo < edge
@@ -246,7 +408,7 @@ def separable_least_squares(builder, *, bounds, options=None):
                   Status.MAX_ITER if ls.status == 0 else Status.FAILED)
         message += f"; polish (scipy.optimize.least_squares): {ls.message}"
         fac = None
-    cov, s2 = parameter_covariance(builder.jacobian(linear, params), rss, builder.n_samples)
+    cov, s2 = profile.covariance(linear, params, rss)
     return _VarproFit(linear=linear, params=params, rss=rss, grid=grid, grid_J=grid_J,
                       search_alphas=search[0], search_J=search[1], status=status, nit=nit,
                       nfev=nfev, message=message, at_lower=np.asarray(at_lower, dtype=bool),
@@ -256,8 +418,8 @@ def separable_least_squares(builder, *, bounds, options=None):
 
 def _linear_only(builder, profile):
     """Every order fixed and no past levels: one linear least-squares solve."""
-    matrix, linear, rss, fac = profile.solve(np.zeros(0))
-    cov, s2 = parameter_covariance(matrix, rss, builder.n_samples)
+    linear, rss, fac = profile(np.zeros(0))
+    cov, s2 = profile.covariance(linear, np.zeros(0), rss)
     return _VarproFit(linear=linear, params=np.zeros(0), rss=rss, grid=np.zeros(0),
                       grid_J=np.zeros(0), search_alphas=[], search_J=[],
                       status=Status.CONVERGED, nit=0, nfev=1,
@@ -360,23 +522,10 @@ def _vector_search(builder, profile, lo, hi, opts):
     upper = np.r_[hi, np.full(n_past, np.inf)]
 
     def residual(params):
-        matrix, linear, _, _ = profile.solve(params)
-        return (y - matrix @ linear) / y_scale
+        return profile.residual(params) / y_scale
 
     def golub_pereyra(params):
-        # d/dp of P_perp y: -P_perp dPhi theta - (Phi^+)^T dPhi^T r (Golub and Pereyra);
-        # Kaufman's approximation drops the second term, exact only at a zero residual.
-        matrix, linear, _, fac = profile.solve(params)
-        k = fac.rank
-        q, r_tri = fac.q[:, :k], fac.r[:k, :k]
-        resid = y - matrix @ linear
-        cols = []
-        for d in builder.matrix_derivatives(params):
-            v = d @ linear
-            w = ((d.T @ resid) / fac.scale)[fac.perm[:k]]
-            z = scipy.linalg.solve_triangular(r_tri, w, trans="T")
-            cols.append(-(v - q @ (q.T @ v)) - q @ z)
-        return np.column_stack(cols) / y_scale
+        return profile.golub_pereyra(params) / y_scale
 
     best, nit = None, 0
     for x0 in starts:
@@ -421,24 +570,29 @@ def _polish(builder, linear, params, lo, hi, opts):
 
 
 @thin_solves
-def varpro_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
+def varpro_result(builder, options, bounds, *, operating_point=(0.0, 0.0), _reference=False):
     """Run separable least squares and wrap it as an IdentificationResult.
 
-    ``bounds`` is ``(lower, upper)`` over the free orders (:func:`fohw.identify` builds it).
+    ``bounds`` is ``(lower, upper)`` over the free orders (:func:`fohw.identify` builds it);
+    ``_reference`` as in :func:`separable_least_squares`.
     """
     s = builder.structure
     lo, hi = bounds
-    fit = separable_least_squares(builder, bounds=(lo, hi), options=options)
+    fit = separable_least_squares(builder, bounds=(lo, hi), options=options,
+                                  _reference=_reference)
     message = fit.message
     for m, name in enumerate(s.orders.free):
         if fit.at_lower[m] or fit.at_upper[m]:
             message += bound_note(name, lo[m], hi[m], fit.at_lower[m], fit.at_upper[m])
     record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lo, hi))
     profile = np.vstack([fit.grid, fit.grid_J]) if fit.grid.size else None
+    rank_factor = fit.rank_factor
+    if rank_factor is None and not _reference:      # after the polish: the final Phi's rank
+        rank_factor = _rank_factor(builder, fit.params)
     return finish(builder, method="varpro", linear=fit.linear, params=fit.params,
                   status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
                   alpha_at_bound=bool(np.any(fit.at_lower) or np.any(fit.at_upper)),
-                  options=record, rank_factor=fit.rank_factor, covariance=fit.covariance,
+                  options=record, rank_factor=rank_factor, covariance=fit.covariance,
                   noise_variance=fit.noise_variance,
                   alpha_history=fit.search_alphas or None, J_history=fit.search_J or None,
                   alpha_profile=profile, operating_point=operating_point)

@@ -16,6 +16,7 @@ estimated, and the offset adds a column of ones.
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
@@ -56,6 +57,76 @@ class WindowKernel:
         t_lo = k - n_rows + 1 - self.max_lag          # earliest time a row needs
         index = (self._sig_idx[None, :], rows[:, None] - self._lag_idx[None, :] - t_lo)
         return [convolution_at(signals, w, t_lo, k - 1)[index] for w in weights]
+
+
+#: Stacked basis signals up to this size are convolved in one batched FFT call (16 MB: the
+#: call's transient is about four times that); larger ones one signal at a time.
+_BATCHED_BYTES = 16 * 2**20
+
+
+class _Columns:
+    """The columns of an information matrix (or of a derivative), without the ``N x n`` array.
+
+    Column ``c`` is ``source[k - lag]`` (zero for ``k < lag``; no source: zero), plus
+    ``coef * transient[k]`` when an ``extra = (coef, transient)`` is given, plus a constant
+    (the offset's ones). The sources are rows of the stacked GL differences, shared by the
+    columns, so rows ``start:stop`` of the matrix, ``Phi @ x`` and ``Phi.T @ r`` cost
+    ``O(N n)`` and no more memory than the differences themselves.
+    """
+
+    def __init__(self, n_samples, specs):
+        self.n_samples = n_samples
+        self.specs = specs                  # [(source or None, lag, extra or None, constant)]
+
+    @property
+    def n_columns(self):
+        return len(self.specs)
+
+    def fill(self, start, stop, out):
+        """Write rows ``start:stop`` into ``out`` (shape ``(stop - start, n_columns)``)."""
+        m = stop - start
+        for c, (src, lag, extra, const) in enumerate(self.specs):
+            col = out[:, c]
+            if src is None:
+                col[:] = const
+            else:
+                first = min(max(lag - start, 0), m)          # rows before the first lagged sample
+                col[:first] = 0.0
+                if first < m:
+                    col[first:] = src[start + first - lag:stop - lag]
+            if extra is not None:
+                coef, transient = extra
+                if src is None:
+                    col[:] = coef * transient[start:stop]
+                else:
+                    col += coef * transient[start:stop]
+        return out
+
+    def matvec(self, x):
+        """``Phi @ x``, shape ``(N,)``."""
+        n = self.n_samples
+        out = np.zeros(n)
+        for xc, (src, lag, extra, const) in zip(x, self.specs):
+            if src is not None and lag < n:
+                out[lag:] += xc * src[:n - lag]
+            if extra is not None:
+                out += (xc * extra[0]) * extra[1]
+            if const != 0.0:
+                out += xc * const
+        return out
+
+    def rmatvec(self, r):
+        """``Phi.T @ r``, shape ``(n_columns,)``."""
+        n = self.n_samples
+        out = np.zeros(len(self.specs))
+        for c, (src, lag, extra, const) in enumerate(self.specs):
+            if src is not None and lag < n:
+                out[c] += src[:n - lag] @ r[lag:]
+            if extra is not None:
+                out[c] += extra[0] * (extra[1] @ r)
+            if const != 0.0:
+                out[c] += const * np.sum(r)
+        return out
 
 
 class RegressorBuilder:
@@ -124,6 +195,7 @@ class RegressorBuilder:
         self._n_g = len(self.g_basis)
         self._lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
         self._convolution = CausalConvolution(self.signals)
+        self._row_convolutions = None
         self._window_kernel = WindowKernel(self._lags)
 
     # ---- the paper's commensurate model ---------------------------------------------------------
@@ -140,12 +212,30 @@ class RegressorBuilder:
         n = self.n_samples
         h = self.structure.dt
         if not derivative:
-            d = self._convolution(gl_weights(nu, n))
+            d = self._convolve(gl_weights(nu, n))
             return d if h == 1.0 else d * h**-nu
-        d = self._convolution(gl_weights_derivative(nu, n))
+        d = self._convolve(gl_weights_derivative(nu, n))
         if h == 1.0:
             return d
-        return (d - np.log(h) * self._convolution(gl_weights(nu, n))) * h**-nu
+        return (d - np.log(h) * self._convolve(gl_weights(nu, n))) * h**-nu
+
+    def _convolve(self, weights):
+        """The stacked basis signals convolved with ``weights``, shape ``(n_g + n_f, N)``.
+
+        Records whose stacked signals exceed :data:`_BATCHED_BYTES` are convolved one signal
+        at a time (the weights transformed once), so the transient is one signal's padded
+        transform, not all of them (at N = 10^6 and five signals: 48 MB instead of 160 MB);
+        the numbers are those of the batched call, which shorter records use (it is faster).
+        """
+        if self._convolution.direct or self.signals.nbytes <= _BATCHED_BYTES:
+            return self._convolution(weights)
+        if self._row_convolutions is None:
+            self._row_convolutions = [CausalConvolution(x) for x in self.signals]
+        spectrum = scipy.fft.rfft(weights, n=self._row_convolutions[0]._nfft())
+        out = np.empty(self.signals.shape)
+        for row, conv in zip(out, self._row_convolutions):
+            row[:] = conv(weights, weights_spectrum=spectrum)
+        return out
 
     def window(self, k, innovation_length, weights):
         """Rows ``phi[k], phi[k-1], …, phi[k-P+1]`` (those with index >= 0), for given weights.
@@ -232,13 +322,16 @@ class RegressorBuilder:
             return dout
         return out if h == 1.0 else out * h**-nu
 
-    def _build(self, params, which=None):
-        """``Phi(params)``, or with ``which = m`` its derivative with respect to ``params[m]``."""
+    def _columns(self, params, which=None):
+        """:class:`_Columns` of ``Phi(params)``, or with ``which = m`` of ``dPhi/dparams[m]``.
+
+        ``params`` must be validated (:meth:`_params`). The differences are computed once
+        (one inverse FFT of the stacked basis signals per distinct order); the columns are
+        lagged views of them, so nothing of size ``N x n_linear`` is allocated here.
+        """
         struct = self.structure
         out_nu, in_nu, past = self._term_orders(params)
         n_free = len(struct.orders.free)
-        n = self.n_samples
-        phi = np.zeros((n, struct.n_linear))
         d_order = None if which is None or which >= n_free else struct.orders.free[which]
         d_past = None if which is None or which < n_free else which - n_free   # 0: u, 1: y
         levels = self._past_levels(past) if struct.past == "estimate" else None
@@ -250,7 +343,7 @@ class RegressorBuilder:
                 cache[nu, derivative] = self._differences(nu, derivative)
             return cache[nu, derivative]
 
-        col = 0
+        specs = []
         branches = ((range(self._n_g), struct.orders.output, out_nu, 1),
                     (range(self._n_g, self.signals.shape[0]), struct.orders.input, in_nu, 0))
         for signals, terms, nus, past_index in branches:
@@ -258,19 +351,25 @@ class RegressorBuilder:
                 for term, nu in zip(terms, nus):
                     i = term.lag
                     if which is None:
-                        phi[i:, col] = diffs(nu, False)[s, : n - i]
-                        if levels is not None and levels[s] != 0.0:
-                            phi[:, col] += levels[s] * self._transient(nu, i)
+                        extra = (None if levels is None or levels[s] == 0.0 else
+                                 (levels[s], self._transient(nu, i)))
+                        specs.append((diffs(nu, False)[s], i, extra, 0.0))
                     elif d_order is not None and term.order == d_order:
-                        phi[i:, col] = diffs(nu, True)[s, : n - i]
-                        if levels is not None and levels[s] != 0.0:
-                            phi[:, col] += levels[s] * self._transient(nu, i, derivative=True)
+                        extra = (None if levels is None or levels[s] == 0.0 else
+                                 (levels[s], self._transient(nu, i, derivative=True)))
+                        specs.append((diffs(nu, True)[s], i, extra, 0.0))
                     elif d_past == past_index:
-                        phi[:, col] = slopes[s] * self._transient(nu, i)
-                    col += 1
-        if struct.offset and which is None:
-            phi[:, col] = 1.0
-        return phi
+                        specs.append((None, i, (slopes[s], self._transient(nu, i)), 0.0))
+                    else:
+                        specs.append((None, i, None, 0.0))
+        if struct.offset:
+            specs.append((None, 0, None, 1.0 if which is None else 0.0))
+        return _Columns(self.n_samples, specs)
+
+    def _build(self, params, which=None):
+        """``Phi(params)``, or with ``which = m`` its derivative with respect to ``params[m]``."""
+        n = self.n_samples
+        return self._columns(params, which).fill(0, n, np.zeros((n, self.structure.n_linear)))
 
     def matrix(self, params):
         """Information matrix, shape ``(N, n_linear)``: rows ``phi[k]`` at ``params``.
@@ -301,7 +400,9 @@ class RegressorBuilder:
         """Jacobian of the one-step predictor ``Phi(params) @ linear``.
 
         The derivative with respect to ``(linear, params)``: ``[Phi, dPhi/dparams[m] @
-        linear …]``, built in one ``N x (n_linear + n_nonlinear)`` array; the estimators'
+        linear …]``, built in one ``N x (n_linear + n_nonlinear)`` array and nothing else of
+        that size: the columns of ``Phi`` are written into it from the differences, and each
+        derivative column is summed from the lagged derivative differences. The estimators'
         least-squares steps, their covariances and the Cramér–Rao bound all use it.
 
         Returns
@@ -312,14 +413,13 @@ class RegressorBuilder:
         if linear.shape[0] != self.structure.n_linear:
             raise DimensionError(f"`linear` must have {self.structure.n_linear} entries "
                                  f"({self.structure.linear_names}); got {linear.shape[0]}.")
+        params = self._params(params)
         n = linear.shape[0]
-        derivs = self.matrix_derivatives(params)
-        G = np.empty((self.n_samples, n + len(derivs)))
-        G[:, :n] = self.matrix(params)
-        for m, d in enumerate(derivs):
-            G[:, n + m] = d @ linear
+        G = np.empty((self.n_samples, n + params.shape[0]))
+        self._columns(params).fill(0, self.n_samples, G[:, :n])
+        for m in range(params.shape[0]):
+            G[:, n + m] = self._columns(params, which=m).matvec(linear)
         return G
-
 
 def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, offset=False,
                        past="rest", dt=1.0):
