@@ -58,18 +58,14 @@ def factor(a, *, rcond=None, with_q=True) -> Factor:
     """Equilibrate the columns of ``a`` and factor it by QR with column pivoting.
 
     ``rcond`` defaults to ``max(N, n) * eps``: a column whose component orthogonal to the others
-    is smaller than that, relative to the largest, counts as dependent.
+    is smaller than that, relative to the largest, counts as dependent. When ``a`` is rank
+    deficient, which columns are named dependent follows one rule, ties to the first column
+    (:func:`_pivoted_qr`), so of two identical columns the later one is named, whatever the
+    rounding: LAPACK's pivoting breaks such ties by the rounding of the column norms.
     """
     a = np.asarray(a, dtype=np.float64)
     n_rows, n_cols = a.shape
-    scale = np.sqrt(np.einsum("ij,ij->j", a, a))
-    tiny = np.finfo(float).tiny ** 0.5
-    redo = ~np.isfinite(scale) | (scale < tiny)      # squares overflowed or underflowed
-    if np.any(redo):                                  # data in units of 1e+-100 and beyond
-        peak = np.max(np.abs(a[:, redo]), axis=0)
-        peak[peak == 0] = 1.0
-        scale[redo] = peak * np.sqrt(np.einsum("ij,ij->j", a[:, redo] / peak, a[:, redo] / peak))
-    scale[scale == 0] = 1.0
+    scale = _column_scale(a)
     if rcond is None:
         rcond = max(n_rows, n_cols) * np.finfo(float).eps
     if with_q:
@@ -79,9 +75,27 @@ def factor(a, *, rcond=None, with_q=True) -> Factor:
         r, perm = scipy.linalg.qr(a / scale, mode="r", pivoting=True, check_finite=False)
         q = None
         r = r[:n_cols]
-    d = np.abs(np.diag(r))
-    rank = int(np.sum(d > rcond * d[0])) if d.size and d[0] > 0 else 0
+    rank = _rank(r, rcond)
+    if rank < n_cols:                # which columns are named dependent: ties to the first
+        unpivoted = np.empty_like(r)
+        unpivoted[:, perm] = r                        # a / scale = q @ unpivoted
+        q2, r, perm = _pivoted_qr(unpivoted)
+        rank = _rank(r, rcond)
+        q = None if q is None else q @ q2
     return Factor(q=q, r=r, perm=perm, scale=scale, rank=rank)
+
+
+def _column_scale(a):
+    """Euclidean norm of each column (1 for a zero column), without overflow or underflow."""
+    scale = np.sqrt(np.einsum("ij,ij->j", a, a))
+    tiny = np.finfo(float).tiny ** 0.5
+    redo = ~np.isfinite(scale) | (scale < tiny)      # squares overflowed or underflowed
+    if np.any(redo):                                  # data in units of 1e+-100 and beyond
+        peak = np.max(np.abs(a[:, redo]), axis=0)
+        peak[peak == 0] = 1.0
+        scale[redo] = peak * np.sqrt(np.einsum("ij,ij->j", a[:, redo] / peak, a[:, redo] / peak))
+    scale[scale == 0] = 1.0
+    return scale
 
 
 def lstsq(a, b, *, rcond=None):
@@ -151,36 +165,13 @@ def factor_triangular(r, n_rows, *, rcond=None) -> Factor:
     pivots and triangle of pivoted QR of ``A / scale`` (``Q1`` is orthonormal): the same rank
     and condition number to rounding, with the default ``rcond`` of ``A``
     (``max(n_rows, n) * eps``). The returned ``q`` is the ``n x n`` factor of ``R / scale``:
-    ``A / scale`` permuted is ``(Q1 q) r``.
-
-    When ``A`` is rank deficient, ties are broken by column order: at each step the pivot is
-    the first column (in the original order) whose remaining norm is within :data:`_TIE` of
-    the largest (:func:`_pivoted_qr`; a full-rank ``R`` is factored by LAPACK). Equilibrated
-    columns all have norm 1, so the first pivot is always a tie, and identical columns of
-    ``A`` stay tied through the steps; LAPACK's pivoting (what :func:`factor` uses) breaks
-    such ties by the rounding of the norms, which for an ``R`` assembled by blocks is not that
-    of ``A``. With the rule, of two identical columns the later one is the dependent one, as
-    :func:`factor` finds for the whole ``A``.
+    ``A / scale`` permuted is ``(Q1 q) r``. Dependent columns are named by :func:`factor`'s
+    rule (ties to the first column), so the blocked and the full-matrix paths name the same.
     """
-    a = np.asarray(r, dtype=np.float64)
-    n_cols = a.shape[1]
+    n_cols = np.shape(r)[1]
     if rcond is None:
         rcond = max(n_rows, n_cols) * np.finfo(float).eps
-    scale = np.sqrt(np.einsum("ij,ij->j", a, a))
-    tiny = np.finfo(float).tiny ** 0.5
-    redo = ~np.isfinite(scale) | (scale < tiny)      # squares overflowed or underflowed
-    if np.any(redo):
-        peak = np.max(np.abs(a[:, redo]), axis=0)
-        peak[peak == 0] = 1.0
-        scale[redo] = peak * np.sqrt(np.einsum("ij,ij->j", a[:, redo] / peak, a[:, redo] / peak))
-    scale[scale == 0] = 1.0
-    a = a / scale
-    q, rr, perm = scipy.linalg.qr(a, pivoting=True, check_finite=False)
-    rank = _rank(rr, rcond)
-    if rank < n_cols:                # which columns are named dependent: ties to the first
-        q, rr, perm = _pivoted_qr(a)
-        rank = _rank(rr, rcond)
-    return Factor(q=q, r=rr, perm=perm, scale=scale, rank=rank)
+    return factor(r, rcond=rcond)
 
 
 def _rank(r, rcond):
