@@ -1,8 +1,9 @@
-"""The simulator's compiled leaf against its pure-Python leaf, and the shared FFT merge (issue 15).
+"""The compiled leaves (simulator, sensitivity) against their pure-Python leaves, and the FFT merge.
 
-The compiled leaf (``fohw[fast]``, numba) must give the numbers of the pure leaf at every
-sample, raise the same divergence, and be replaceable by the pure leaf (no numba, or switched
-off). The merge of the divide and conquer is checked against direct sums.
+The compiled leaves (``fohw[fast]``, numba; issue 15) must give the numbers of the pure leaves
+at every sample, raise the same divergence, and be replaceable by the pure leaves (no numba, or
+switched off). The merge of the divide and conquer and the sensitivity's recursion are checked
+against direct sums.
 """
 
 import importlib.util
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.model import _compiled, system
+from fohw.model import _compiled, sensitivity, system
 from fohw.model._online import HalfMerge, divide_and_conquer
 
 # The comparisons need numba and the compiled leaf switched on (not FOHW_NO_NUMBA=1); the test
@@ -208,3 +209,180 @@ def test_half_merge_equals_direct_sums(n, leaf):
         for c in range(2):
             want = np.convolve(z[s, :, c], w[k])[:n]
             np.testing.assert_allclose(dz[a, :, c], want, rtol=0, atol=1e-12)
+
+
+# ---- the sensitivity's compiled leaf (fohw.model.sensitivity._solve_feedback) ---------------
+
+SENSITIVITY_STRUCTURES = dict(STRUCTURES, **{
+    # a non-polynomial output basis: the simulator runs its pure leaf, the sensitivity compiled
+    "tanh_output": lambda: fohw.HammersteinWiener(
+        [0.4, -0.1], [1.0, 0.5], [1.0, 0.3], [1.0, 0.3], 0.6,
+        g_basis={"y": lambda x: x, "tanh": np.tanh}),
+})
+
+
+@pytest.fixture
+def small_sensitivity_leaves(small_leaves, monkeypatch):
+    """The simulator's small leaves, and leaves of 48 for both sensitivity leaves."""
+    monkeypatch.setattr(sensitivity, "_LEAF", 48)
+    monkeypatch.setattr(sensitivity, "_LEAF_COMPILED", 48)
+
+
+def both_feedback(fn, monkeypatch):
+    """``fn()`` with the compiled sensitivity leaf (counting its calls), then with the pure one."""
+    assert _compiled.load() is not None
+    calls = []
+    kernel = _compiled._state["feedback"]
+
+    def counted(*args):
+        calls.append(args[:2])
+        return kernel(*args)
+
+    counts = []
+
+    def run():
+        out = fn()
+        counts.append(len(calls))
+        return out
+
+    monkeypatch.setitem(_compiled._state, "feedback", counted)
+    compiled, pure = both(run, monkeypatch)
+    assert counts[0] > 0, "the compiled sensitivity leaf did not run"
+    assert counts[1] == counts[0], "the pure run called the compiled sensitivity leaf"
+    return compiled, pure, calls[:counts[0]]
+
+
+# Same reasoning as for the simulator: the two leaves do the same IEEE operations in the same
+# order, the leaf's own past through the same BLAS call (dgemv for d >= 2 columns, ddot for one,
+# which is what NumPy's ``rev @ Z`` calls for these shapes), so S must be identical.
+@needs_numba
+@pytest.mark.parametrize("name", sorted(SENSITIVITY_STRUCTURES))
+def test_compiled_sensitivity_leaf_equals_pure_leaf_at_every_sample(
+        name, small_sensitivity_leaves, monkeypatch):
+    model = SENSITIVITY_STRUCTURES[name]()
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-1, 1, 1500)
+
+    def run():
+        return sensitivity.simulation_jacobian(model.structure, model.linear, model.nonlinear, u)
+
+    (y_c, S_c), (y_p, S_p), segments = both_feedback(run, monkeypatch)
+    np.testing.assert_array_equal(y_c, y_p)
+    np.testing.assert_array_equal(S_c, S_p)
+    assert len(segments) > 16 and max(hi - lo for lo, hi in segments) <= 48
+    assert S_p.shape[1] == len(model.linear) + len(model.nonlinear)
+    # not trivial: the feedback moves S away from the one-step Jacobian E (S != E) everywhere
+    E = fohw.RegressorBuilder(u, y_p, structure=model.structure).jacobian(model.linear,
+                                                                          model.nonlinear)
+    assert np.all(np.max(np.abs(S_p - E), axis=0) > 1e-3 * np.max(np.abs(S_p), axis=0))
+
+
+def direct_feedback(E, lags, betas, coefs):
+    """The recursion of ``_solve_feedback`` by its definition, one sample at a time (O(N^2))."""
+    n, d = E.shape
+    S = E.copy()
+    for k in range(n):
+        for lag, b, c in zip(lags, betas, coefs):
+            if k >= lag:
+                m = np.arange(k - lag + 1)
+                S[k] += (b[k - lag - m] * c[m]) @ S[m]
+    return S
+
+
+@needs_numba
+@pytest.mark.parametrize("d", [1, 2, 7])
+def test_compiled_sensitivity_leaf_on_the_recursion_itself(d, monkeypatch):
+    # _solve_feedback with random E (d = 1 takes the ddot branch), three terms (two sharing an
+    # order, one of order 0, lags 1, 2, 3), several leaf sizes: compiled == pure exactly, and
+    # both equal the direct sums to rounding. The recursion is stable here (|c| <= 0.3, the
+    # weights' absolute sums at most 2), so the error is that of the sums: per sample at most
+    # about eps * log2(n) * sum |terms| (FFT merges and dot products), bounded below by
+    # eps * n * max|S| * sum_t max|c_t| * sum|beta_t| (a generous multiple of the first).
+    rng = np.random.default_rng(d)
+    n = 700
+    E = rng.standard_normal((n, d))
+    b06 = fohw.gl_weights(0.6, n)
+    betas = [b06, b06, fohw.gl_weights(0.0, n)]
+    lags = [1, 2, 3]
+    coefs = [0.3 * rng.uniform(-1, 1, n), -0.2 * rng.uniform(0, 1, n), 0.1 * np.ones(n)]
+    want = direct_feedback(E, lags, betas, coefs)
+    bound = (EPS * n * np.max(np.abs(want))
+             * sum(np.max(np.abs(c)) * np.sum(np.abs(b)) for b, c in zip(betas, coefs)))
+    assert bound < 1e-10
+    assert _compiled.load() is not None
+    for leaf in (1, 16, 100, 128, 700):
+        pure = sensitivity._solve_feedback(E, lags, betas, coefs, kernel="pure", leaf_size=leaf)
+        compiled = sensitivity._solve_feedback(E, lags, betas, coefs, kernel="compiled",
+                                               leaf_size=leaf)
+        np.testing.assert_array_equal(compiled, pure)
+        np.testing.assert_allclose(pure, want, rtol=0, atol=bound)
+    assert np.max(np.abs(want - E)) > 0.1                  # the feedback is not negligible
+    # no output terms: S = E
+    np.testing.assert_array_equal(sensitivity._solve_feedback(E, [], [], [], kernel="compiled"),
+                                  E)
+
+
+@needs_numba
+def test_output_error_and_crb_are_the_same_with_either_sensitivity_leaf(
+        small_sensitivity_leaves, monkeypatch):
+    # The entries that use the sensitivity: identify(method="output_error") (its Jacobian and
+    # standard errors, with n_init) and crb(noise="output"), on the offset / dt = 4 structure.
+    d = fohw.datasets.paper_example(1200, random_state=3)
+    model = STRUCTURES["offset_dt_point"]()
+    u = np.random.default_rng(4).uniform(-1, 1, 1200) + model.operating_point[0]
+
+    def run():
+        res = fohw.identify(d.u, d.y, method="output_error", na=2, nb=2, f_basis=2, g_basis=3,
+                            n_init=50)
+        return res, fohw.crb(model, u, 0.01, noise="output", parametrisation="structured")
+
+    (r_c, b_c), (r_p, b_p), _ = both_feedback(run, monkeypatch)
+    np.testing.assert_array_equal(r_c.theta, r_p.theta)
+    np.testing.assert_array_equal(r_c.alpha, r_p.alpha)
+    np.testing.assert_array_equal(r_c.covariance, r_p.covariance)
+    assert r_c.n_iter == r_p.n_iter and r_c.nfev == r_p.nfev
+    np.testing.assert_array_equal(b_c.covariance, b_p.covariance)
+
+
+@needs_numba
+def test_sensitivity_default_leaves_are_equal(monkeypatch):
+    # The default leaf sizes of the two sensitivity leaves are equal, so with the default
+    # settings numba changes no number of the sensitivity (the simulator's leaves differ).
+    assert sensitivity._LEAF == sensitivity._LEAF_COMPILED
+    m = fohw.datasets.paper_model()
+    u = np.random.default_rng(0).uniform(-1, 1, 3000)
+    _, E, lags, betas, coefs = sensitivity._feedback_problem(m.structure, m.linear,
+                                                             m.nonlinear, u)
+    compiled, pure = both(lambda: sensitivity._solve_feedback(E, lags, betas, coefs),
+                          monkeypatch)
+    np.testing.assert_array_equal(compiled, pure)
+
+
+def test_sensitivity_pure_path_when_switched_off(monkeypatch):
+    monkeypatch.setattr(_compiled, "ENABLED", False)
+    assert _compiled.feedback_leaf_for(10**9) is None
+    E = np.ones((300, 2))
+    with pytest.raises(RuntimeError, match="not available"):
+        sensitivity._solve_feedback(E, [1], [fohw.gl_weights(0.5, 300)], [np.ones(300)],
+                                    kernel="compiled")
+    # the pure path still solves it: S[k] = 1 + sum_{m <= k-1} beta[k-1-m] S[m]
+    S = sensitivity._solve_feedback(E, [1], [fohw.gl_weights(0.5, 300)], [0.5 * np.ones(300)])
+    np.testing.assert_allclose(S, direct_feedback(E, [1], [fohw.gl_weights(0.5, 300)],
+                                                  [0.5 * np.ones(300)]), rtol=1e-12)
+
+
+def test_sensitivity_leaf_loads_by_the_same_rule(monkeypatch):
+    # Not loaded: a short solve stays pure; a solve of LOAD_AFTER / FEEDBACK_WEIGHT samples, or
+    # enough pure samples so far, loads it.
+    monkeypatch.setitem(_compiled._state, "kernel", None)
+    monkeypatch.setitem(_compiled._state, "feedback", None)
+    monkeypatch.setitem(_compiled._state, "pure_samples", 0)
+    monkeypatch.setattr(_compiled, "load", lambda: "loaded")
+    monkeypatch.setattr(_compiled, "available", lambda: True)
+    short = -(-_compiled.LOAD_AFTER // _compiled.FEEDBACK_WEIGHT) - 1     # ceil - 1
+    assert _compiled.feedback_leaf_for(short) is None
+    _compiled.count_pure(_compiled.LOAD_AFTER)
+    monkeypatch.setitem(_compiled._state, "feedback", "feedback kernel")
+    assert _compiled.feedback_leaf_for(short) == "feedback kernel"
+    monkeypatch.setitem(_compiled._state, "pure_samples", 0)
+    assert _compiled.feedback_leaf_for(short + 1) == "feedback kernel"

@@ -1,19 +1,23 @@
-"""The simulator's leaf loop compiled with numba (optional extra ``fohw[fast]``; Eqs. 14, 16).
+"""The simulator's and its sensitivity's leaves compiled with numba (extra ``fohw[fast]``; Eqs. 14, 16).
 
 :func:`fohw.model.system._recursion` runs each leaf of its divide and conquer sample by sample:
 ``y[k]`` from the forcing and the accumulated GL memory, the output signals ``z_r(y[k])``, then
 the leaf's own past added to the accumulators by one dot product each. :func:`_leaf` is that
 loop for a polynomial output basis, doing the same floating-point operations in the same order
 as the pure-Python leaf (the dot products through BLAS ``ddot``, as ``numpy.dot``), compiled by
-numba. Without numba, with ``FOHW_NO_NUMBA=1`` in the environment, with :data:`ENABLED` set to
-False, or for any other output basis, the simulator runs its pure-Python leaf instead, which
-gives the same numbers to rounding (``tests/test_compiled.py`` compares them at every sample).
+numba. :func:`_feedback_leaf` is the leaf of the sensitivity's linear recursion
+(:func:`fohw.model.sensitivity._solve_feedback`), likewise the operations of its pure leaf in
+their order (the leaf's own past by one BLAS ``dgemv`` per term and sample, as NumPy's
+``rev @ Z``). Without numba, with ``FOHW_NO_NUMBA=1`` in the environment, with :data:`ENABLED`
+set to False, or (simulator) for any other output basis, the pure-Python leaves run instead,
+which give the same numbers (``tests/test_compiled.py`` compares them at every sample).
 
-Importing numba and loading the compiled leaf from numba's cache costs about 1–3 s once per
-process (compiling it the first time, before the cache exists, a few seconds more), so it is
-loaded lazily: by a simulation of at least :data:`LOAD_AFTER` samples, or once the simulations
-of the process have run that many samples through the pure leaf. From then on every simulation
-long enough for the divide and conquer uses it. :func:`load` loads it at once.
+Importing numba and loading the compiled leaves from numba's cache costs about 1–3 s once per
+process (compiling them the first time, before the cache exists, a few seconds more), so they
+are loaded lazily: by a simulation of at least :data:`LOAD_AFTER` samples (a sensitivity solve
+counts :data:`FEEDBACK_WEIGHT` samples per sample), or once the pure leaves of the process have
+run that many samples. From then on every simulation long enough for the divide and conquer,
+and every sensitivity solve, uses them. :func:`load` loads them at once.
 """
 
 from __future__ import annotations
@@ -25,7 +29,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["ENABLED", "LOAD_AFTER", "available", "load", "leaf_for", "count_pure"]
+__all__ = ["ENABLED", "LOAD_AFTER", "FEEDBACK_WEIGHT", "available", "load", "leaf_for",
+           "feedback_leaf_for", "count_pure"]
 
 #: Use the compiled leaf when numba is importable; ``FOHW_NO_NUMBA=1`` in the environment turns
 #: it off at import, and tests and benchmarks flip it to compare both paths in one process.
@@ -36,10 +41,17 @@ ENABLED = os.environ.get("FOHW_NO_NUMBA", "") in ("", "0")
 #: one-time cost of importing numba and loading the cached leaf.
 LOAD_AFTER = 2**18
 
+#: Samples of the simulator's pure leaf that one sample of a pure sensitivity solve counts for
+#: (towards :data:`LOAD_AFTER`): the solve's time per sample with the 11 columns of the paper's
+#: example, about 6 times the pure simulator's (``benchmarks/bench_output_error.py
+#: --sensitivity``: the whole sensitivity, simulation included, is 7-8 simulations at 1e4-1e5).
+FEEDBACK_WEIGHT = 6
+
 # Status codes returned by the leaf (the caller raises SimulationDivergedError).
 OK, GROWTH, OUTPUT_BASIS = 0, 1, 2
 
-_state = {"kernel": None, "failed": False, "error": None, "pure_samples": 0, "load_seconds": None}
+_state = {"kernel": None, "feedback": None, "failed": False, "error": None, "pure_samples": 0,
+          "load_seconds": None}
 
 
 def _has_numba():
@@ -52,7 +64,7 @@ def available():
 
 
 def load():
-    """Import numba and compile (or load from cache) the leaf; return it, or ``None``.
+    """Import numba and compile (or load from cache) both leaves; return the simulator's, or ``None``.
 
     ``None`` when numba is not installed, or is installed but does not import (for instance a
     NumPy newer than the numba release supports, or a module of the script's directory
@@ -72,7 +84,8 @@ def load():
         _state["failed"] = True
         _state["error"] = err
         warnings.warn(f"numba is installed but does not import ({type(err).__name__}: {err}); "
-                      "the simulator uses its pure-Python leaf (same numbers, slower).",
+                      "the simulator and its sensitivity use their pure-Python leaves (same "
+                      "numbers, slower).",
                       RuntimeWarning, stacklevel=2)
         return None
     kernel = numba.njit(cache=True, nogil=True)(_leaf)
@@ -81,6 +94,10 @@ def load():
            np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0), np.zeros(1, np.intp),
            np.zeros(1, np.intp), np.ones((1, 1)), np.zeros(0, np.intp), np.zeros(0, np.intp),
            np.ones((n_g, 1)), True, np.zeros(0), 1.0, np.zeros(n_g))   # compile now
+    feedback = numba.njit(cache=True, nogil=True)(_feedback_leaf)
+    feedback(0, 1, np.zeros((1, 2)), np.zeros((1, 1, 2)), np.zeros((1, 1, 2)),
+             np.ones(1, np.intp), np.zeros((1, 1)), np.ones((1, 1)), np.zeros(2))
+    _state["feedback"] = feedback
     _state["kernel"] = kernel
     _state["load_seconds"] = time.perf_counter() - t0
     return kernel
@@ -89,6 +106,21 @@ def load():
 def count_pure(n):
     """Record ``n`` samples run through the pure leaf (towards :data:`LOAD_AFTER`)."""
     _state["pure_samples"] += n
+
+
+def _loaded_after(n):
+    """The compiled leaves once loaded, or when ``n`` or the pure samples so far reach LOAD_AFTER."""
+    return _state["kernel"] is not None or max(n, _state["pure_samples"]) >= LOAD_AFTER
+
+
+def feedback_leaf_for(n):
+    """The compiled sensitivity leaf for a solve of ``n`` samples, or ``None`` (the pure leaf).
+
+    The rules of :func:`leaf_for`, a sample of the solve counting :data:`FEEDBACK_WEIGHT`.
+    """
+    if not available() or not _loaded_after(n * FEEDBACK_WEIGHT):
+        return None
+    return _state["feedback"] if load() is not None else None
 
 
 def leaf_for(g_basis, n):
@@ -100,7 +132,7 @@ def leaf_for(g_basis, n):
     """
     if not g_basis.is_polynomial or not available():
         return None
-    if _state["kernel"] is None and max(n, _state["pure_samples"]) < LOAD_AFTER:
+    if not _loaded_after(n):
         return None
     return load()
 
@@ -161,3 +193,34 @@ def _leaf(lo, hi, w, y, z, dz, term_acc, term_lag, term_coef, mem_acc, mem_sig, 
         for a in range(ml_acc.shape[0]):
             dz[ml_acc[a], k] = z[ml_sig[a], k]
     return OK, hi, 0.0
+
+
+def _feedback_leaf(lo, hi, S, Z, D, lags, coefs, rev, x):
+    """Samples ``lo .. hi-1`` of the sensitivity recursion in place (``_solve_feedback``'s leaf).
+
+    ``S[k] += D[t, k - lags[t]]`` over the terms ``t`` (those with ``k >= lags[t]``), then per
+    term ``Z[t, k] = coefs[t, k] * S[k]`` and ``D[t, k] += rev[t, L - m:] @ Z[t, lo:k + 1]``
+    (``m = k - lo + 1``, ``rev`` the first ``L`` weights of each term reversed), as the pure
+    leaf does: a BLAS ``dgemv`` for ``d >= 2`` columns and a ``ddot`` for one, which is what
+    NumPy's ``@`` calls for these shapes. ``x``: scratch of length ``d``.
+    """
+    n_terms = lags.shape[0]
+    d = S.shape[1]
+    L = rev.shape[1]
+    for k in range(lo, hi):
+        for t in range(n_terms):
+            j = k - lags[t]
+            if j >= 0:
+                for c in range(d):
+                    S[k, c] += D[t, j, c]
+        m = k - lo + 1
+        for t in range(n_terms):
+            ck = coefs[t, k]
+            for c in range(d):
+                Z[t, k, c] = ck * S[k, c]
+            if d == 1:
+                D[t, k, 0] += np.dot(rev[t, L - m:], Z[t, lo:k + 1].reshape(m))
+            else:
+                np.dot(rev[t, L - m:], Z[t, lo:k + 1], x)
+                for c in range(d):
+                    D[t, k, c] += x[c]

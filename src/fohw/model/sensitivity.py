@@ -16,7 +16,8 @@ over the output terms ``t`` (lag ``i_t >= 1``, order ``nu_t``, coefficient ``q_j
 function ``g_j``). Because every lag is at least 1, ``S[k]`` depends on ``S[0..k-1]`` only, and
 the recursion is solved exactly by the divide-and-conquer scheme of the simulator
 (:func:`fohw.simulate`): finished halves enter later samples through FFT convolutions,
-``O(N log^2 N)``.
+``O(N log^2 N)``. The leaves are compiled with numba when it is installed (as the
+simulator's, :mod:`fohw.model._compiled`), with the same numbers.
 
 ``S`` is the Jacobian of the simulation-error residual (:mod:`fohw.estimators.output_error`),
 and ``S^T S / sigma^2`` is the Fisher information when white Gaussian noise of variance
@@ -29,6 +30,7 @@ import numpy as np
 
 from .._validation import check_array
 from ..exceptions import DimensionError
+from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
 from .gl import gl_weights
 from .regressors import RegressorBuilder
@@ -37,7 +39,12 @@ from .system import simulate_parameters
 
 __all__ = ["simulation_jacobian", "basis_derivative"]
 
+#: Leaf sizes of the divide and conquer for the pure-Python and the compiled leaf
+#: (``benchmarks/bench_output_error.py --leaves``: 128 is the fastest pure leaf at 10**5 and
+#: within the spread of the fastest compiled one, 128-256, at 10**4-10**6). Equal sizes make
+#: the two leaves give identical numbers, so numba changes no sensitivity.
 _LEAF = 128
+_LEAF_COMPILED = 128
 
 
 def basis_derivative(basis, x):
@@ -99,6 +106,12 @@ def simulation_jacobian(structure, linear, params, u):
     >>> S.shape, bool(np.allclose(y, fohw.simulate(m, u)))
     ((300, 11), True)
     """
+    y, E, lags, betas, coefs = _feedback_problem(structure, linear, params, u)
+    return y, _solve_feedback(E, lags, betas, coefs)
+
+
+def _feedback_problem(structure, linear, params, u):
+    """The simulated output and the arguments of :func:`_solve_feedback` for them."""
     if not isinstance(structure, Structure):
         raise DimensionError(f"`structure` must be a fohw.Structure; got "
                              f"{type(structure).__name__}.")
@@ -122,25 +135,38 @@ def simulation_jacobian(structure, linear, params, u):
             weights[nu] = gl_weights(nu, n)
         betas.append(weights[nu])
         coefs.append((qa[:, t] @ dg) * (1.0 if h == 1.0 else h**-nu))
-    return y, _solve_feedback(E, lags, betas, coefs)
+    return y, E, lags, betas, coefs
 
 
-def _solve_feedback(E, lags, betas, coefs):
+def _solve_feedback(E, lags, betas, coefs, *, kernel="auto", leaf_size=None):
     """``S[k] = E[k] + sum_t (beta_t * (c_t S))[k - lag_t]`` for all ``k`` (lags >= 1).
 
     Divide and conquer over time with the simulator's skeleton (:mod:`fohw.model._online`):
     ``D[t]`` gathers ``beta_t * z_t`` with ``z_t = c_t S``; a leaf finishes its samples one by
-    one (a dot product per term and sample for the leaf's own past), and once the first half of
-    ``[lo, hi)`` is finished its ``z`` enters ``D`` on the second half by FFT
+    one (a matrix-vector product per term and sample for the leaf's own past), and once the
+    first half of ``[lo, hi)`` is finished its ``z`` enters ``D`` on the second half by FFT
     (:class:`~fohw.model._online.HalfMerge`: the spectra of the weights once per FFT size, and
     terms given the same weights array share them).
+
+    ``kernel`` chooses the leaf: ``"auto"`` the compiled one (:mod:`fohw.model._compiled`, when
+    numba is installed and loaded) or else the pure-Python one; ``"pure"``; ``"compiled"`` (an
+    error if it is not available). Both do the same operations in the same order, so at equal
+    leaf sizes they give identical numbers. ``leaf_size`` overrides the leaf size
+    (:data:`_LEAF` for the pure leaf, :data:`_LEAF_COMPILED` for the compiled one).
     """
     n, d = E.shape
     T = len(lags)
+    compiled = None
+    if kernel in ("auto", "compiled"):
+        compiled = _compiled.feedback_leaf_for(n if kernel == "auto" else _compiled.LOAD_AFTER)
+        if compiled is None and kernel == "compiled":
+            raise RuntimeError("the compiled leaf is not available (numba missing or disabled).")
+    if leaf_size is None:
+        leaf_size = _LEAF_COMPILED if compiled is not None else _LEAF
     S = E.copy()
     Z = np.zeros((T, n, d))
     D = np.zeros((T, n, d))
-    leaf = min(_LEAF, n)
+    leaf = max(1, min(leaf_size, n))
     rev = [b[:leaf][::-1].copy() for b in betas]
     distinct = {}
     for b in betas:
@@ -148,16 +174,26 @@ def _solve_feedback(E, lags, betas, coefs):
     merge = HalfMerge([b for _, b in distinct.values()],
                       [(t, t, distinct[id(b)][0]) for t, b in enumerate(betas)])
 
-    def run_leaf(lo, hi):
-        for k in range(lo, hi):
-            s = S[k]
-            for t in range(T):
-                j = k - lags[t]
-                if j >= 0:
-                    s += D[t, j]
-            for t in range(T):
-                Z[t, k] = coefs[t][k] * s
-                D[t, k] += rev[t][leaf - (k - lo + 1):] @ Z[t, lo:k + 1]
+    if compiled is not None:
+        args = (S, Z, D, np.array(lags, dtype=np.intp),
+                np.array(coefs, dtype=np.float64).reshape(T, n),
+                np.array(rev, dtype=np.float64).reshape(T, leaf), np.zeros(d))
+
+        def run_leaf(lo, hi):
+            compiled(lo, hi, *args)
+    else:
+        _compiled.count_pure(n * _compiled.FEEDBACK_WEIGHT)
+
+        def run_leaf(lo, hi):
+            for k in range(lo, hi):
+                s = S[k]
+                for t in range(T):
+                    j = k - lags[t]
+                    if j >= 0:
+                        s += D[t, j]
+                for t in range(T):
+                    Z[t, k] = coefs[t][k] * s
+                    D[t, k] += rev[t][leaf - (k - lo + 1):] @ Z[t, lo:k + 1]
 
     divide_and_conquer(n, leaf, run_leaf, lambda lo, mid, hi: merge(Z, D, lo, mid, hi))
     return S
