@@ -315,9 +315,12 @@ def _output_terms(g_basis: Basis, Q: np.ndarray):
 #: output signal and sample); above it, by divide and conquer (:func:`_recursion`).
 FAST_SIMULATION_THRESHOLD = 8192
 #: Leaf sizes of the divide and conquer for the pure-Python and the compiled leaf, chosen by
-#: ``benchmarks/bench_simulator.py --leaves`` (64 to 512 measured at N = 10**5 and 10**6).
+#: ``benchmarks/bench_simulator.py --leaves`` (64 to 1024 measured at N = 10**5 and 10**6):
+#: 256 is the fastest pure leaf; the compiled one is about 10 % faster at 512, but equal sizes
+#: make the two leaves give identical numbers, so installing numba (or loading it part-way
+#: through a process) changes no simulation.
 _LEAF = 256
-_LEAF_COMPILED = 512
+_LEAF_COMPILED = 256
 _LEAF_REFERENCE = 128             # the simulator before issue 15 (_recursion_reference)
 
 
