@@ -164,6 +164,54 @@ def test_pure_path_when_switched_off(monkeypatch):
     assert _compiled.leaf_for(fohw.as_basis([np.sin]), 10**9) is None
 
 
+def _fresh_state(monkeypatch):
+    monkeypatch.setattr(_compiled, "_state", dict(_compiled._state, kernel=None, feedback=None,
+                                                  failed=False, error=None, pure_samples=0))
+
+
+@needs_numba
+def test_nowhere_to_write_numba_cache_compiles_without_it(monkeypatch):
+    # A read-only install and no writable home: numba.njit(cache=True) raises "cannot cache
+    # function ... no locator available"; the leaves are then compiled without a cache.
+    import numba
+
+    real = numba.njit
+    asked = []
+
+    def njit(*args, cache=False, **kw):
+        asked.append(cache)
+        if cache:
+            raise RuntimeError("cannot cache function '_leaf': no locator available for file")
+        return real(*args, cache=cache, **kw)
+
+    _fresh_state(monkeypatch)
+    monkeypatch.setattr(numba, "njit", njit)
+    assert _compiled.load() is not None and not _compiled._state["failed"]
+    assert asked == [True, False, False]
+    m = fohw.datasets.paper_model()
+    u = np.random.default_rng(1).uniform(-1, 1, 9000)
+    compiled, pure = both(lambda: fohw.simulate(m, u), monkeypatch)
+    np.testing.assert_array_equal(compiled, pure)
+
+
+@needs_numba
+def test_a_compile_error_falls_back_to_the_pure_leaf_with_one_warning(monkeypatch):
+    import numba
+
+    def njit(*args, **kw):
+        raise TypeError("a typing error from another numba release")
+
+    _fresh_state(monkeypatch)
+    monkeypatch.setattr(numba, "njit", njit)
+    with pytest.warns(RuntimeWarning, match="could not compile the leaves .*pure-Python"):
+        assert _compiled.load() is None
+    assert _compiled._state["failed"] and not _compiled.available()
+    assert _compiled.load() is None                     # no second attempt, no second warning
+    m = fohw.datasets.paper_model()
+    y = fohw.simulate(m, np.random.default_rng(1).uniform(-1, 1, 2**18))   # above LOAD_AFTER
+    assert np.all(np.isfinite(y))
+
+
 @needs_numba
 def test_environment_variable_turns_the_compiled_leaf_off():
     code = ("import fohw.model._compiled as c, fohw.model.system as s, numpy as np, fohw;"

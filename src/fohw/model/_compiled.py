@@ -68,8 +68,10 @@ def load():
 
     ``None`` when numba is not installed, or is installed but does not import (for instance a
     NumPy newer than the numba release supports, or a module of the script's directory
-    shadowing one numba imports, such as a ``coverage.py``): then a ``RuntimeWarning`` says
-    why, once, and the pure leaf is used. The seconds spent are kept in
+    shadowing one numba imports, such as a ``coverage.py``) or cannot compile the leaves: then
+    a ``RuntimeWarning`` says why, once, and the pure leaf is used. Where numba has nowhere to
+    write its cache (a read-only install and no writable home), the leaves are compiled without
+    it, in every process. The seconds spent are kept in
     ``_state["load_seconds"]``.
     """
     if _state["kernel"] is not None or _state["failed"]:
@@ -81,26 +83,44 @@ def load():
     try:
         import numba
     except Exception as err:   # an optional accelerator: any import failure means the pure leaf
-        _state["failed"] = True
-        _state["error"] = err
-        warnings.warn(f"numba is installed but does not import ({type(err).__name__}: {err}); "
-                      "the simulator and its sensitivity use their pure-Python leaves (same "
-                      "numbers, slower).",
-                      RuntimeWarning, stacklevel=2)
-        return None
-    kernel = numba.njit(cache=True, nogil=True)(_leaf)
+        return _fail(err, "is installed but does not import")
+    try:
+        try:
+            kernel, feedback = _compile(numba, cache=True)
+        except RuntimeError as err:          # e.g. "cannot cache function": nowhere to write
+            if "cache" not in str(err):
+                raise
+            kernel, feedback = _compile(numba, cache=False)
+    except Exception as err:   # a compile or typing error (another numba release, ...)
+        return _fail(err, "could not compile the leaves")
+    _state["feedback"] = feedback
+    _state["kernel"] = kernel
+    _state["load_seconds"] = time.perf_counter() - t0
+    return kernel
+
+
+def _compile(numba, *, cache):
+    """Both leaves compiled (from numba's cache when ``cache`` and it exists), called once."""
+    kernel = numba.njit(cache=cache, nogil=True)(_leaf)
     n_g = 2
     kernel(0, 1, np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1)),
            np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0), np.zeros(1, np.intp),
            np.zeros(1, np.intp), np.ones((1, 1)), np.zeros(0, np.intp), np.zeros(0, np.intp),
            np.ones((n_g, 1)), True, np.zeros(0), 1.0, np.zeros(n_g))   # compile now
-    feedback = numba.njit(cache=True, nogil=True)(_feedback_leaf)
+    feedback = numba.njit(cache=cache, nogil=True)(_feedback_leaf)
     feedback(0, 1, np.zeros((1, 2)), np.zeros((1, 1, 2)), np.zeros((1, 1, 2)),
              np.ones(1, np.intp), np.zeros((1, 1)), np.ones((1, 1)), np.zeros(2))
-    _state["feedback"] = feedback
-    _state["kernel"] = kernel
-    _state["load_seconds"] = time.perf_counter() - t0
-    return kernel
+    return kernel, feedback
+
+
+def _fail(err, what):
+    """Give up on the compiled leaves for this process: one RuntimeWarning, then the pure ones."""
+    _state["failed"] = True
+    _state["error"] = err
+    warnings.warn(f"numba {what} ({type(err).__name__}: {err}); the simulator and its "
+                  "sensitivity use their pure-Python leaves (same numbers, slower).",
+                  RuntimeWarning, stacklevel=3)
+    return None
 
 
 def count_pure(n):
