@@ -175,11 +175,16 @@ def factor_triangular(r, n_rows, *, rcond=None) -> Factor:
 
 
 def _rank(r, rcond):
+    """The leading run of diagonal entries above ``rcond * |r[0, 0]|`` (pivoted ``r``)."""
     d = np.abs(np.diag(r))
-    return int(np.sum(d > rcond * d[0])) if d.size and d[0] > 0 else 0
+    if not d.size or not d[0] > 0:
+        return 0
+    small = np.flatnonzero(d <= rcond * d[0])
+    return int(small[0]) if small.size else d.size
 
 
-#: Remaining column norms (of columns of unit norm) this close to the largest are a tie.
+#: Remaining column norms within this fraction of the largest are a tie (relative: a nearly
+#: independent column of remaining norm 6e-13 must not tie with a dependent one of 1e-16).
 _TIE = 2.0 ** -40
 
 
@@ -195,7 +200,7 @@ def _pivoted_qr(a):
     perm = np.arange(n)
     for j in range(min(m, n)):
         norms = np.sqrt(np.einsum("ij,ij->j", r[j:, j:], r[j:, j:]))
-        ties = np.flatnonzero(norms >= norms.max() - _TIE)
+        ties = np.flatnonzero(norms >= norms.max() * (1.0 - _TIE))
         pick = j + ties[np.argmin(perm[j + ties])]
         if pick != j:
             r[:, [j, pick]] = r[:, [pick, j]]
