@@ -12,8 +12,9 @@ their order (the leaf's own past by one BLAS ``dgemv`` per term and sample, as N
 set to False, or (simulator) for any other output basis, the pure-Python leaves run instead,
 which give the same numbers (``tests/test_compiled.py`` compares them at every sample).
 
-Importing numba and loading the compiled leaves from numba's cache costs about 1–3 s once per
-process (compiling them the first time, before the cache exists, a few seconds more), so they
+Importing numba and loading the compiled leaves from numba's cache costs 0.5–1.7 s once per
+process in the measurements of docs/performance.md (compiling them the first time, before the
+cache exists, 3–4 s), so they
 are loaded lazily: by a simulation of at least :data:`LOAD_AFTER` samples (a sensitivity solve
 counts :data:`FEEDBACK_WEIGHT` samples per sample), or once the pure leaves of the process have
 run that many samples. From then on every simulation long enough for the divide and conquer,

@@ -733,11 +733,11 @@ def simulate(model, u, *, noise=None, noise_std=0.0, random_state=None,
     sum over all of ``gbar(y[0..k-i])``. The input branch is computed once by FFT. Up to
     ``N = 8192`` the output memory is one dot product per sample (``O(N**2)``); above,
     finished halves of the record enter later samples through FFT convolutions
-    (``O(N log^2 N)``), equal to the direct recursion to rounding: 0.47 s at ``N = 10**5`` and
-    7.4 s at ``10**6`` with the per-sample loop in Python, 0.064 s and 1.3 s when the optional
-    ``fast`` extra (numba) compiles it for a polynomial output basis (same numbers; loaded
+    (``O(N log^2 N)``), equal to the direct recursion to rounding: 0.38 s at ``N = 10**5`` and
+    3.9 s at ``10**6`` with the per-sample loop in Python, 0.078 s and 0.88 s when the optional
+    ``fast`` extra (numba) compiles it for a polynomial output basis (identical numbers; loaded
     once per process, for simulations of at least ``2**18`` samples or once that many have
-    run; docs/performance.md).
+    run; docs/performance.md, measured on an idle 2-core machine).
 
     Examples
     --------
