@@ -56,8 +56,20 @@ def _gamma(n_rows, n_cols):
     return n_rows * n_cols * EPS
 
 
+# The records have 3000 rows, one block at the default _BLOCK_ROWS; 1000 gives three blocks, 7
+# (fewer rows than columns) 429 pieces, so the stacked triangles are reduced again on the way.
+BLOCK_ROWS = [None, 1000, 7]
+
+
+@pytest.fixture(params=BLOCK_ROWS, ids=lambda r: f"block_rows={r}")
+def block_rows(request, monkeypatch):
+    if request.param is not None:
+        monkeypatch.setattr(varpro, "_BLOCK_ROWS", request.param)
+    return request.param
+
+
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
-def test_profile_solve_equals_the_full_matrix_solve(name):
+def test_profile_solve_equals_the_full_matrix_solve(name, block_rows):
     model = SYSTEMS[name]()
     b = _builder(model)
     for params in (model.nonlinear, 0.9 * np.asarray(model.nonlinear) + 0.05):
@@ -79,7 +91,7 @@ def test_profile_solve_equals_the_full_matrix_solve(name):
 
 
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
-def test_golub_pereyra_and_covariance_equal_the_full_matrix_ones(name):
+def test_golub_pereyra_and_covariance_equal_the_full_matrix_ones(name, block_rows):
     model = SYSTEMS[name]()
     b = _builder(model)
     params = np.asarray(model.nonlinear, dtype=float)
@@ -109,7 +121,7 @@ def test_golub_pereyra_and_covariance_equal_the_full_matrix_ones(name):
                       * scale)
 
 
-def test_rank_deficient_profile_names_the_same_columns():
+def test_rank_deficient_profile_names_the_same_columns(block_rows):
     rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, 2000)
     y = fohw.simulate(_paper(), u, noise_std=0.05, random_state=4)

@@ -173,11 +173,12 @@ class _VarproFit:
 _BLOCK_ROWS = 16384
 
 
-def _row_blocks(columns, extra=(), rows=_BLOCK_ROWS):
-    """Rows of ``[Phi, extra...]`` in Fortran-ordered blocks.
+def _row_blocks(columns, extra=(), rows=None):
+    """Rows of ``[Phi, extra...]`` in Fortran-ordered blocks (of :data:`_BLOCK_ROWS` rows).
 
     One buffer is reused: consume each block before asking for the next.
     """
+    rows = _BLOCK_ROWS if rows is None else rows
     n, k = columns.n_samples, columns.n_columns
     buffer = np.empty((min(rows, n), k + len(extra)), order="F")
     for start in range(0, n, rows):
