@@ -217,3 +217,19 @@ def test_where_the_sensitivity_stops_the_jacobian_falls_back_to_forward_differen
         np.testing.assert_array_equal(J[:, i], (crit.residual(xi) - r) / (xi[i] - x[i]))
     _, (fallback,) = _fit_both(u, y, jacobians=("exact",), **kw)
     _same_optimum(s, exact, fallback, y.size)
+
+
+def test_a_start_that_escapes_after_shrinking_is_a_failed_fit():
+    """Shrinking the start's output parameters cannot tame an input branch 1e6 times too large:
+    scipy then met a zero Jacobian at the penalty and stopped, and the fit said CONVERGED."""
+    model = fohw.datasets.paper_model()
+    crit, u, y, _ = _criterion(model)
+    s = model.structure
+    builder = RegressorBuilder(u, y, structure=s)
+    k, n = model.layout.n_output_params, model.layout.n_params
+    start = model.linear.copy()
+    start[k:n] *= 1e6
+    fit = oe.fit_output_error(builder, start, model.nonlinear, lower=np.array([0.0]),
+                              upper=np.array([1.0]))
+    assert fit.status == fohw.Status.FAILED
+    assert "free run of the estimate escapes" in fit.message

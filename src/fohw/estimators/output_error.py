@@ -239,6 +239,9 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
+    escaped = crit.residual(x) is crit.penalty
+    if escaped:        # the start escaped even after shrinking: the zero Jacobian stopped scipy
+        status = Status.FAILED
     # Standard errors from the exact sensitivity of the free run at the estimate (the
     # Jacobian of the output-noise bound, fohw.crb(noise="output")), at x with the orders put
     # on an active bound (the solver's last Jacobian is at its own x, ~1e-10 inside).
@@ -252,9 +255,14 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     how = (f"{crit.n_simulations} simulations, {crit.n_jacobians} of them with the exact "
            "sensitivity" if _jacobian == "exact" else
            f"{crit.n_simulations} simulations, finite-difference Jacobians included")
+    message = f"output-error fit (scipy.optimize.least_squares): {ls.message} ({how})"
+    if escaped:
+        message = ("output-error fit failed: the free run of the estimate escapes (beyond ten "
+                   "times the largest measured |y|), as did the start after shrinking its "
+                   f"output parameters 60 times; {message}. Give a start whose simulation "
+                   "stays bounded.")
     return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=shrink,
-                  status=status, message=f"output-error fit (scipy.optimize.least_squares): "
-                  f"{ls.message} ({how})", covariance=cov, noise_variance=s2,
+                  status=status, message=message, covariance=cov, noise_variance=s2,
                   nit=int(ls.njev), nfev=crit.n_simulations, at_lower=active < 0,
                   at_upper=active > 0)
 
