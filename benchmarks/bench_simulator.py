@@ -7,7 +7,7 @@
 One run, the paper's example (``fohw.datasets.paper_model()``, the input and noise of
 ``benchmarks/run.py``'s simulate stage), medians of interleaved repeats:
 
-* **before**: the simulator before issue 15 (``_recursion(kernel="reference")``: leaves of 128
+* **before**: the simulator before issue 15 (``benchmarks/simulator_before.py``: leaves of 128
   in pure Python, each merge a full zero-padded linear convolution with the weights' spectrum
   computed every time);
 * **pure**: the pure-Python leaf (what runs without numba), with the new merges;
@@ -38,7 +38,9 @@ from fohw.model import _compiled, system
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+import simulator_before  # noqa: E402
 from run import reference_simulate  # noqa: E402
+from simulator_before import simulate_before  # noqa: E402
 
 # ruff: noqa: B023   (the timed lambdas run inside their loop iteration)
 
@@ -53,7 +55,12 @@ def data(n):
 
 
 def simulate(model, u, v, kernel, leaf_size=None):
-    """fohw.simulate(model, u, noise=v) with a chosen leaf (what simulate runs, step for step)."""
+    """fohw.simulate(model, u, noise=v) with a chosen leaf (what simulate runs, step for step).
+
+    ``kernel="reference"``: the recursion before issue 15 (``simulator_before.py``).
+    """
+    if kernel == "reference":
+        return simulate_before(lambda: simulate(model, u, v, "pure"))
     return system._run(model.structure, model.q[:, None], model.a[None, :],
                        np.outer(model.q, model.a), np.outer(model.p, model.b), model.orders, u, v,
                        offset=model.offset, past=model.past,
@@ -92,7 +99,7 @@ def side_by_side(sizes):
     print(f"compiled leaf: numba import + compile or cache load {time.perf_counter() - t0:.2f} s "
           "(once per process; not in the times below)")
     print(f"leaf sizes: pure {system._LEAF}, compiled {system._LEAF_COMPILED}, "
-          f"before {system._LEAF_REFERENCE}")
+          f"before {simulator_before.LEAF}")
     rows = []
     for n in sizes:
         u, v = data(n)

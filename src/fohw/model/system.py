@@ -321,7 +321,6 @@ FAST_SIMULATION_THRESHOLD = 8192
 #: through a process) changes no simulation.
 _LEAF = 256
 _LEAF_COMPILED = 256
-_LEAF_REFERENCE = 128             # the simulator before issue 15 (_recursion_reference)
 
 
 def _transient(nu, lag, n, h):
@@ -380,8 +379,7 @@ def _recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_f
 
     ``kernel`` chooses the leaf: ``"auto"`` the compiled leaf (:mod:`fohw.model._compiled`,
     polynomial output bases, numba installed and loaded) or else the pure-Python one;
-    ``"pure"``; ``"compiled"`` (an error if it is not available); ``"reference"`` the
-    simulator before issue 15 (:func:`_recursion_reference`, leaves of 128, for benchmarks);
+    ``"pure"``; ``"compiled"`` (an error if it is not available);
     ``"merges"`` a leaf that does nothing, so only the FFT merges run, on the same segments
     (the floor of the divide and conquer, for benchmarks; the output is then meaningless).
     ``leaf_size`` overrides the leaf size of the divide and conquer (:data:`_LEAF` for the pure
@@ -390,9 +388,6 @@ def _recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_f
     n = w.shape[0]
     if method == "auto":
         method = "fast" if n > FAST_SIMULATION_THRESHOLD else "direct"
-    if kernel == "reference":
-        return _recursion_reference(Q, A, out_terms, g_basis, w, threshold,
-                                    _LEAF_REFERENCE if method == "fast" else n, h, y_fixed)
     compiled = None
     if kernel in ("auto", "compiled"):
         compiled = _compiled.leaf_for(g_basis, n if kernel == "auto" else _compiled.LOAD_AFTER)
@@ -505,95 +500,6 @@ def _compiled_leaf(kernel, Q, terms, memory, memoryless, rev, w, y, z, dz, thres
         if status == _compiled.OUTPUT_BASIS:
             raise SimulationDivergedError(k, yk, threshold, "output_basis")
     return leaf
-
-
-def _recursion_reference(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
-    """The simulator before issue 15, kept as the benchmarks' reference (``kernel="reference"``).
-
-    ``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
-
-    ``z_r(y) = sum_j Q[j, r] g_j(y)``: for a model ``Q = q``, ``A = a`` (one signal, gbar);
-    for a general theta either ``Q = I, A = qa`` or ``Q = qa, A = I``. ``out_terms[t]`` is the
-    ``(lag, order)`` of column ``t`` of ``A``. Every (signal, distinct order) pair has an
-    accumulator of ``Delta^nu z_r``; order-0 accumulators have no memory (``z_r`` itself).
-
-    O(N log^2 N) by divide and conquer over time: ``solve(l, r)`` first finishes ``[l, mid)``,
-    then adds the contribution of ``z[:, l:mid]`` to the accumulators at ``[mid, r)`` with one
-    FFT convolution per accumulator, then finishes ``[mid, r)``. Leaves of at most
-    ``leaf_size`` samples run the recursion directly, one dot product per accumulator and
-    sample; with ``leaf_size >= N`` that is the whole (direct, O(N^2)) simulation. The first
-    ``len(y_fixed)`` outputs are not computed but taken from ``y_fixed`` (a measured history).
-    """
-    import math
-
-    n = w.shape[0]
-    R = Q.shape[1]
-    nus = []
-    for _, nu in out_terms:
-        if nu not in nus:
-            nus.append(nu)
-    acc = [(r, nu) for r in range(R) for nu in nus]          # accumulator index -> (signal, nu)
-    index = {key: a for a, key in enumerate(acc)}
-    terms = [(index[r, nu], lag - 1, float(A[r, t]) * (1.0 if h == 1.0 else h**-nu))
-             for r in range(R) for t, (lag, nu) in enumerate(out_terms)]
-    betas = {nu: gl_weights(nu, n) for nu in nus if nu != 0.0}
-    memory = [(a, r, betas[nu]) for a, (r, nu) in enumerate(acc) if nu != 0.0]
-    memoryless = [(a, r) for a, (r, nu) in enumerate(acc) if nu == 0.0]
-    zfun = _output_terms(g_basis, Q)
-    w = w.tolist()
-    n_fixed = 0 if y_fixed is None else y_fixed.shape[0]
-    fixed = [] if y_fixed is None else y_fixed.tolist()
-    leaf_size = min(leaf_size, n)
-    rev_leaf = {id(b): b[:leaf_size][::-1].copy() for _, _, b in memory}
-    y = [0.0] * n
-    z = np.zeros((R, n))
-    dz = np.zeros((len(acc), n))      # contributions gathered so far
-    dz_item = dz.item
-    isfinite = math.isfinite
-    zrows = list(z)                   # 1-D views, one per output signal
-    dzrows = list(dz)
-    dot = np.dot
-    signals = range(R)
-    leaf_memory = [(dzrows[a], r, rev_leaf[id(b)]) for a, r, b in memory]
-    leaf_memoryless = [(dzrows[a], r) for a, r in memoryless]
-
-    def leaf(lo, hi):
-        for k in range(lo, hi):
-            if k < n_fixed:
-                yk = fixed[k]
-            else:
-                yk = w[k]
-                for a, i, c in terms:
-                    if i < k:
-                        yk += c * dz_item(a, k - 1 - i)
-                if not abs(yk) <= threshold:       # also catches nan
-                    raise SimulationDivergedError(k, yk, threshold)
-            zk = zfun(yk)
-            if not all(isfinite(x) for x in zk):
-                raise SimulationDivergedError(k, yk, threshold, "output_basis")
-            y[k] = yk
-            for r in signals:
-                zrows[r][k] = zk[r]
-            for row, r, b_rev in leaf_memory:
-                row[k] += dot(zrows[r][lo:k + 1], b_rev[leaf_size - (k - lo + 1):])
-            for row, r in leaf_memoryless:
-                row[k] = zk[r]
-
-    def solve(lo, hi):
-        if hi - lo <= leaf_size:
-            leaf(lo, hi)
-            return
-        mid = (lo + hi) // 2
-        solve(lo, mid)
-        # dz[t] += sum_{m in [lo, mid)} beta[t - m] z[m] for t in [mid, hi); z[mid:hi] is
-        # still zero, so this is the causal convolution of z[lo:hi].
-        for a, r, beta in memory:
-            dz[a, mid:hi] += causal_convolve(z[r, lo:hi], beta[:hi - lo])[mid - lo:]
-        solve(mid, hi)
-
-    with np.errstate(over="ignore", invalid="ignore"):
-        solve(0, n)
-    return np.array(y)
 
 
 def _simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
