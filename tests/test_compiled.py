@@ -13,6 +13,7 @@ import sys
 
 import numpy as np
 import pytest
+from models import MODELS
 
 import fohw
 from fohw.model import _compiled, sensitivity, system
@@ -27,33 +28,11 @@ needs_numba = pytest.mark.skipif(importlib.util.find_spec("numba") is None
 EPS = np.finfo(float).eps
 
 
-def lin():
-    return fohw.polynomial_basis(1)
-
-
-STRUCTURES = {
-    "paper": fohw.datasets.paper_model,
-    # several orders, one accumulator each
-    "per_lag": lambda: fohw.HammersteinWiener(
-        [0.3, -0.1], [1.0, 0.4], [1.0, 0.2], [1.0, -0.05],
-        {"alpha_a1": 0.3, "alpha_a2": 0.7, "alpha_b1": 0.5, "alpha_b2": 1.2}, orders="per_lag"),
-    # order-0 (memoryless) and fractional accumulators on the same signal
-    "mixed": lambda: fohw.HammersteinWiener(
-        [0.5, 0.2, -0.1, 0.05], [1.0, 0.4, 0.3, -0.2], [1.0], [1.0], 0.45, orders="mixed"),
-    # dt != 1, an offset and an operating point
-    "offset_dt_point": lambda: fohw.HammersteinWiener(
-        [0.5, 0.2], [1.0, 0.3], [1.0], [1.0], 0.35, orders="mixed", dt=4.0, offset=0.7,
-        operating_point=(2.0, 5.0)),
-    # past levels, dt = 0.5, a fixed order 0 and a free order per lag
-    "past": lambda: fohw.HammersteinWiener(
-        [0.3, 0.2, 0.1, -0.1], [1.0, 0.5], [1.0, 0.2], [1.0, 0.1], {"alpha": 0.55},
-        orders=fohw.Orders([(1, 0.0), (1, "alpha"), (2, 0.0), (2, "alpha")],
-                           [(1, 0.0), (1, "alpha")]),
-        past=(0.6, -0.4), dt=0.5),
+STRUCTURES = dict(MODELS, **{
     # an order above 1 on the output
     "order_1.4": lambda: fohw.HammersteinWiener([0.2, -0.1], [0.8], [1.0, 0.5], [1.0], 1.4,
                                                 f_basis={"u": lambda x: x, "tanh": np.tanh}),
-}
+})
 
 
 @pytest.fixture
@@ -103,7 +82,7 @@ def test_compiled_leaf_general_theta_and_history(small_leaves, monkeypatch):
     u = rng.uniform(-1, 1, 1200)
     for na, g in ((2, 3), (4, 2)):       # n_g > na: Q = qa; n_g < na: Q = I
         th = np.r_[0.1 * rng.standard_normal(na * g), theta[-4:]]
-        compiled, pure = both(lambda: fohw.simulate_theta(
+        compiled, pure = both(lambda th=th, na=na, g=g: fohw.simulate_theta(
             th, 0.6, u, na=na, nb=2, f_basis=2, g_basis=g), monkeypatch)
         np.testing.assert_array_equal(compiled, pure)
     # A measured history (the first outputs are fixed, not computed).
