@@ -27,7 +27,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
-from fohw.paper.accuracy import system_b, system_c  # noqa: E402  (systems B and C)
+from fohw.paper.accuracy import system_b, system_c, write_csv  # noqa: E402
 
 
 def paper():
@@ -229,10 +229,7 @@ def main(argv=None):
     (args.outdir / "accuracy_noise_models.md").write_text(text)
     keys = ["system", "noise", "n", "seed", "method", "delta", "alpha_error", "converged",
             "seconds", "error"]
-    with open(args.outdir / "accuracy_noise_models.csv", "w") as fh:
-        fh.write(",".join(keys) + "\n")
-        for r in all_rows:
-            fh.write(",".join(str(r.get(k, "")).replace(",", ";") for k in keys) + "\n")
+    write_csv(args.outdir / "accuracy_noise_models.csv", all_rows, keys)
     print(text)
     return 0
 

@@ -10,6 +10,7 @@ Writes accuracy.md, accuracy.csv, accuracy_methods.png and accuracy_vs_n.png.
 """
 
 import argparse
+import csv
 import sys
 import time
 from pathlib import Path
@@ -57,6 +58,14 @@ def make_system_data(seed, system="B", n_samples=10_000):
 def crb_for(make, n, **kw):
     data = make(10**6 + n, n_samples=n, **kw)   # an input independent of the Monte Carlo seeds
     return fohw.crb(data.model, data.u, 0.01, n_realizations=8, random_state=0)
+
+
+def write_csv(path, rows, keys):
+    """The ``keys`` of each row (a dict; missing ones empty) as CSV, quoted where needed."""
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=keys, extrasaction="ignore", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
 
 
 def paper_data(seed, n_samples=10_000):
@@ -139,10 +148,7 @@ def main(argv=None):
     (args.outdir / "accuracy.md").write_text(text)
     keys = ["system", "n_samples", "seed", "method", "delta", "alpha", "alpha_error", "J",
             "converged", "seconds"]
-    with open(args.outdir / "accuracy.csv", "w") as fh:
-        fh.write(",".join(keys) + "\n")
-        for r in all_rows:
-            fh.write(",".join(str(r.get(k, "")) for k in keys) + "\n")
+    write_csv(args.outdir / "accuracy.csv", all_rows, keys)
 
     fig, axes = subplots(1, 2, figsize=(11, 4))
     names = list(methods)
