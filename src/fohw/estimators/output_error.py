@@ -239,8 +239,10 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
-    escaped = crit.residual(x) is crit.penalty
-    if escaped:        # the start escaped even after shrinking: the zero Jacobian stopped scipy
+    # The solver's last residual is the (scaled) penalty: the start escaped even after
+    # shrinking, and the zero Jacobian there stopped scipy.
+    escaped = np.array_equal(ls.fun, crit.penalty / y_scale)
+    if escaped:
         status = Status.FAILED
     # Standard errors from the exact sensitivity of the free run at the estimate (the
     # Jacobian of the output-noise bound, fohw.crb(noise="output")), at x with the orders put
