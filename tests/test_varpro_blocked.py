@@ -149,7 +149,7 @@ def test_rank_deficient_profile_names_the_same_columns(block_rows):
 
 
 @pytest.mark.parametrize("name", sorted(SYSTEMS))
-def test_fit_equals_the_full_matrix_fit(name):
+def test_fit_equals_the_full_matrix_fit(name, block_rows):
     model = SYSTEMS[name]()
     b = _builder(model)
     k = len(model.structure.orders.free)
@@ -170,5 +170,11 @@ def test_fit_equals_the_full_matrix_fit(name):
     se = np.sqrt(np.diag(ref.covariance))
     allowed = 2 * np.sqrt(2 * opts.tol * (b.n_samples - x_ref.size))
     assert np.max(np.abs(x_new - x_ref) / se) <= allowed
-    np.testing.assert_allclose(new.covariance, ref.covariance, rtol=10 * allowed)
-    assert new.J == pytest.approx(ref.J, rel=10 * opts.tol)
+    # The covariance s^2 (G^T G)^-1 moves with the estimate: to first order by the displacement
+    # in standard errors (<= allowed) where G varies on the scale of one standard error or
+    # slower (measured: at most 1.1e-5 relative, against allowed = 1.5e-3).
+    np.testing.assert_allclose(new.covariance, ref.covariance, rtol=allowed)
+    # Each cost is within tol * cost of the minimum (the quadratic model above: F - F* <=
+    # s^2 |delta|^2 / 2 with |delta| <= sqrt(2 tol (N - d)) gives tol * rss), so the two J
+    # differ by at most 2 tol relative (measured: 3.5e-16).
+    assert new.J == pytest.approx(ref.J, rel=2 * opts.tol)
