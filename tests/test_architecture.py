@@ -7,6 +7,7 @@
    (``fohw.paper``), nor ``argparse``.
 3. No private name (``_name``) is imported from another fohw module. Private *modules*
    (``from . import _linalg``, ``from .._validation import check_array``) are fine.
+4. CONTRIBUTING.md's module map has a line for every module, and only for modules.
 
 Run alone with ``python -m pytest tests/test_architecture.py``; ``python tests/test_architecture.py``
 prints the graph's circles and the private imports without pytest.
@@ -226,6 +227,17 @@ def test_import_fohw_loads_no_application():
     assert not seen["applications"], f"`import fohw` loads {seen['applications']}"
     assert not seen["argparse_by_fohw"], (f"`import fohw` imports argparse from "
                                           f"{seen['argparse_by_fohw']}")
+
+
+def test_module_map_names_every_module():
+    # CONTRIBUTING.md's module map: one line per module, the module in the first column. The
+    # subpackages' __init__ files (re-exports only) need no line; fohw's own does.
+    text = (Path(__file__).resolve().parents[1] / "CONTRIBUTING.md").read_text(encoding="utf-8")
+    listed = {line.split("`")[1] for line in text.splitlines() if line.startswith("| `fohw")}
+    modules = _modules()
+    needed = {m for m, p in modules.items() if p.name != "__init__.py"} | {"fohw"}
+    assert not sorted(needed - listed), f"not in CONTRIBUTING.md's module map: {sorted(needed - listed)}"
+    assert not sorted(listed - set(modules)), f"not modules of fohw: {sorted(listed - set(modules))}"
 
 
 def test_no_private_names_cross_modules():
