@@ -51,8 +51,8 @@ print("MI-RLS after %d samples: alpha = %.4f" % (online.n_samples_seen_, online.
 # 6. Validate: one-step prediction and free-run simulation on fresh data.
 u_new = rng.uniform(-np.sqrt(3), np.sqrt(3), 2000)
 y_new = fohw.simulate(model, u_new, noise=0.1 * rng.standard_normal(2000))
-print("one-step fit %%: %.1f" % fohw.metrics.fit_percent(y_new, best.predict(u_new, y_new)))
-print("free-run fit %%: %.1f" % fohw.metrics.fit_percent(y_new, best.simulate(u_new)))
+print("one-step fit %%: %.1f" % fohw.analysis.metrics.fit_percent(y_new, best.predict(u_new, y_new)))
+print("free-run fit %%: %.1f" % fohw.analysis.metrics.fit_percent(y_new, best.simulate(u_new)))
 
 # 7. Save and load (JSON, exact floats, never pickle).
 with tempfile.TemporaryDirectory() as folder:

@@ -1,4 +1,5 @@
-"""Reproduce Fig. 6 of the paper: relative error of the hybrid method (P = 5) against the two single-innovation baselines.
+"""Reproduce Fig. 6 of the paper: relative error of the hybrid method (P = 5) against the two
+single-innovation baselines.
 
     python examples/figure_6.py --outdir results [--fast] [--seed 0]
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.io.cli import main as cli
+from fohw.cli import main as cli
 
 ROOT = Path(__file__).resolve().parents[1]
 S = dict(na=2, nb=2, f_basis=2, g_basis=3)
@@ -304,25 +304,29 @@ API = [
      lambda t: fohw.read_record(_bad_file(t, "u,y\n1,2\n3,NA\n4,5\n", "r.csv")),
      fohw.DataFileError, "line 3: column 'y' has 'NA', a missing value; fohw does not fill gaps"),
     ("metrics.fit_percent", "n_init leaves no samples",
-     lambda t: fohw.metrics.fit_percent(Y, Y, n_init=49),
+     lambda t: fohw.analysis.metrics.fit_percent(Y, Y, n_init=49),
      fohw.DimensionError, "`n_init` must leave at least 2 samples"),
 ]
 
 CLI = [
-    ("fohw identify", "data file missing", lambda t: ["identify", "/nonexistent.dat", "--na", "2", "--nb", "2"],
+    ("fohw identify", "data file missing",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "2", "--nb", "2"],
      "data file not found"),
     ("fohw identify", "column that does not exist",
-     lambda t: ["identify", _bad_file(t, "1 2\n3 4\n5 6\n"), "--columns", "0,5", "--na", "1", "--nb", "1"],
+     lambda t: ["identify", _bad_file(t, "1 2\n3 4\n5 6\n"), "--columns", "0,5",
+                "--na", "1", "--nb", "1"],
      "column 5 does not exist"),
     ("fohw identify", "unknown header name",
-     lambda t: ["identify", _bad_file(t, "a,b\n1,2\n3,4\n5,6\n"), "--columns", "u,y", "--na", "1", "--nb", "1"],
+     lambda t: ["identify", _bad_file(t, "a,b\n1,2\n3,4\n5,6\n"), "--columns", "u,y",
+                "--na", "1", "--nb", "1"],
      "'u' is neither a column number nor a header name"),
     ("fohw identify", "basis degree 0",
      lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--f-basis", "0"],
      "a basis is a polynomial degree from 1 to 100"),
     ("fohw identify", "na missing", lambda t: ["identify", "x.dat", "--nb", "1"],
      "the following arguments are required: --na"),
-    ("fohw identify", "malformed line", lambda t: ["identify", _bad_file(t, "1 2\n3 oops\n"), "--na", "1", "--nb", "1"],
+    ("fohw identify", "malformed line",
+     lambda t: ["identify", _bad_file(t, "1 2\n3 oops\n"), "--na", "1", "--nb", "1"],
      "line 2: 'oops' is not a number"),
     ("fohw identify", "alpha bounds not a pair",
      lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--alpha-bounds", "0.5"],

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.io.cli import main
+from fohw.cli import main
 
 
 def test_reproduce_table2_fast(tmp_path, capsys):

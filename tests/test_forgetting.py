@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.io.cli import main
+from fohw.cli import main
 from fohw.paper import reproduction as rep
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)

@@ -175,9 +175,11 @@ def test_orders_spellings():
 @pytest.mark.parametrize("call, match", [
     (lambda: fohw.Orders.resolve("fractional", na=1, nb=1), r"`orders` must be one of"),
     (lambda: fohw.Orders.resolve(2.5, na=1, nb=1), r"must be in \[0, 2\]; got 2.5"),
-    (lambda: fohw.Orders.from_lags(a=[-0.1], b=[0]), r"`orders`: the order of term 0 of branch 'a' must be in \[0, 2\]; got -0.1"),
+    (lambda: fohw.Orders.from_lags(a=[-0.1], b=[0]),
+     r"`orders`: the order of term 0 of branch 'a' must be in \[0, 2\]; got -0.1"),
     (lambda: fohw.Orders.from_lags(a=[(0, 0)], b=[0]), r"has the term \(lag 1, order 0"),
-    (lambda: fohw.Orders([(0, 0.5)], [(1, 0.5)]), r"the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
+    (lambda: fohw.Orders([(0, 0.5)], [(1, 0.5)]),
+     r"the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
     (lambda: fohw.Orders.resolve({"a": [0.5]}, na=1, nb=1), r"needs exactly the keys 'a' and 'b'"),
     (lambda: fohw.Orders.resolve({"a": [0.5, 0.5], "b": [0.5]}, na=1, nb=1),
      r"uses lags up to 2 \(output\)"),

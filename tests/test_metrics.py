@@ -15,7 +15,7 @@ import scipy.signal
 from scipy import stats
 
 import fohw
-from fohw import metrics
+from fohw.analysis import metrics
 
 
 def test_fit_percent_and_error_range_by_hand():

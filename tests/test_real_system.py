@@ -8,7 +8,7 @@ import pytest
 import scipy.signal
 
 import fohw
-from fohw import metrics
+from fohw.analysis import metrics
 from fohw.estimators.baselines import fit_linear_output_error
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)

@@ -22,10 +22,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fohw
+from fohw.cli import _fit_text
+from fohw.cli import main as cli
 from fohw.io import jsonio
 from fohw.io import text as text_io
-from fohw.io.cli import _fit_text
-from fohw.io.cli import main as cli
 
 S = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -218,9 +218,9 @@ def test_tiny_data_give_finite_fit_indices():
     y = rng.normal(size=100)
     yhat = y + 0.1 * rng.normal(size=100)
     for scale in (1e-200, 1.0, 1e200):
-        assert fohw.metrics.fit_percent(scale * y, scale * yhat) == pytest.approx(
-            fohw.metrics.fit_percent(y, yhat), rel=1e-12)
-        assert fohw.metrics.rmse(scale * y, scale * yhat) / scale == pytest.approx(
+        assert fohw.analysis.metrics.fit_percent(scale * y, scale * yhat) == pytest.approx(
+            fohw.analysis.metrics.fit_percent(y, yhat), rel=1e-12)
+        assert fohw.analysis.metrics.rmse(scale * y, scale * yhat) / scale == pytest.approx(
             np.sqrt(np.mean((y - yhat) ** 2)), rel=1e-12)
 
 

@@ -171,7 +171,7 @@ def test_non_finite_iterates_raise_instead_of_clamping():
 
 
 @pytest.mark.parametrize("module", ["fohw.paper.robot_arm", "fohw.paper.accuracy",
-                                    "fohw.paper.reproduction", "fohw.io.cli"])
+                                    "fohw.paper.reproduction", "fohw.cli"])
 def test_library_code_leaves_the_matplotlib_backend_alone(module, tmp_path):
     code = ("import matplotlib; matplotlib.use('svg'); import importlib; "
             f"importlib.import_module({module!r}); "

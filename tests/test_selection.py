@@ -11,7 +11,7 @@ import fohw
 from fohw._validation import input_in_range
 from fohw.analysis.metrics import fit_percent, rmse
 from fohw.analysis.selection import expand_candidates
-from fohw.io.cli import main
+from fohw.cli import main
 
 STRUCT = dict(f_basis=2, g_basis=3)
 

@@ -115,7 +115,8 @@ def test_gaussian_paper_input_diverges_for_some_seeds():
     "kwargs, exc, match",
     [
         (dict(u=[0.0, np.nan, 1.0]), fohw.ParameterError, r"`u` must contain only finite.*index 1"),
-        (dict(noise=np.zeros(4)), fohw.DimensionError, r"`noise` and `u` must have the same length; got 4 and 5"),
+        (dict(noise=np.zeros(4)), fohw.DimensionError,
+         r"`noise` and `u` must have the same length; got 4 and 5"),
         (dict(noise=np.zeros(5), noise_std=0.1), fohw.ParameterError, "not both"),
         (dict(noise_std=-1.0), fohw.ParameterError, r"`noise_std` must be in \[0, inf\]"),
         (dict(random_state="seed", noise_std=0.1), fohw.ParameterError, "`random_state`"),

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.io.cli import main
+from fohw.cli import main
 from fohw.io.text import read_table
 
 TANKS = os.path.join(os.path.dirname(fohw.__file__), "data", "cascaded_tanks.csv")

@@ -5,7 +5,7 @@ import pytest
 
 import fohw
 from fohw.analysis.metrics import fit_percent, rmse, whiteness_test
-from fohw.io.cli import main
+from fohw.cli import main
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 

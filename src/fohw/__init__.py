@@ -7,7 +7,6 @@ matrix, and the paper's estimators.
 """
 
 from . import datasets
-from .analysis import metrics
 from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
 from .analysis.montecarlo import monte_carlo
@@ -50,33 +49,23 @@ from .model.system import HammersteinWiener, simulate, simulate_parameters, simu
 from .record import Benchmark, Record
 from .results import IdentificationResult, Status
 
-__version__ = "0.1.0.dev0"
 
+def _installed_version():
+    """The version of the installed distribution (pyproject.toml is the one place it is written).
 
-def _keep_old_module_paths():
-    """``import fohw.migd``, ``from fohw.metrics import rmse``, … as in fohw 0.1.
-
-    The modules moved into subpackages (``fohw.estimators.migd``, ``fohw.analysis.metrics``);
-    their old dotted paths stay importable and reachable as attributes.
+    From a source tree that was never installed (``PYTHONPATH=src``) there is no distribution
+    metadata; the version is then ``"0+unknown"`` (a valid PEP 440 version that sorts below every
+    release) rather than a number that could be stale.
     """
-    import sys
+    from importlib.metadata import PackageNotFoundError, version
 
-    from .analysis import crb, montecarlo
-    from .estimators import baselines, migd, milm, output_error, rls, varpro
-    from .io import cli
-    from .model import basis, gl, params, regressors, system
-    from .paper import reproduction
-
-    moved = dict(gl=gl, basis=basis, params=params, system=system, regressors=regressors,
-                 migd=migd, milm=milm, varpro=varpro, output_error=output_error, rls=rls,
-                 baselines=baselines, crb=crb, metrics=metrics,
-                 montecarlo=montecarlo, reproduction=reproduction, cli=cli)
-    for old, module in moved.items():
-        sys.modules.setdefault(f"{__name__}.{old}", module)
-        globals().setdefault(old, module)
+    try:
+        return version("fohw")
+    except PackageNotFoundError:
+        return "0+unknown"
 
 
-_keep_old_module_paths()
+__version__ = _installed_version()
 
 __all__ = [
     "identify_many",
@@ -120,7 +109,6 @@ __all__ = [
     "as_basis",
     "crb",
     "datasets",
-    "metrics",
     "gl_difference",
     "gl_weights",
     "gl_weights_derivative",

@@ -1,7 +1,7 @@
 """Getting data and models in and out of fohw.
 
-Versioned JSON for models and results (:mod:`~fohw.io.jsonio`) and the ``fohw`` command line
-(:mod:`~fohw.io.cli`).
+Versioned JSON for models and results (:mod:`~fohw.io.jsonio`) and text tables
+(:mod:`~fohw.io.text`). The ``fohw`` command line is :mod:`fohw.cli`.
 """
 
 from .jsonio import load_model, load_result, save_model

@@ -1,4 +1,5 @@
 """The paper's reproduction and the studies that ``fohw reproduce`` runs.
 
-Everything here uses the rest of fohw; nothing else in fohw imports it.
+Everything here uses the rest of fohw; only the command line (:mod:`fohw.cli`) imports it, and
+``import fohw`` does not load it.
 """

@@ -31,7 +31,7 @@ import json
 import os
 import sys
 
-from .. import __version__
+from . import __version__
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -74,8 +74,8 @@ def read_table(path, decimal="."):
     """
     import time
 
-    from .text import read_table as parse
-    from .text import sampling_time
+    from .io.text import read_table as parse
+    from .io.text import sampling_time
 
     start = time.perf_counter()
     _progress(f"reading {path} ...")
@@ -126,7 +126,7 @@ def _pick_columns(data, names, spec, count, path, flag="--columns"):
 
 
 def _basis_arg(text):
-    from ..model.basis import MAX_POLYNOMIAL_DEGREE
+    from .model.basis import MAX_POLYNOMIAL_DEGREE
 
     try:
         degree = int(text)
@@ -144,8 +144,8 @@ def _check_file_out(path, flag, inputs=()):
 
     Not a folder, in a folder that exists, and not one of the files the run reads.
     """
-    from ..exceptions import DataFileError
-    from .jsonio import check_output_path
+    from .exceptions import DataFileError
+    from .io.jsonio import check_output_path
 
     if path is None:
         return
@@ -233,8 +233,8 @@ def _validation_arg(text):
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
-    from ..estimators.hybrid import SCHEDULES
-    from ..estimators.identify import METHODS
+    from .estimators.hybrid import SCHEDULES
+    from .estimators.identify import METHODS
 
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")
@@ -333,7 +333,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _fohw_warnings():
-    from .. import exceptions
+    from . import exceptions
 
     return tuple(getattr(exceptions, name) for name in exceptions.__all__
                  if name.endswith("Warning"))
@@ -354,9 +354,9 @@ def _identify(args):
     import time
     import warnings
 
-    from .. import identify
-    from ..analysis.validation import compare
-    from ..exceptions import FohwError
+    from . import identify
+    from .analysis.validation import compare
+    from .exceptions import FohwError
 
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
@@ -441,7 +441,7 @@ def _select(args):
     import warnings
     from concurrent.futures import ProcessPoolExecutor
 
-    from ..analysis.selection import expand_candidates, select_structure
+    from .analysis.selection import expand_candidates, select_structure
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
@@ -491,7 +491,7 @@ def _select(args):
 
 def _load_model_or_result(path):
     """A fohw-model file's model, or a fohw-result file's result (``(kind, object)``)."""
-    from .jsonio import _read_json, model_from_dict, result_from_dict
+    from .io.jsonio import _read_json, model_from_dict, result_from_dict
 
     d = _read_json(path)                       # read once; the format says which it is
     if isinstance(d, dict) and d.get("format") == "fohw-result":
@@ -507,7 +507,7 @@ def _simulate(args):
 
     import numpy as np
 
-    from ..model.system import _noise, simulate
+    from .model.system import _noise, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
@@ -525,7 +525,7 @@ def _simulate(args):
         print(f"fohw: warning: {w.message}", file=sys.stderr)
     text = "\n".join(repr(float(v)) for v in y) + "\n"
     if args.output:
-        from .jsonio import _write_text
+        from .io.jsonio import _write_text
 
         _write_text(text, args.output)
     else:
@@ -536,7 +536,7 @@ def _simulate(args):
 def _reproduce(args):
     _check_outdir(args.outdir)
     if args.what in _REPRODUCE:
-        from ..paper.reproduction import example_main
+        from .paper.reproduction import example_main
 
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
@@ -550,21 +550,21 @@ def _reproduce(args):
         raise UsageError(f"--forgetting applies to table2 and figures, not to {args.what}.")
     forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
     if args.what == "forgetting":
-        from ..paper.reproduction import forgetting_main
+        from .paper.reproduction import forgetting_main
 
         return forgetting_main(forwarded, "fohw reproduce forgetting")
     if args.what == "robot-arm":
-        from ..paper.robot_arm import main as study
+        from .paper.robot_arm import main as study
         if args.data:
             forwarded += ["--data", args.data]
     else:
-        from ..paper.accuracy import main as study
+        from .paper.accuracy import main as study
     return study(forwarded)
 
 
 def main(argv=None) -> int:
     """Run the ``fohw`` command; return its exit status."""
-    from ..exceptions import FohwError
+    from .exceptions import FohwError
 
     parser = build_parser()
     args = parser.parse_args(argv)
