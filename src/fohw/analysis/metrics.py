@@ -14,6 +14,7 @@ import numpy as np
 import scipy.linalg
 from scipy import stats
 
+from .._linalg import full_column_rank, rank_tolerance, triangular_factor
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
 
@@ -291,56 +292,6 @@ def _levinson_durbin(x, max_order):
     return np.array(variances)
 
 
-def _r_factor(rows, n_rows, n_cols, block=8192):
-    """Upper-triangular ``R`` with ``A^T A = R^T R`` for the matrix whose rows ``rows(i, j)`` returns.
-
-    The matrix is never held whole. The Cholesky factor of the column-scaled Gram matrix is
-    used when it is well conditioned (estimated reciprocal condition number above 1e-4, so
-    ``cond(A) <~ 1e4`` and the squared condition number costs at most about 8 digits);
-    otherwise ``R`` comes from Householder QR accumulated over row blocks, which keeps the
-    accuracy of ill-conditioned problems (nearly noise-free records).
-    """
-    gram = np.zeros((n_cols, n_cols))
-    for start in range(0, n_rows, block):
-        a = rows(start, min(start + block, n_rows))
-        gram += a.T @ a
-    scale = np.sqrt(np.diag(gram))
-    if np.all(scale > 0):
-        try:
-            r = np.linalg.cholesky(gram / np.outer(scale, scale)).T
-        except np.linalg.LinAlgError:
-            r = None
-        if r is not None:
-            rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
-            if info == 0 and rcond > 1e-4:
-                return r * scale
-    r = np.zeros((0, n_cols))
-    for start in range(0, n_rows, block):
-        r = np.linalg.qr(np.vstack([r, rows(start, min(start + block, n_rows))]), mode="r")
-    return r
-
-
-def _rank_tol(n_rows, n_cols):
-    """Relative singular-value tolerance of ``numpy.linalg.matrix_rank``."""
-    return max(n_rows, n_cols) * np.finfo(float).eps
-
-
-def _full_rank(r, n_rows, *, fast_only=False):
-    """Whether the triangular factor ``r`` of an ``n_rows``-row matrix has full column rank.
-
-    A cheap LAPACK estimate of the reciprocal condition number settles the usual case
-    (``> 1e-8``); otherwise the singular values are compared with ``matrix_rank``'s tolerance
-    (or, with ``fast_only``, ``False`` is returned for the caller to do that itself).
-    """
-    rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
-    if info == 0 and rcond > 1e-8:
-        return True
-    if fast_only:
-        return False
-    sv = np.linalg.svd(r, compute_uv=False)
-    return bool(sv[-1] > _rank_tol(n_rows, r.shape[1]) * sv[0])
-
-
 def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=0,
                            prewhiten_order=None):
     """Test residuals for correlation with past and future input, lags ``-max_lag..max_lag``.
@@ -501,11 +452,11 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     past = np.lib.stride_tricks.sliding_window_view(e, p + 1)[:, ::-1]       # [e(t), .., e(t-p)]
     padded = np.r_[np.zeros(max_lag), z, np.zeros(max_lag)]
     delayed = np.lib.stride_tricks.sliding_window_view(padded, n_lags)[p:, ::-1]
-    r_factor = _r_factor(lambda start, stop: np.column_stack(
+    r_factor = triangular_factor(lambda start, stop: np.column_stack(
         [np.ones(stop - start), past[start:stop, 1:], delayed[start:stop], past[start:stop, 0]]),
         m, k + n_lags + 1)
     r11 = r_factor[:k, :k]
-    if not _full_rank(r11, m):
+    if not full_column_rank(r11, m):
         raise DimensionError(
             f"the {p} past `residuals` of the whitening filter are linearly dependent (the "
             "residuals are predicted exactly by their own past); use a smaller "
@@ -514,7 +465,7 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     # the part of e(t) along them in r2y and the remaining residual in r_yy.
     r22 = r_factor[k:k + n_lags, k:k + n_lags]
     r2y = r_factor[k:k + n_lags, -1]
-    if _full_rank(r22, m, fast_only=True):
+    if full_column_rank(r22, m, fast_only=True):
         rank = n_lags
         explained = float(r2y @ r2y)
         rss = float(r_factor[-1, -1] ** 2)
@@ -522,7 +473,7 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     else:
         # Numerically dependent delayed inputs: test only the directions they resolve.
         left, sv22, right_t = np.linalg.svd(r22)
-        rank = int(np.sum(sv22 > _rank_tol(m, n_lags) * sv22[0]))
+        rank = int(np.sum(sv22 > rank_tolerance(m, n_lags) * sv22[0]))
         coords = left.T @ r2y
         explained = float(coords[:rank] @ coords[:rank])
         rss = float(coords[rank:] @ coords[rank:] + r_factor[-1, -1] ** 2)
