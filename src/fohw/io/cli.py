@@ -52,8 +52,9 @@ class _Parser(argparse.ArgumentParser):
 
 def _progress(message):
     """A status line on stderr when it is a terminal (never in pipes, files or tests)."""
-    if sys.stderr.isatty():
-        print(f"fohw: {message}", file=sys.stderr, flush=True)
+    from .._parallel import progress_bar
+
+    progress_bar(None, "fohw").write(message)
 
 
 def read_table(path, decimal="."):

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import fohw
+from fohw._parallel import progress_bar
 from fohw._plotting import subplots
 from fohw.analysis.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test
 from fohw.analysis.selection import expand_candidates
@@ -54,8 +55,7 @@ LINEAR = fohw.polynomial_basis(1)
 
 def progress(message):
     """Stage messages on stderr when a terminal is attached (the study takes minutes)."""
-    if sys.stderr.isatty():
-        print(f"robot-arm: {message}", file=sys.stderr, flush=True)
+    progress_bar(None, "robot-arm").write(message)
 
 
 def quiet(fn, *args, **kwargs):
