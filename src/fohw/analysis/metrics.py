@@ -18,8 +18,8 @@ from .._linalg import full_column_rank, rank_tolerance, triangular_factor
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
 
-__all__ = ["fit_percent", "error_range", "rmse", "whiteness_test", "cross_correlation_test",
-           "CorrelationTest"]
+__all__ = ["fit_percent", "error_range", "rmse", "aic", "bic", "whiteness_test",
+           "cross_correlation_test", "CorrelationTest"]
 
 
 def _pair(y, yhat, n_init):
@@ -85,6 +85,33 @@ def rmse(y, yhat, *, n_init=0):
     """Root-mean-square error after the start-up window."""
     y, yhat = _pair(y, yhat, n_init)
     return _norm(y - yhat) / float(np.sqrt(y.shape[0]))
+
+
+def aic(mean_squared_error, n_samples, n_params):
+    """Akaike's information criterion ``N ln V + 2 d`` of a least-squares fit.
+
+    Parameters
+    ----------
+    mean_squared_error : float
+        ``V``: the fit's criterion per sample (the one-step ``J`` of Eq. 41, or the mean
+        squared simulation error of an output-error fit), ``> 0``.
+    n_samples : int
+        ``N``: samples the fit used.
+    n_params : int
+        ``d``: estimated parameters (linear and nonlinear).
+
+    Examples
+    --------
+    >>> from fohw.analysis.metrics import aic, bic
+    >>> round(aic(0.01, 1000, 9), 2), round(bic(0.01, 1000, 9), 2)
+    (-4587.17, -4543.0)
+    """
+    return float(n_samples * np.log(mean_squared_error) + 2 * n_params)
+
+
+def bic(mean_squared_error, n_samples, n_params):
+    """The Bayesian (Schwarz) information criterion ``N ln V + d ln N``; see :func:`aic`."""
+    return float(n_samples * np.log(mean_squared_error) + n_params * np.log(n_samples))
 
 
 @dataclass(frozen=True)

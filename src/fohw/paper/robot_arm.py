@@ -31,7 +31,7 @@ import numpy as np
 import fohw
 from fohw._parallel import progress_bar
 from fohw._plotting import subplots
-from fohw.analysis.metrics import cross_correlation_test, error_range, fit_percent, whiteness_test
+from fohw.analysis.metrics import bic, cross_correlation_test, error_range, fit_percent, whiteness_test
 from fohw.analysis.selection import expand_candidates
 from fohw.estimators.baselines import fit_linear_output_error
 from fohw.paper.reproduction import paper_table2
@@ -71,9 +71,9 @@ def bic_scan(u, y, orders, degrees):
         for df, dg in degrees:
             r = quiet(fohw.identify, u, y, na=na, nb=nb, f_basis=df, g_basis=dg, method="varpro",
                       alpha_bounds=(0.0, 2.0))
-            d = r.theta.size + 1
-            rows.append(dict(na=na, nb=nb, f=df, g=dg, bic=n * np.log(r.J) + d * np.log(n),
-                             J=r.J, alpha=r.alpha, result=r))
+            d = r.linear.size + r.nonlinear.size
+            rows.append(dict(na=na, nb=nb, f=df, g=dg, bic=bic(r.J, n, d), J=r.J, alpha=r.alpha,
+                             result=r))
     return sorted(rows, key=lambda r: r["bic"])
 
 
