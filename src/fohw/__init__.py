@@ -65,12 +65,11 @@ def _keep_old_module_paths():
     from .estimators import baselines, migd, milm, output_error, rls, varpro
     from .io import cli
     from .model import basis, gl, params, regressors, system
-    from .paper import reproduction
 
     moved = dict(gl=gl, basis=basis, params=params, system=system, regressors=regressors,
                  migd=migd, milm=milm, varpro=varpro, output_error=output_error, rls=rls,
                  baselines=baselines, crb=crb, metrics=metrics,
-                 montecarlo=montecarlo, reproduction=reproduction, cli=cli)
+                 montecarlo=montecarlo, cli=cli)
     for old, module in moved.items():
         sys.modules.setdefault(f"{__name__}.{old}", module)
         globals().setdefault(old, module)

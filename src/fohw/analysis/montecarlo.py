@@ -25,8 +25,8 @@ import numpy as np
 from .._parallel import TaskError, progress_bar, run_tasks
 from .._threads import thin_solves
 from ..datasets import paper_example
-from ..estimators.identify import identify
-from ..exceptions import ConvergenceWarning, FohwError, ParameterError, SimulationDivergedError
+from ..exceptions import FohwError, ParameterError, SimulationDivergedError
+from .batch import identify_quietly
 
 __all__ = ["monte_carlo", "summarise"]
 
@@ -47,9 +47,7 @@ def _run_task(make_data, methods, seed, setting):
     theta = model.theta
     for name, options in methods.items():
         t0 = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            res = identify(data.u, data.y, **{**struct, **options})
+        res = identify_quietly(data.u, data.y, **{**struct, **options})
         rows.append(dict(seed=seed, **setting, method=name, alpha=res.alpha,
                          alpha_error=res.alpha - model.alpha,
                          delta=float(np.linalg.norm(res.theta - theta) / np.linalg.norm(theta)),

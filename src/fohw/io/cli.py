@@ -537,7 +537,7 @@ def _simulate(args):
 def _reproduce(args):
     _check_outdir(args.outdir)
     if args.what in _REPRODUCE:
-        from ..paper.reproduction import example_main
+        from ..paper.table2 import main as example_main
 
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
@@ -551,7 +551,7 @@ def _reproduce(args):
         raise UsageError(f"--forgetting applies to table2 and figures, not to {args.what}.")
     forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
     if args.what == "forgetting":
-        from ..paper.reproduction import forgetting_main
+        from ..paper.forgetting import main as forgetting_main
 
         return forgetting_main(forwarded, "fohw reproduce forgetting")
     if args.what == "robot-arm":
