@@ -240,7 +240,6 @@ def forgetting_markdown(rows, summary, comparison, *, n_seeds, n_samples, second
     lams = sorted({k[1] for k in summary}, reverse=True)
     Ps = sorted({k[2] for k in summary})
     ks = sorted({k[3] for k in summary})
-    kmax = ks[-1]
     out = [f"# The paper's hybrid method under a forgetting factor (N = {n_samples}, "
            f"{n_seeds} seeds)", "",
            "r(k) = lambda r(k-1) + ||Phi(P, k)||^2. **lambda is not in the paper** (its Eq. 31 "
@@ -250,42 +249,10 @@ def forgetting_markdown(rows, summary, comparison, *, n_seeds, n_samples, second
            "schedules: a run on the first k samples of the same record.", "",
            "Schedules:", ""]
     out += [f"- `{s}`: {FORGETTING_SCHEDULES[s][0]}" for s in schedules]
-    out += ["", f"## Median delta at k = {kmax} [interquartile range]", "",
-            "| lambda | " + " | ".join(f"{s} P={P}" for s in schedules for P in Ps) + " |",
-            "|---|" + "---:|" * (len(schedules) * len(Ps))]
-    for lam in lams:
-        cells = []
-        for s in schedules:
-            for P in Ps:
-                v = summary[(s, lam, P, kmax)]
-                m, lo, hi = v["delta"]
-                cells.append(f"{m:.3f} [{lo:.3f}, {hi:.3f}]"
-                             + (f" ({v['failed']} failed)" if v["failed"] else ""))
-        out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
-    for s in schedules:
-        out += ["", f"## `{s}`: median delta at k = {', '.join(map(str, ks))}; median alpha at "
-                f"k = {kmax}", "", "| lambda | " + " | ".join(f"P = {P}" for P in Ps) + " |",
-                "|---|" + "---|" * len(Ps)]
-        for lam in lams:
-            cells = []
-            for P in Ps:
-                ds = " / ".join(f"{summary[(s, lam, P, k)]['delta'][0]:.3f}" for k in ks)
-                a = summary[(s, lam, P, kmax)]["alpha"]
-                cells.append(f"{ds}; alpha {a[0]:.3f} [{a[1]:.3f}, {a[2]:.3f}]")
-            out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
-    long, short = max(Ps), min(Ps)
-    out += ["", f"## Does P = {long} beat P = {short}? (paired by seed)", "",
-            f"Seeds on which delta(P = {long}) < delta(P = {short}), at k = "
-            f"{', '.join(map(str, ks))}; in brackets the median over seeds of delta(P = {short}) "
-            f"- delta(P = {long}) at k = {kmax} (positive: P = {long} better).", "",
-            "| lambda | " + " | ".join(schedules) + " |", "|---|" + "---|" * len(schedules)]
-    for lam in lams:
-        cells = []
-        for s in schedules:
-            c = [comparison[(s, lam, k)] for k in ks]
-            cells.append(" / ".join(f"{e['wins']}" for e in c) + f" of {c[-1]['n']} "
-                         f"({c[-1]['median_difference']:+.4f})")
-        out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
+    out += _delta_table(summary, schedules, lams, Ps, ks[-1])
+    out += _schedule_tables(summary, schedules, lams, Ps, ks)
+    out += _p_comparison_table(comparison, schedules, lams, Ps, ks)
+    long, kmax = max(Ps), ks[-1]
     out += ["", "## Best forgetting factor per schedule (smallest median delta at "
             f"k = {kmax}, P = {long})", ""]
     for s in schedules:
@@ -299,6 +266,59 @@ def forgetting_markdown(rows, summary, comparison, *, n_seeds, n_samples, second
     out += ["", f"{n_runs} runs of the hybrid method ({failed} left the finite numbers), "
             f"{seconds:.0f} s wall time with {jobs} worker process(es)."]
     return "\n".join(out) + "\n"
+
+
+def _delta_table(summary, schedules, lams, Ps, kmax):
+    """Median [IQR] delta at the last checkpoint: lambda x (schedule, P)."""
+    out = ["", f"## Median delta at k = {kmax} [interquartile range]", "",
+           "| lambda | " + " | ".join(f"{s} P={P}" for s in schedules for P in Ps) + " |",
+           "|---|" + "---:|" * (len(schedules) * len(Ps))]
+    for lam in lams:
+        cells = []
+        for s in schedules:
+            for P in Ps:
+                v = summary[(s, lam, P, kmax)]
+                m, lo, hi = v["delta"]
+                cells.append(f"{m:.3f} [{lo:.3f}, {hi:.3f}]"
+                             + (f" ({v['failed']} failed)" if v["failed"] else ""))
+        out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
+    return out
+
+
+def _schedule_tables(summary, schedules, lams, Ps, ks):
+    """Per schedule: median delta at every checkpoint and median [IQR] alpha at the last."""
+    kmax = ks[-1]
+    out = []
+    for s in schedules:
+        out += ["", f"## `{s}`: median delta at k = {', '.join(map(str, ks))}; median alpha at "
+                f"k = {kmax}", "", "| lambda | " + " | ".join(f"P = {P}" for P in Ps) + " |",
+                "|---|" + "---|" * len(Ps)]
+        for lam in lams:
+            cells = []
+            for P in Ps:
+                ds = " / ".join(f"{summary[(s, lam, P, k)]['delta'][0]:.3f}" for k in ks)
+                a = summary[(s, lam, P, kmax)]["alpha"]
+                cells.append(f"{ds}; alpha {a[0]:.3f} [{a[1]:.3f}, {a[2]:.3f}]")
+            out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
+    return out
+
+
+def _p_comparison_table(comparison, schedules, lams, Ps, ks):
+    """Seeds on which the longest P beats the shortest, per lambda and schedule."""
+    long, short, kmax = max(Ps), min(Ps), ks[-1]
+    out = ["", f"## Does P = {long} beat P = {short}? (paired by seed)", "",
+           f"Seeds on which delta(P = {long}) < delta(P = {short}), at k = "
+           f"{', '.join(map(str, ks))}; in brackets the median over seeds of delta(P = {short}) "
+           f"- delta(P = {long}) at k = {kmax} (positive: P = {long} better).", "",
+           "| lambda | " + " | ".join(schedules) + " |", "|---|" + "---|" * len(schedules)]
+    for lam in lams:
+        cells = []
+        for s in schedules:
+            c = [comparison[(s, lam, k)] for k in ks]
+            cells.append(" / ".join(f"{e['wins']}" for e in c) + f" of {c[-1]['n']} "
+                         f"({c[-1]['median_difference']:+.4f})")
+        out.append(f"| {_lam(lam)} | " + " | ".join(cells) + " |")
+    return out
 
 
 def plot_forgetting_map(summary):
