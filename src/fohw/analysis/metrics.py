@@ -319,6 +319,64 @@ def _levinson_durbin(x, max_order):
     return np.array(variances)
 
 
+def _check_cross_correlation_args(residuals, u, max_lag, confidence, n_init, prewhiten_order):
+    """Checked ``(e, u)`` after ``n_init``, ``max_lag``, ``confidence`` and the largest AR order."""
+    e = check_array(residuals, "residuals")
+    u = check_array(u, "u")
+    check_same_length(e, u, "residuals", "u")
+    n_init = check_int(n_init, "n_init", minimum=0)
+    if n_init > e.shape[0] - 3:
+        raise DimensionError(f"`n_init` must leave at least 3 samples; got n_init={n_init} for "
+                             f"{e.shape[0]} samples.")
+    e, u = e[n_init:], u[n_init:]
+    n = e.shape[0]
+    max_lag = check_int(max_lag, "max_lag", minimum=0)
+    confidence = _check_confidence(confidence)
+    if prewhiten_order is None:
+        order_cap = min(int(np.floor(10 * np.log10(n))), n // 10)
+    else:
+        order_cap = check_int(prewhiten_order, "prewhiten_order", minimum=0)
+    n_lags = 2 * max_lag + 1
+    if n_lags + 2 * order_cap + 2 > n:
+        what = ("the largest prewhitening order" if prewhiten_order is None else
+                "`prewhiten_order`")
+        raise ParameterError(
+            f"`max_lag` = {max_lag} is too large for {n} samples after `n_init`: the test needs "
+            f"2 * max_lag + 1 + 2 p + 2 <= {n} with p = {order_cap} ({what}), i.e. max_lag <= "
+            f"{(n - 2 * order_cap - 3) // 2}.")
+    _check_not_constant(e, "residuals")
+    _check_not_constant(u, "u")
+    return e, u, max_lag, confidence, order_cap
+
+
+def _delayed_input_fit(r_factor, k, n_lags, m, max_lag):
+    """The delayed inputs' part of the regression: ``(rank, explained, rss, b)``.
+
+    The intercept and past residuals (the first ``k`` columns) are projected out: ``R22``, with
+    the part of ``e(t)`` along the delayed inputs in ``r2y`` and the remaining residual in
+    ``r_yy``. ``b`` are the delayed inputs' coefficients (minimum norm if they are
+    numerically dependent; then only the directions they resolve are tested).
+    """
+    r22 = r_factor[k:k + n_lags, k:k + n_lags]
+    r2y = r_factor[k:k + n_lags, -1]
+    if full_column_rank(r22, m, fast_only=True):
+        rank = n_lags
+        explained = float(r2y @ r2y)
+        rss = float(r_factor[-1, -1] ** 2)
+        b = scipy.linalg.solve_triangular(r22, r2y)
+        return rank, explained, rss, b
+    left, sv22, right_t = np.linalg.svd(r22)
+    rank = int(np.sum(sv22 > rank_tolerance(m, n_lags) * sv22[0]))
+    coords = left.T @ r2y
+    explained = float(coords[:rank] @ coords[:rank])
+    rss = float(coords[rank:] @ coords[rank:] + r_factor[-1, -1] ** 2)
+    b = right_t[:rank].T @ (coords[:rank] / sv22[:rank])     # minimum-norm coefficients
+    if rank == 0:
+        raise DimensionError(f"`u` delayed by -{max_lag}..{max_lag} is numerically zero over "
+                             "the record: there is nothing to test.")
+    return rank, explained, rss, b
+
+
 def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=0,
                            prewhiten_order=None):
     """Test residuals for correlation with past and future input, lags ``-max_lag..max_lag``.
@@ -439,32 +497,10 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     >>> res.passed, res.dof, res.p_value < 1e-6, int(res.lags[np.argmax(res.correlation)])
     (False, 51, True, 2)
     """
-    e = check_array(residuals, "residuals")
-    u = check_array(u, "u")
-    check_same_length(e, u, "residuals", "u")
-    n_init = check_int(n_init, "n_init", minimum=0)
-    if n_init > e.shape[0] - 3:
-        raise DimensionError(f"`n_init` must leave at least 3 samples; got n_init={n_init} for "
-                             f"{e.shape[0]} samples.")
-    e, u = e[n_init:], u[n_init:]
+    e, u, max_lag, confidence, order_cap = _check_cross_correlation_args(
+        residuals, u, max_lag, confidence, n_init, prewhiten_order)
     n = e.shape[0]
-    max_lag = check_int(max_lag, "max_lag", minimum=0)
-    confidence = _check_confidence(confidence)
-    if prewhiten_order is None:
-        order_cap = min(int(np.floor(10 * np.log10(n))), n // 10)
-    else:
-        order_cap = check_int(prewhiten_order, "prewhiten_order", minimum=0)
     n_lags = 2 * max_lag + 1
-    if n_lags + 2 * order_cap + 2 > n:
-        what = ("the largest prewhitening order" if prewhiten_order is None else
-                "`prewhiten_order`")
-        raise ParameterError(
-            f"`max_lag` = {max_lag} is too large for {n} samples after `n_init`: the test needs "
-            f"2 * max_lag + 1 + 2 p + 2 <= {n} with p = {order_cap} ({what}), i.e. max_lag <= "
-            f"{(n - 2 * order_cap - 3) // 2}.")
-    _check_not_constant(e, "residuals")
-    _check_not_constant(u, "u")
-
     if prewhiten_order is None:
         variances = _levinson_durbin(e, order_cap)
         p = int(np.argmin(n * np.log(variances) + 2 * np.arange(variances.shape[0])))
@@ -488,26 +524,7 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
             f"the {p} past `residuals` of the whitening filter are linearly dependent (the "
             "residuals are predicted exactly by their own past); use a smaller "
             "`prewhiten_order`.")
-    # The delayed inputs after the intercept and past residuals are projected out: R22, with
-    # the part of e(t) along them in r2y and the remaining residual in r_yy.
-    r22 = r_factor[k:k + n_lags, k:k + n_lags]
-    r2y = r_factor[k:k + n_lags, -1]
-    if full_column_rank(r22, m, fast_only=True):
-        rank = n_lags
-        explained = float(r2y @ r2y)
-        rss = float(r_factor[-1, -1] ** 2)
-        b = scipy.linalg.solve_triangular(r22, r2y)
-    else:
-        # Numerically dependent delayed inputs: test only the directions they resolve.
-        left, sv22, right_t = np.linalg.svd(r22)
-        rank = int(np.sum(sv22 > rank_tolerance(m, n_lags) * sv22[0]))
-        coords = left.T @ r2y
-        explained = float(coords[:rank] @ coords[:rank])
-        rss = float(coords[rank:] @ coords[rank:] + r_factor[-1, -1] ** 2)
-        b = right_t[:rank].T @ (coords[:rank] / sv22[:rank])     # minimum-norm coefficients
-        if rank == 0:
-            raise DimensionError(f"`u` delayed by -{max_lag}..{max_lag} is numerically zero over "
-                                 "the record: there is nothing to test.")
+    rank, explained, rss, b = _delayed_input_fit(r_factor, k, n_lags, m, max_lag)
     dof_den = m - k - rank
     q = dof_den * explained / rss if rss > 0 else float("inf")
     pval = float(stats.f.sf(q / rank, rank, dof_den))
