@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _linalg
+from .._linalg import inverse_gram_triangular, triangular
 from .._validation import check_array, check_int, check_random_state, check_scalar
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
@@ -209,7 +209,7 @@ def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
                 yield b.jacobian(linear, nonlinear)
 
         # The information is R^T R / (n_realizations sigma2), R the triangle of the stacked G.
-        root = _linalg.triangular(jacobians(), n)
+        root = triangular(jacobians(), n)
         n_rows = n_realizations * u.shape[0]
         variance = n_realizations * sigma2
     else:
@@ -247,7 +247,7 @@ def _inverse(root, n_rows, variance, names):
     The information matrix is ``A^T A / variance``; it is inverted from the equilibrated,
     pivoted QR of ``root`` (:func:`fohw._linalg.inverse_gram_triangular`), never formed.
     """
-    inverse, fac = _linalg.inverse_gram_triangular(root, n_rows)
+    inverse, fac = inverse_gram_triangular(root, n_rows)
     if inverse is None:
         dependent = ", ".join(names[i] for i in fac.dependent)
         raise ParameterError("the Fisher information is singular: the parameters "
