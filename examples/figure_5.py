@@ -7,7 +7,7 @@ Writes figure_5.png to --outdir.
 
 import sys
 
-from fohw.paper.reproduction import example_main
+from fohw.paper.table2 import main
 
 if __name__ == "__main__":
-    sys.exit(example_main(("figure_5",), __doc__.splitlines()[0]))
+    sys.exit(main(("figure_5",), __doc__.splitlines()[0]))

@@ -16,7 +16,7 @@ lambda against the printed Table 2). Also `fohw reproduce forgetting`.
 
 import sys
 
-from fohw.paper.reproduction import forgetting_main
+from fohw.paper.forgetting import main
 
 if __name__ == "__main__":
-    sys.exit(forgetting_main(description=__doc__.splitlines()[0]))
+    sys.exit(main(description=__doc__.splitlines()[0]))

@@ -12,7 +12,7 @@ claims appear (see examples/forgetting_map.py and docs/reproduction.md).
 
 import sys
 
-from fohw.paper.reproduction import OUTPUTS, example_main
+from fohw.paper.table2 import OUTPUTS, main
 
 if __name__ == "__main__":
-    sys.exit(example_main(OUTPUTS, __doc__.splitlines()[0]))
+    sys.exit(main(OUTPUTS, __doc__.splitlines()[0]))

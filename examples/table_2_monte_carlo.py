@@ -20,7 +20,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from fohw.paper.reproduction import monte_carlo_table2, paper_table2  # noqa: E402
+from fohw.paper.common import paper_table2  # noqa: E402
+from fohw.paper.table2 import monte_carlo_table2  # noqa: E402
 
 
 def main(argv=None):

@@ -11,14 +11,14 @@ import pytest
 
 import fohw
 from fohw.cli import main
-from fohw.paper import reproduction as rep
+from fohw.paper import forgetting, table2
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
 
 def _table2_csv(tmp_path, name, *extra):
     out = tmp_path / name
-    assert rep.example_main(("table_2",), "test", ["--outdir", str(out), "--fast", *extra]) == 0
+    assert table2.main(("table_2",), "test", ["--outdir", str(out), "--fast", *extra]) == 0
     return (out / "table_2.csv").read_text(), (out / "table_2.md").read_text()
 
 
@@ -33,8 +33,8 @@ def test_forgetting_one_is_the_paper_bit_for_bit(tmp_path, default_table):
     one_csv, one_md = _table2_csv(tmp_path, "one", "--forgetting", "1")
     assert one_csv == default_csv and one_md == default_md
     # and the runs themselves, not only their 17-digit text
-    a = rep.run_paper_example(400, innovation_lengths=(3,), baselines=False)
-    b = rep.run_paper_example(400, innovation_lengths=(3,), baselines=False, forgetting=1.0)
+    a = table2.run_paper_example(400, innovation_lengths=(3,), baselines=False)
+    b = table2.run_paper_example(400, innovation_lengths=(3,), baselines=False, forgetting=1.0)
     assert np.array_equal(a.hybrid[3].theta_history, b.hybrid[3].theta_history)
     assert np.array_equal(a.hybrid[3].alpha_sample_history, b.hybrid[3].alpha_sample_history)
 
@@ -58,22 +58,22 @@ def test_forgetting_below_one_changes_the_run_and_says_so(tmp_path, default_tabl
 @pytest.mark.parametrize("bad", ["0", "1.5", "-0.2"])
 def test_example_rejects_a_forgetting_factor_outside_0_1(bad, tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
-        rep.example_main(("table_2",), "test", ["--outdir", str(tmp_path), "--forgetting", bad])
+        table2.main(("table_2",), "test", ["--outdir", str(tmp_path), "--forgetting", bad])
     assert exc.value.code == 2
     assert "--forgetting must be in (0, 1]" in capsys.readouterr().err
 
 
 def test_cli_forwards_forgetting_and_wires_the_map(monkeypatch, tmp_path):
     calls = []
-    monkeypatch.setattr(rep, "example_main", lambda which, desc, argv: calls.append(
+    monkeypatch.setattr(table2, "main", lambda which, desc, argv: calls.append(
         ("table", which, argv)) or 0)
-    monkeypatch.setattr(rep, "forgetting_main", lambda argv, desc: calls.append(
+    monkeypatch.setattr(forgetting, "main", lambda argv, desc: calls.append(
         ("map", argv)) or 0)
     out = str(tmp_path)
     assert main(["reproduce", "table2", "--outdir", out, "--forgetting", "0.95"]) == 0
     assert main(["reproduce", "table2", "--outdir", out]) == 0
     assert main(["reproduce", "forgetting", "--outdir", out, "--fast"]) == 0
-    assert calls[0] == ("table", rep.OUTPUTS,
+    assert calls[0] == ("table", table2.OUTPUTS,
                         ["--outdir", out, "--seed", "0", "--forgetting", "0.95"])
     assert "--forgetting" not in calls[1][2]           # the default is not even passed on
     assert calls[2] == ("map", ["--outdir", out, "--fast"])
@@ -93,7 +93,7 @@ def test_cli_forgetting_misuse_is_a_one_line_error(argv, message, capsys):
 def test_map_rows_are_the_runs_they_name():
     # Recursive: the estimate after sample k of one pass. Iterative: a run on the first k
     # samples. Both recomputed here through fohw.identify directly.
-    rows, curves = rep.forgetting_map([3], 400, forgetting=(1.0, 0.9), innovation_lengths=(1, 2),
+    rows, curves = forgetting.forgetting_map([3], 400, forgetting=(1.0, 0.9), innovation_lengths=(1, 2),
                                       schedules=("recursive", "iterative"),
                                       checkpoints=(200, 400), max_iter=3, curve_step=100)
     assert len(rows) == 2 * 2 * 2 * 2
@@ -122,7 +122,7 @@ def test_p_comparison_counts_paired_seeds():
     rows = [dict(schedule="recursive", forgetting=0.9, k=10, seed=s, P=P, delta=d)
             for s, d1, d5 in [(0, 0.5, 0.4), (1, 0.5, 0.7), (2, 0.6, 0.3)]
             for P, d in ((1, d1), (5, d5))]
-    out = rep.forgetting_p_comparison(rows)
+    out = forgetting.forgetting_p_comparison(rows)
     entry = out[("recursive", 0.9, 10)]
     assert (entry["wins"], entry["n"]) == (2, 3)
     assert entry["median_difference"] == pytest.approx(0.1)

@@ -171,11 +171,12 @@ def test_non_finite_iterates_raise_instead_of_clamping():
 
 
 @pytest.mark.parametrize("module", ["fohw.paper.robot_arm", "fohw.paper.accuracy",
-                                    "fohw.paper.reproduction", "fohw.cli"])
+                                    "fohw.paper.table2", "fohw.paper.forgetting",
+                                    "fohw.cli"])
 def test_library_code_leaves_the_matplotlib_backend_alone(module, tmp_path):
     code = ("import matplotlib; matplotlib.use('svg'); import importlib; "
             f"importlib.import_module({module!r}); "
-            "from fohw.paper.reproduction import run_paper_example, write_outputs; "
+            "from fohw.paper.table2 import run_paper_example, write_outputs; "
             "import warnings; warnings.simplefilter('ignore'); "
             f"write_outputs(run_paper_example(300), {str(tmp_path)!r}, ['figure_3']); "
             "print(matplotlib.get_backend())")

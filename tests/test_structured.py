@@ -302,3 +302,13 @@ def test_output_error_standard_errors_are_those_of_the_free_run_sensitivity():
     resid = y - simulate_parameters(s, r.linear, r.nonlinear, u)
     cov = resid @ resid / (400 - 11) * np.linalg.inv(S.T @ S)
     np.testing.assert_allclose(np.sqrt(np.diag(r.covariance)), np.sqrt(np.diag(cov)), rtol=1e-5)
+
+
+def test_crb_names_the_parameters_of_a_singular_information():
+    # b = 0: the input nonlinearity's p2 has no effect on the output, in either noise model.
+    model = fohw.HammersteinWiener([0.3, 0.2], [0.0, 0.0], [1.0, 0.5], [1.0], 0.5)
+    u = np.random.default_rng(0).uniform(-1, 1, 300)
+    with pytest.raises(fohw.ParameterError, match="singular: the parameters p2 are not"):
+        fohw.crb(model, u, 0.01, parametrisation="structured", random_state=0)
+    with pytest.raises(fohw.ParameterError, match="Fisher information is singular"):
+        fohw.crb(model, u, 0.01, parametrisation="structured", noise="output")

@@ -54,6 +54,15 @@ class Factor:
         return float(d[0] / d[self.rank - 1]) if self.rank else np.inf
 
 
+def rank_tolerance(n_rows, n_cols):
+    """Relative tolerance of every rank decision: ``max(n_rows, n_cols) * eps``.
+
+    The default ``rcond`` of :func:`factor` and the singular-value tolerance of
+    ``numpy.linalg.matrix_rank`` for an ``n_rows x n_cols`` matrix.
+    """
+    return max(n_rows, n_cols) * np.finfo(float).eps
+
+
 def factor(a, *, rcond=None, with_q=True) -> Factor:
     """Equilibrate the columns of ``a`` and factor it by QR with column pivoting.
 
@@ -67,7 +76,7 @@ def factor(a, *, rcond=None, with_q=True) -> Factor:
     n_rows, n_cols = a.shape
     scale = _column_scale(a)
     if rcond is None:
-        rcond = max(n_rows, n_cols) * np.finfo(float).eps
+        rcond = rank_tolerance(n_rows, n_cols)
     if with_q:
         q, r, perm = scipy.linalg.qr(a / scale, mode="economic", pivoting=True,
                                      check_finite=False)
@@ -144,6 +153,65 @@ def triangular(blocks, n_cols):
     return _qr_r(np.vstack(pieces) if pieces else np.zeros((0, n_cols)), n_cols)
 
 
+def triangular_factor(rows, n_rows, n_cols, *, block=8192):
+    """Upper-triangular ``R`` with ``A^T A = R^T R``, ``A``'s rows read by ``rows(start, stop)``.
+
+    The matrix is never held whole. The Cholesky factor of the column-scaled Gram matrix is
+    used when it is well conditioned (estimated reciprocal condition number above 1e-4, so
+    ``cond(A) <~ 1e4`` and the squared condition number costs at most about 8 digits);
+    otherwise ``R`` comes from Householder QR over row blocks (:func:`triangular`), which keeps
+    the accuracy of ill-conditioned problems (nearly noise-free records).
+
+    Parameters
+    ----------
+    rows : callable
+        ``rows(start, stop)`` returns rows ``start..stop-1`` of ``A``, shape
+        ``(stop - start, n_cols)``; it is called twice per block when the Gram matrix is
+        ill-conditioned.
+    n_rows, n_cols : int
+        Shape of ``A``.
+    block : int, optional
+        Rows read at a time.
+
+    Returns
+    -------
+    ndarray, shape (n_cols, n_cols)
+    """
+    gram = np.zeros((n_cols, n_cols))
+    for start in range(0, n_rows, block):
+        a = rows(start, min(start + block, n_rows))
+        gram += a.T @ a
+    scale = np.sqrt(np.diag(gram))
+    if np.all(scale > 0):
+        try:
+            r = np.linalg.cholesky(gram / np.outer(scale, scale)).T
+        except np.linalg.LinAlgError:
+            r = None
+        if r is not None:
+            rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
+            if info == 0 and rcond > 1e-4:
+                return r * scale
+    return triangular((rows(start, min(start + block, n_rows))
+                       for start in range(0, n_rows, block)), n_cols)
+
+
+def full_column_rank(r, n_rows, *, fast_only=False):
+    """Whether the triangular factor ``r`` of an ``n_rows``-row matrix has full column rank.
+
+    A cheap LAPACK estimate of the reciprocal condition number settles the usual case
+    (``> 1e-8``); otherwise the singular values are compared with :func:`rank_tolerance`
+    (``numpy.linalg.matrix_rank``'s), or, with ``fast_only``, ``False`` is returned for the
+    caller to decide itself.
+    """
+    rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
+    if info == 0 and rcond > 1e-8:
+        return True
+    if fast_only:
+        return False
+    sv = np.linalg.svd(r, compute_uv=False)
+    return bool(sv[-1] > rank_tolerance(n_rows, r.shape[1]) * sv[0])
+
+
 def _qr_r(a, n_cols):
     """Upper triangle ``R`` (``n_cols`` rows, zero-padded) of the unpivoted QR of ``a``."""
     r = np.zeros((n_cols, n_cols))
@@ -170,7 +238,7 @@ def factor_triangular(r, n_rows, *, rcond=None) -> Factor:
     """
     n_cols = np.shape(r)[1]
     if rcond is None:
-        rcond = max(n_rows, n_cols) * np.finfo(float).eps
+        rcond = rank_tolerance(n_rows, n_cols)
     return factor(r, rcond=rcond)
 
 

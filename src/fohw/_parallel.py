@@ -12,7 +12,7 @@ from concurrent.futures import Executor
 
 from .exceptions import ParameterError
 
-__all__ = ["run_tasks"]
+__all__ = ["run_tasks", "progress_bar"]
 
 
 class TaskError:
@@ -23,18 +23,70 @@ class TaskError:
         self.message = f"{type(exc).__name__}: {exc}"
 
 
-def _progress_bar(total, label, enabled):
+def progress_bar(total, label, enabled=None):
+    """Progress on stderr: a bar over ``total`` steps, or stage messages (``total=None``).
+
+    Parameters
+    ----------
+    total : int or None
+        Steps of the bar (tqdm if installed, else a plain ``label: i/total`` counter); ``None``
+        for stage messages only (:meth:`write`).
+    label : str
+        Shown beside the count and before every message (``label: message``).
+    enabled : bool, optional
+        Default (None): only when stderr is a terminal, never in pipes, files or tests.
+
+    Returns
+    -------
+    object
+        With ``update(n=1)``, ``write(message)`` and ``close()``; they do nothing when
+        disabled.
+    """
+    if enabled is None:
+        enabled = sys.stderr.isatty()
     if not enabled:
-        return None
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
-        return _Counter(total, label)
-    return tqdm(total=total, desc=label, file=sys.stderr)
+        return _Silent()
+    if total is not None:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            pass
+        else:
+            return _Tqdm(tqdm(total=total, desc=label, file=sys.stderr), label)
+    return _Counter(total, label)
+
+
+class _Silent:
+    """A disabled progress display."""
+
+    def update(self, n=1):
+        pass
+
+    def write(self, message):
+        pass
+
+    def close(self):
+        pass
+
+
+class _Tqdm:
+    """A tqdm bar whose messages go to stderr above it."""
+
+    def __init__(self, bar, label):
+        self.bar, self.label = bar, label
+
+    def update(self, n=1):
+        self.bar.update(n)
+
+    def write(self, message):
+        self.bar.write(f"{self.label}: {message}", file=sys.stderr)
+
+    def close(self):
+        self.bar.close()
 
 
 class _Counter:
-    """A plain ``label: i/total`` counter on stderr (when tqdm is not installed)."""
+    """A plain ``label: i/total`` counter and ``label: message`` lines on stderr."""
 
     def __init__(self, total, label):
         self.total, self.label, self.n = total, label, 0
@@ -43,8 +95,14 @@ class _Counter:
         self.n += n
         print(f"\r{self.label}: {self.n}/{self.total}", end="", file=sys.stderr, flush=True)
 
+    def write(self, message):
+        if self.n:                                    # below the counter's line
+            print(file=sys.stderr)
+        print(f"{self.label}: {message}", file=sys.stderr, flush=True)
+
     def close(self):
-        print(file=sys.stderr, flush=True)
+        if self.total is not None:
+            print(file=sys.stderr, flush=True)
 
 
 def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
@@ -75,16 +133,13 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
         raise ParameterError("`executor` must be a concurrent.futures.Executor (e.g. a "
                              "ProcessPoolExecutor, or dask's Client.get_executor()) or None; "
                              f"got {type(executor).__name__}.")
-    if progress is None:
-        progress = sys.stderr.isatty()
-    bar = _progress_bar(len(tasks), label, progress)
+    bar = progress_bar(len(tasks), label, progress)
     out = []
     try:
         if executor is None:
             for task in tasks:
                 out.append(fn(*task))
-                if bar is not None:
-                    bar.update(1)
+                bar.update(1)
             return out
         futures = []
         for task in tasks:
@@ -100,9 +155,7 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
                     out.append(future.result())
                 except Exception as exc:      # the executor's failure, not fn's
                     out.append(TaskError(exc))
-            if bar is not None:
-                bar.update(1)
+            bar.update(1)
         return out
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()

@@ -52,8 +52,9 @@ class _Parser(argparse.ArgumentParser):
 
 def _progress(message):
     """A status line on stderr when it is a terminal (never in pipes, files or tests)."""
-    if sys.stderr.isatty():
-        print(f"fohw: {message}", file=sys.stderr, flush=True)
+    from ._parallel import progress_bar
+
+    progress_bar(None, "fohw").write(message)
 
 
 def read_table(path, decimal="."):
@@ -536,7 +537,7 @@ def _simulate(args):
 def _reproduce(args):
     _check_outdir(args.outdir)
     if args.what in _REPRODUCE:
-        from .paper.reproduction import example_main
+        from .paper.table2 import main as example_main
 
         forwarded = ["--outdir", args.outdir, "--seed", str(args.seed)]
         if args.fast:
@@ -550,7 +551,7 @@ def _reproduce(args):
         raise UsageError(f"--forgetting applies to table2 and figures, not to {args.what}.")
     forwarded = ["--outdir", args.outdir] + (["--fast"] if args.fast else [])
     if args.what == "forgetting":
-        from .paper.reproduction import forgetting_main
+        from .paper.forgetting import main as forgetting_main
 
         return forgetting_main(forwarded, "fohw reproduce forgetting")
     if args.what == "robot-arm":

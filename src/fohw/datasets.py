@@ -14,7 +14,7 @@ import numpy as np
 
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
-from .io.text import _number
+from .io.text import parse_number
 from .model.system import HammersteinWiener, simulate
 from .record import Benchmark, Record
 
@@ -182,7 +182,7 @@ def _parse_daisy(path, *, n_columns=None):
             if not text or text[0] in "%#":
                 continue
             fields = text.split()
-            values = [_number(f) for f in fields]
+            values = [parse_number(f) for f in fields]
             if None in values:
                 bad = fields[values.index(None)]
                 raise DataFileError(f"{path}: line {lineno}: {bad!r} is not a number.")

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._linalg import inverse_gram_triangular, triangular
 from .._validation import check_array, check_int, check_random_state, check_scalar
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
@@ -152,8 +153,9 @@ def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
     Raises
     ------
     ParameterError
-        An unknown ``parametrisation`` or ``noise``, or ``n_realizations``/``random_state``
-        with ``noise="output"``.
+        An unknown ``parametrisation`` or ``noise``, ``n_realizations``/``random_state``
+        with ``noise="output"``, or a singular Fisher information (the message names the
+        parameters that the model and input leave unidentifiable).
     SimulationDivergedError
         A realisation (or the noise-free run) escaped to infinity.
 
@@ -163,6 +165,8 @@ def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
     one-step predictor ``Phi(alpha) theta`` (Eq. 19). Output noise: ``S^T S / sigma^2``, ``S``
     the sensitivity of the noise-free simulation. Structured: ``G M`` (or ``S M``) with ``M``
     the derivative of ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20) with respect to ``(a, b, p, q)``.
+    The information matrix is never formed: the bound is inverted from the equilibrated,
+    pivoted QR of the stacked ``G`` (or ``S``, times ``M``) (:mod:`fohw._linalg`).
 
     Examples
     --------
@@ -196,31 +200,35 @@ def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
                                    "n_realizations", minimum=1)
         rng = check_random_state(random_state)
         n = linear.shape[0] + nonlinear.shape[0]
-        info = np.zeros((n, n))
-        for _ in range(n_realizations):
-            v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
-            y = simulate(model, u, noise=v)
-            b = RegressorBuilder(u - u0, y - y0, structure=structure)
-            g = b.jacobian(linear, nonlinear)
-            info += g.T @ g
-        info /= n_realizations * sigma2
+
+        def jacobians():
+            for _ in range(n_realizations):
+                v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
+                y = simulate(model, u, noise=v)
+                b = RegressorBuilder(u - u0, y - y0, structure=structure)
+                yield b.jacobian(linear, nonlinear)
+
+        # The information is R^T R / (n_realizations sigma2), R the triangle of the stacked G.
+        root = triangular(jacobians(), n)
+        n_rows = n_realizations * u.shape[0]
+        variance = n_realizations * sigma2
     else:
         for name, value in (("n_realizations", n_realizations), ("random_state", random_state)):
             if value is not None:
                 raise ParameterError(f"`{name}` is not used with noise='output' (the bound is "
                                      f"deterministic: no noise realisations); got {value!r}.")
         n_realizations = 0
-        _, sens = simulation_jacobian(structure, linear, nonlinear, u - u0)
-        info = sens.T @ sens / sigma2
+        _, root = simulation_jacobian(structure, linear, nonlinear, u - u0)   # S
+        n_rows, variance = u.shape[0], sigma2
     names = structure.linear_names + structure.nonlinear_names
     if parametrisation == "structured":
         x = np.r_[model.a, model.b, model.p[1:], model.q[1:], linear[n_theta:], nonlinear]
         M = structure.structured_jacobian(x)
-        cov = _inverse(M.T @ info @ M)
+        cov = _inverse(root @ M, n_rows, variance, structure.structured_names)
         full = M @ cov @ M.T
         names = structure.structured_names
     else:
-        cov = full = _inverse(info)
+        cov = full = _inverse(root, n_rows, variance, names)
     theta_cov = full[:n_theta, :n_theta]
     free = structure.orders.free
     alpha_std = float(np.sqrt(cov[names.index(free[0]), names.index(free[0])])) if free \
@@ -233,7 +241,16 @@ def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
                      theta_covariance=theta_cov)
 
 
-def _inverse(info):
-    """Inverse of a symmetric information matrix, symmetrised."""
-    cov = np.linalg.inv(info)
+def _inverse(root, n_rows, variance, names):
+    """``variance (A^T A)^{-1}``, symmetrised, with ``A = Q root`` of ``n_rows`` rows.
+
+    The information matrix is ``A^T A / variance``; it is inverted from the equilibrated,
+    pivoted QR of ``root`` (:func:`fohw._linalg.inverse_gram_triangular`), never formed.
+    """
+    inverse, fac = inverse_gram_triangular(root, n_rows)
+    if inverse is None:
+        dependent = ", ".join(names[i] for i in fac.dependent)
+        raise ParameterError("the Fisher information is singular: the parameters "
+                             f"{dependent} are not identifiable from this model and input.")
+    cov = variance * inverse
     return 0.5 * (cov + cov.T)

@@ -14,11 +14,12 @@ import numpy as np
 import scipy.linalg
 from scipy import stats
 
+from .._linalg import full_column_rank, rank_tolerance, triangular_factor
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
 
-__all__ = ["fit_percent", "error_range", "rmse", "whiteness_test", "cross_correlation_test",
-           "CorrelationTest"]
+__all__ = ["fit_percent", "error_range", "rmse", "aic", "bic", "whiteness_test",
+           "cross_correlation_test", "CorrelationTest"]
 
 
 def _pair(y, yhat, n_init):
@@ -84,6 +85,33 @@ def rmse(y, yhat, *, n_init=0):
     """Root-mean-square error after the start-up window."""
     y, yhat = _pair(y, yhat, n_init)
     return _norm(y - yhat) / float(np.sqrt(y.shape[0]))
+
+
+def aic(mean_squared_error, n_samples, n_params):
+    """Akaike's information criterion ``N ln V + 2 d`` of a least-squares fit.
+
+    Parameters
+    ----------
+    mean_squared_error : float
+        ``V``: the fit's criterion per sample (the one-step ``J`` of Eq. 41, or the mean
+        squared simulation error of an output-error fit), ``> 0``.
+    n_samples : int
+        ``N``: samples the fit used.
+    n_params : int
+        ``d``: estimated parameters (linear and nonlinear).
+
+    Examples
+    --------
+    >>> from fohw.analysis.metrics import aic, bic
+    >>> round(aic(0.01, 1000, 9), 2), round(bic(0.01, 1000, 9), 2)
+    (-4587.17, -4543.0)
+    """
+    return float(n_samples * np.log(mean_squared_error) + 2 * n_params)
+
+
+def bic(mean_squared_error, n_samples, n_params):
+    """The Bayesian (Schwarz) information criterion ``N ln V + d ln N``; see :func:`aic`."""
+    return float(n_samples * np.log(mean_squared_error) + n_params * np.log(n_samples))
 
 
 @dataclass(frozen=True)
@@ -291,54 +319,62 @@ def _levinson_durbin(x, max_order):
     return np.array(variances)
 
 
-def _r_factor(rows, n_rows, n_cols, block=8192):
-    """Upper-triangular ``R`` with ``A^T A = R^T R`` for the matrix whose rows ``rows(i, j)`` returns.
+def _check_cross_correlation_args(residuals, u, max_lag, confidence, n_init, prewhiten_order):
+    """Checked ``(e, u)`` after ``n_init``, ``max_lag``, ``confidence`` and the largest AR order."""
+    e = check_array(residuals, "residuals")
+    u = check_array(u, "u")
+    check_same_length(e, u, "residuals", "u")
+    n_init = check_int(n_init, "n_init", minimum=0)
+    if n_init > e.shape[0] - 3:
+        raise DimensionError(f"`n_init` must leave at least 3 samples; got n_init={n_init} for "
+                             f"{e.shape[0]} samples.")
+    e, u = e[n_init:], u[n_init:]
+    n = e.shape[0]
+    max_lag = check_int(max_lag, "max_lag", minimum=0)
+    confidence = _check_confidence(confidence)
+    if prewhiten_order is None:
+        order_cap = min(int(np.floor(10 * np.log10(n))), n // 10)
+    else:
+        order_cap = check_int(prewhiten_order, "prewhiten_order", minimum=0)
+    n_lags = 2 * max_lag + 1
+    if n_lags + 2 * order_cap + 2 > n:
+        what = ("the largest prewhitening order" if prewhiten_order is None else
+                "`prewhiten_order`")
+        raise ParameterError(
+            f"`max_lag` = {max_lag} is too large for {n} samples after `n_init`: the test needs "
+            f"2 * max_lag + 1 + 2 p + 2 <= {n} with p = {order_cap} ({what}), i.e. max_lag <= "
+            f"{(n - 2 * order_cap - 3) // 2}.")
+    _check_not_constant(e, "residuals")
+    _check_not_constant(u, "u")
+    return e, u, max_lag, confidence, order_cap
 
-    The matrix is never held whole. The Cholesky factor of the column-scaled Gram matrix is
-    used when it is well conditioned (estimated reciprocal condition number above 1e-4, so
-    ``cond(A) <~ 1e4`` and the squared condition number costs at most about 8 digits);
-    otherwise ``R`` comes from Householder QR accumulated over row blocks, which keeps the
-    accuracy of ill-conditioned problems (nearly noise-free records).
+
+def _delayed_input_fit(r_factor, k, n_lags, m, max_lag):
+    """The delayed inputs' part of the regression: ``(rank, explained, rss, b)``.
+
+    The intercept and past residuals (the first ``k`` columns) are projected out: ``R22``, with
+    the part of ``e(t)`` along the delayed inputs in ``r2y`` and the remaining residual in
+    ``r_yy``. ``b`` are the delayed inputs' coefficients (minimum norm if they are
+    numerically dependent; then only the directions they resolve are tested).
     """
-    gram = np.zeros((n_cols, n_cols))
-    for start in range(0, n_rows, block):
-        a = rows(start, min(start + block, n_rows))
-        gram += a.T @ a
-    scale = np.sqrt(np.diag(gram))
-    if np.all(scale > 0):
-        try:
-            r = np.linalg.cholesky(gram / np.outer(scale, scale)).T
-        except np.linalg.LinAlgError:
-            r = None
-        if r is not None:
-            rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
-            if info == 0 and rcond > 1e-4:
-                return r * scale
-    r = np.zeros((0, n_cols))
-    for start in range(0, n_rows, block):
-        r = np.linalg.qr(np.vstack([r, rows(start, min(start + block, n_rows))]), mode="r")
-    return r
-
-
-def _rank_tol(n_rows, n_cols):
-    """Relative singular-value tolerance of ``numpy.linalg.matrix_rank``."""
-    return max(n_rows, n_cols) * np.finfo(float).eps
-
-
-def _full_rank(r, n_rows, *, fast_only=False):
-    """Whether the triangular factor ``r`` of an ``n_rows``-row matrix has full column rank.
-
-    A cheap LAPACK estimate of the reciprocal condition number settles the usual case
-    (``> 1e-8``); otherwise the singular values are compared with ``matrix_rank``'s tolerance
-    (or, with ``fast_only``, ``False`` is returned for the caller to do that itself).
-    """
-    rcond, info = scipy.linalg.lapack.dtrcon(r, norm="1", uplo="U")
-    if info == 0 and rcond > 1e-8:
-        return True
-    if fast_only:
-        return False
-    sv = np.linalg.svd(r, compute_uv=False)
-    return bool(sv[-1] > _rank_tol(n_rows, r.shape[1]) * sv[0])
+    r22 = r_factor[k:k + n_lags, k:k + n_lags]
+    r2y = r_factor[k:k + n_lags, -1]
+    if full_column_rank(r22, m, fast_only=True):
+        rank = n_lags
+        explained = float(r2y @ r2y)
+        rss = float(r_factor[-1, -1] ** 2)
+        b = scipy.linalg.solve_triangular(r22, r2y)
+        return rank, explained, rss, b
+    left, sv22, right_t = np.linalg.svd(r22)
+    rank = int(np.sum(sv22 > rank_tolerance(m, n_lags) * sv22[0]))
+    coords = left.T @ r2y
+    explained = float(coords[:rank] @ coords[:rank])
+    rss = float(coords[rank:] @ coords[rank:] + r_factor[-1, -1] ** 2)
+    b = right_t[:rank].T @ (coords[:rank] / sv22[:rank])     # minimum-norm coefficients
+    if rank == 0:
+        raise DimensionError(f"`u` delayed by -{max_lag}..{max_lag} is numerically zero over "
+                             "the record: there is nothing to test.")
+    return rank, explained, rss, b
 
 
 def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=0,
@@ -461,32 +497,10 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     >>> res.passed, res.dof, res.p_value < 1e-6, int(res.lags[np.argmax(res.correlation)])
     (False, 51, True, 2)
     """
-    e = check_array(residuals, "residuals")
-    u = check_array(u, "u")
-    check_same_length(e, u, "residuals", "u")
-    n_init = check_int(n_init, "n_init", minimum=0)
-    if n_init > e.shape[0] - 3:
-        raise DimensionError(f"`n_init` must leave at least 3 samples; got n_init={n_init} for "
-                             f"{e.shape[0]} samples.")
-    e, u = e[n_init:], u[n_init:]
+    e, u, max_lag, confidence, order_cap = _check_cross_correlation_args(
+        residuals, u, max_lag, confidence, n_init, prewhiten_order)
     n = e.shape[0]
-    max_lag = check_int(max_lag, "max_lag", minimum=0)
-    confidence = _check_confidence(confidence)
-    if prewhiten_order is None:
-        order_cap = min(int(np.floor(10 * np.log10(n))), n // 10)
-    else:
-        order_cap = check_int(prewhiten_order, "prewhiten_order", minimum=0)
     n_lags = 2 * max_lag + 1
-    if n_lags + 2 * order_cap + 2 > n:
-        what = ("the largest prewhitening order" if prewhiten_order is None else
-                "`prewhiten_order`")
-        raise ParameterError(
-            f"`max_lag` = {max_lag} is too large for {n} samples after `n_init`: the test needs "
-            f"2 * max_lag + 1 + 2 p + 2 <= {n} with p = {order_cap} ({what}), i.e. max_lag <= "
-            f"{(n - 2 * order_cap - 3) // 2}.")
-    _check_not_constant(e, "residuals")
-    _check_not_constant(u, "u")
-
     if prewhiten_order is None:
         variances = _levinson_durbin(e, order_cap)
         p = int(np.argmin(n * np.log(variances) + 2 * np.arange(variances.shape[0])))
@@ -501,35 +515,16 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     past = np.lib.stride_tricks.sliding_window_view(e, p + 1)[:, ::-1]       # [e(t), .., e(t-p)]
     padded = np.r_[np.zeros(max_lag), z, np.zeros(max_lag)]
     delayed = np.lib.stride_tricks.sliding_window_view(padded, n_lags)[p:, ::-1]
-    r_factor = _r_factor(lambda start, stop: np.column_stack(
+    r_factor = triangular_factor(lambda start, stop: np.column_stack(
         [np.ones(stop - start), past[start:stop, 1:], delayed[start:stop], past[start:stop, 0]]),
         m, k + n_lags + 1)
     r11 = r_factor[:k, :k]
-    if not _full_rank(r11, m):
+    if not full_column_rank(r11, m):
         raise DimensionError(
             f"the {p} past `residuals` of the whitening filter are linearly dependent (the "
             "residuals are predicted exactly by their own past); use a smaller "
             "`prewhiten_order`.")
-    # The delayed inputs after the intercept and past residuals are projected out: R22, with
-    # the part of e(t) along them in r2y and the remaining residual in r_yy.
-    r22 = r_factor[k:k + n_lags, k:k + n_lags]
-    r2y = r_factor[k:k + n_lags, -1]
-    if _full_rank(r22, m, fast_only=True):
-        rank = n_lags
-        explained = float(r2y @ r2y)
-        rss = float(r_factor[-1, -1] ** 2)
-        b = scipy.linalg.solve_triangular(r22, r2y)
-    else:
-        # Numerically dependent delayed inputs: test only the directions they resolve.
-        left, sv22, right_t = np.linalg.svd(r22)
-        rank = int(np.sum(sv22 > _rank_tol(m, n_lags) * sv22[0]))
-        coords = left.T @ r2y
-        explained = float(coords[:rank] @ coords[:rank])
-        rss = float(coords[rank:] @ coords[rank:] + r_factor[-1, -1] ** 2)
-        b = right_t[:rank].T @ (coords[:rank] / sv22[:rank])     # minimum-norm coefficients
-        if rank == 0:
-            raise DimensionError(f"`u` delayed by -{max_lag}..{max_lag} is numerically zero over "
-                                 "the record: there is nothing to test.")
+    rank, explained, rss, b = _delayed_input_fit(r_factor, k, n_lags, m, max_lag)
     dof_den = m - k - rank
     q = dof_den * explained / rss if rss > 0 else float("inf")
     pval = float(stats.f.sf(q / rank, rank, dof_den))

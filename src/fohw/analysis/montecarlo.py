@@ -17,17 +17,16 @@ cluster: point a dask client at a running scheduler and pass its executor (``pip
 
 from __future__ import annotations
 
-import sys
 import time
 import warnings
 
 import numpy as np
 
-from .._parallel import TaskError, _progress_bar, run_tasks
+from .._parallel import TaskError, progress_bar, run_tasks
 from .._threads import thin_solves
 from ..datasets import paper_example
-from ..estimators.identify import identify
-from ..exceptions import ConvergenceWarning, FohwError, ParameterError, SimulationDivergedError
+from ..exceptions import FohwError, ParameterError, SimulationDivergedError
+from .batch import identify_quietly
 
 __all__ = ["monte_carlo", "summarise"]
 
@@ -48,9 +47,7 @@ def _run_task(make_data, methods, seed, setting):
     theta = model.theta
     for name, options in methods.items():
         t0 = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            res = identify(data.u, data.y, **{**struct, **options})
+        res = identify_quietly(data.u, data.y, **{**struct, **options})
         rows.append(dict(seed=seed, **setting, method=name, alpha=res.alpha,
                          alpha_error=res.alpha - model.alpha,
                          delta=float(np.linalg.norm(res.theta - theta) / np.linalg.norm(theta)),
@@ -106,8 +103,6 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
     make_data = _paper_data if make_data is None else make_data
     tasks = [(seed, dict(setting)) for setting in settings for seed in seeds]
     calls = [(make_data, methods, seed, setting) for seed, setting in tasks]
-    if progress is None:
-        progress = sys.stderr.isatty()
     if executor is not None and n_jobs != 1:
         raise ParameterError("give `executor` or `n_jobs`, not both; got n_jobs="
                              f"{n_jobs!r} with an executor.")
@@ -135,17 +130,15 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
 
 def _joblib_tasks(joblib, calls, n_jobs, progress):
     """``[_run_task(*call) for call in calls]`` on joblib's workers, in order, with progress."""
-    bar = _progress_bar(len(calls), "monte_carlo", progress)
+    bar = progress_bar(len(calls), "monte_carlo", progress)
     out = []
     try:
         for part in joblib.Parallel(n_jobs=n_jobs, return_as="generator")(
                 joblib.delayed(_run_task)(*call) for call in calls):
             out.append(part)
-            if bar is not None:
-                bar.update(1)
+            bar.update(1)
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
     return out
 
 

@@ -28,7 +28,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_same_length
 from ..exceptions import ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
-from .metrics import fit_percent, rmse
+from .metrics import aic, bic, fit_percent, rmse
 
 __all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
 
@@ -129,8 +129,8 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
         criterion = (res.options.get("simulation_sse", np.nan) / n
                      if res.method == "output_error" else res.J)
         if np.isfinite(criterion) and criterion > 0:
-            row["aic"] = float(n * np.log(criterion) + 2 * d)
-            row["bic"] = float(n * np.log(criterion) + d * np.log(n))
+            row["aic"] = aic(criterion, n, d)
+            row["bic"] = bic(criterion, n, d)
         try:       # the simulator raises on any non-finite output, so ysim is finite
             ysim = res.simulate(u_sim)
         except SimulationDivergedError as exc:

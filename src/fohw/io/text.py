@@ -61,10 +61,16 @@ class Table:
     skipped: list = field(default_factory=list)
 
 
-def _number(text):
-    """A number as written in data files: ASCII, no digit separators.
+def parse_number(text):
+    """A number as written in data files (ASCII, no digit separators), or ``None``.
 
     ``float`` alone would take ``1_000`` and non-ASCII digits, which numpy's reader refuses.
+
+    Examples
+    --------
+    >>> from fohw.io.text import parse_number
+    >>> parse_number("-1.5e3"), parse_number("1_000"), parse_number("1,5")
+    (-1500.0, None, None)
     """
     if "_" in text or not text.isascii():
         return None
@@ -93,7 +99,7 @@ def _split(text, delimiter):
 
 def _header(fields, decimal):
     """The column names if no field of the line is a number (a header line), else None."""
-    if any(_number(_decimal(f, decimal)) is not None for f in fields if f):
+    if any(parse_number(_decimal(f, decimal)) is not None for f in fields if f):
         return None
     return [f.strip('"').strip("'") for f in fields]
 
@@ -229,7 +235,7 @@ def _field_error(path, lineno, value, column, decimal):
         return DataFileError(f"{path}: {where}column {column!r} has {what}; fohw does not fill "
                              "gaps: remove the row or fill it yourself.")
     hint = ""
-    if decimal == "." and _number(value.replace(",", ".")) is not None:
+    if decimal == "." and parse_number(value.replace(",", ".")) is not None:
         hint = (" It looks like a decimal comma: pass decimal=',' (fohw: --decimal-comma), "
                 "with columns separated by ';' or whitespace.")
     return DataFileError(f"{path}: {where}{value!r} is not a number{col}.{hint}")
@@ -262,7 +268,7 @@ def _read_lines(path, decimal):
                 names, header_line = _header(fields, decimal), lineno
                 continue
             # a second line without numbers: decimal commas, or a second header
-            commas = [f for f in fields if _number(f.replace(",", ".")) is not None]
+            commas = [f for f in fields if parse_number(f.replace(",", ".")) is not None]
             if commas and decimal == ".":
                 raise _field_error(path, lineno, commas[0], fields.index(commas[0]), decimal)
             if not all(f.lower() in MISSING for f in fields):
@@ -297,14 +303,14 @@ def _read_lines(path, decimal):
         if not filled:
             raise DataFileError(f"{path}: column {label!r} has a name but no values.")
         if filled == [0] and len(values) > 1:               # given once
-            value = _number(values[0])
+            value = parse_number(values[0])
             if value is None:
                 raise _field_error(path, linenos[0], cells[0][j], label, decimal)
             scalars[name if name else j] = value
             continue
         col = []
         for i, v in enumerate(values):
-            x = _number(v)
+            x = parse_number(v)
             if x is None:                       # an empty field included
                 raise _field_error(path, linenos[i], cells[i][j], label, decimal)
             if not np.isfinite(x):
