@@ -94,7 +94,7 @@ def fit_fractional_oe(u, y, n, f_basis, g_basis, lin):
                               n_f=len(fohw.as_basis(f_basis)))
     fits = [quiet(fohw.identify, u, y, **struct),
             quiet(fohw.identify, u, y, start=(linear_start(layout, lin), 1e-3), **struct)]
-    return min(fits, key=lambda r: r.options["simulation_sse"])
+    return min(fits, key=lambda r: r.details["simulation_sse"])
 
 
 def sim_fit(simulate, u, y, score):
