@@ -444,7 +444,7 @@ def save_result(result, path):
     >>> with tempfile.TemporaryDirectory() as d:
     ...     fohw.save_result(res, os.path.join(d, "r.json"))
     ...     back = fohw.load_result(os.path.join(d, "r.json"))
-    >>> back.alpha == res.alpha and (back.theta == res.theta).all()
+    >>> back.alpha == res.alpha and bool((back.theta == res.theta).all())
     True
     """
     if not isinstance(result, IdentificationResult):
