@@ -57,7 +57,7 @@ print("free-run fit %%: %.1f" % fohw.analysis.metrics.fit_percent(y_new, best.si
 # 7. Save and load (JSON, exact floats, never pickle).
 with tempfile.TemporaryDirectory() as folder:
     path = Path(folder) / "result.json"
-    best.to_json(path)
+    fohw.save_result(best, path)
     again = fohw.load_result(path)
     assert np.array_equal(again.theta, best.theta) and again.alpha == best.alpha
 print("saved and reloaded exactly")

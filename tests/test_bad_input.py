@@ -51,7 +51,7 @@ def _result_file(tmp, **change):
     import json
 
     path = tmp / "r.json"
-    _result().to_json(path)
+    fohw.save_result(_result(), path)
     d = json.loads(path.read_text())
     for key, value in change.items():
         if key.endswith("_0"):
@@ -266,14 +266,26 @@ API = [
     ("load_model", "#27 'version': \"1\" (a string)",
      lambda t: fohw.load_model(_model_file(t, version="1")),
      fohw.DataFileError, "field 'version' is the string '1'; this fohw reads fohw-model files of "
-     "version 1 or 2, written as a JSON integer"),
+     "version 2 or 3, written as a JSON integer"),
     ("load_model", "#15/#17 a directory", lambda t: fohw.load_model(t),
      fohw.DataFileError, "is a directory, not a fohw JSON file"),
     ("load_result", "#28 a NaN J", lambda t: fohw.load_result(_result_file(t, J=float("nan"))),
      fohw.DataFileError, "field 'J' must be a finite number >= 0; got nan"),
-    ("load_result", "#28 a NaN alpha",
-     lambda t: fohw.load_result(_result_file(t, alpha=float("nan"))),
-     fohw.DataFileError, "field 'alpha' must be a finite number or null; got nan"),
+    ("load_result", "#28 a NaN order",
+     lambda t: fohw.load_result(_result_file(t, orders={"alpha": float("nan")})),
+     fohw.DataFileError, "field 'orders' must be an object of finite numbers"),
+    ("load_result", "issue 28 #10: an order outside [0, 2]",
+     lambda t: fohw.load_result(_result_file(t, orders={"alpha": 2.5})),
+     fohw.DataFileError, "field 'orders': order 'alpha' is 2.5, outside [0, 2]"),
+    ("load_result", "issue 28 #10: a top-level alpha (not part of the format)",
+     lambda t: fohw.load_result(_result_file(t, alpha=0.1)),
+     fohw.DataFileError, "field 'alpha' is not part of a fohw-result file of version 3"),
+    ("load_result", "issue 28 #10: input_range reversed",
+     lambda t: fohw.load_result(_result_file(t, input_range=[1.0, -1.0])),
+     fohw.DataFileError, "field 'input_range' is reversed ([1.0, -1.0])"),
+    ("load_result", "issue 28 #10: an unknown method",
+     lambda t: fohw.load_result(_result_file(t, method="magic")),
+     fohw.DataFileError, "field 'method' must be one of fohw's methods"),
     ("load_result", "#28 'status': \"yes\"",
      lambda t: fohw.load_result(_result_file(t, status="yes")),
      fohw.DataFileError, "field 'status' must be one of [-2, -1, 0, 1, 2]"),
@@ -283,11 +295,11 @@ API = [
     ("load_result", "#28 a negative variance in the covariance",
      lambda t: fohw.load_result(_result_file(t, covariance_0=-1.0)),
      fohw.DataFileError, "field 'covariance' has a negative variance"),
-    ("IdentificationResult.to_json", "#1 a result holding NaN (the old file is kept)",
-     lambda t: _nan_result().to_json(t / "r.json"),
+    ("save_result", "#1 a result holding NaN (the old file is kept)",
+     lambda t: fohw.save_result(_nan_result(), t / "r.json"),
      fohw.ParameterError, "field 'J' is nan, and JSON holds finite numbers only; nothing was "
      "written"),
-    ("IdentificationResult.to_json", "#17 a directory as the file", lambda t: _result().to_json(t),
+    ("save_result", "#17 a directory as the file", lambda t: fohw.save_result(_result(), t),
      fohw.DataFileError, "is a directory; give a file name"),
     ("read_record", "#30 ';' columns with decimal commas, no decimal=','",
      lambda t: fohw.read_record(_bad_file(t, "u;y\n0,5;1,25\n-0,25;0,5\n", "r.csv")),

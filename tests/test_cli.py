@@ -88,14 +88,14 @@ def test_simulate_command(tmp_path, capsys):
 def test_model_and_result_json_are_exact(tmp_path):
     d = fohw.datasets.paper_example(600, random_state=3)
     m = fohw.HammersteinWiener([0.1 / 3, 0.2], [-0.4, np.pi / 10], [1, 0.5], [1, 0.7, 1 / 7], 0.6)
-    m.to_json(tmp_path / "m.json")
+    fohw.save_model(m, tmp_path / "m.json")
     m2 = fohw.load_model(tmp_path / "m.json")
     assert m2 == m
     np.testing.assert_array_equal(fohw.simulate(m2, d.u), fohw.simulate(m, d.u))
     for method in ("varpro", "hybrid"):
         with pytest.warns(fohw.ConvergenceWarning) if method == "hybrid" else _nothing():
             res = fohw.identify(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3, method=method)
-        res.to_json(tmp_path / "r.json")
+        fohw.save_result(res, tmp_path / "r.json")
         back = fohw.load_result(tmp_path / "r.json")
         for key in ("theta", "theta_history", "alpha_history", "J_history", "covariance"):
             a, b = getattr(res, key), getattr(back, key)
@@ -115,7 +115,7 @@ class _nothing:
 def test_custom_basis_needs_the_basis_on_load(tmp_path):
     m = fohw.HammersteinWiener([0.3], [1.0], [1.0, 0.2], [1.0], 0.5,
                                f_basis={"u": lambda x: x, "tanh": np.tanh}, g_basis=1)
-    m.to_json(tmp_path / "m.json")
+    fohw.save_model(m, tmp_path / "m.json")
     with pytest.raises(fohw.ParameterError, match="custom `f_basis`"):
         fohw.load_model(tmp_path / "m.json")
     with pytest.raises(fohw.ParameterError, match="has functions"):

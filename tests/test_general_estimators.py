@@ -148,7 +148,7 @@ def test_a_result_with_the_general_structure_survives_json(tmp_path):
                                    past=(0.6, -0.4), offset=0.2, dt=0.1)
     u, y = record(model, noise_std=0.01)
     r = fit(u, y, model, operating_point=(0.0, 0.0))
-    r.to_json(tmp_path / "r.json")
+    fohw.save_result(r, tmp_path / "r.json")
     back = fohw.load_result(tmp_path / "r.json")
     assert back.structure == r.structure
     assert back.estimate_names == r.estimate_names

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 import fohw
 from fohw.cli import _fit_text
 from fohw.cli import main as cli
-from fohw.io import jsonio
+from fohw.io import files
 from fohw.io import text as text_io
 
 S = dict(na=2, nb=2, f_basis=2, g_basis=3)
@@ -54,7 +54,7 @@ def old_file(tmp_path, paper):
     """A good saved result: the file every failure below must leave byte for byte."""
     d, _ = paper
     path = tmp_path / "old.json"
-    fohw.identify(d.u, d.y, **S).to_json(path)
+    fohw.save_result(fohw.identify(d.u, d.y, **S), path)
     return path, path.read_bytes()
 
 
@@ -66,7 +66,7 @@ def test_a_non_finite_result_is_refused_and_the_old_file_kept(old_file, paper):
 
     bad = dataclasses.replace(fohw.identify(paper[0].u, paper[0].y, **S), J=float("inf"))
     with pytest.raises(fohw.ParameterError, match="field 'J' is inf"):
-        bad.to_json(path)
+        fohw.save_result(bad, path)
     assert path.read_bytes() == before
     assert os.listdir(path.parent) == ["old.json"]          # no temporary file left
 
@@ -78,9 +78,9 @@ def test_a_save_that_fails_at_the_end_keeps_the_old_file(old_file, paper, monkey
     def fail(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(jsonio.os, "replace", fail)
+    monkeypatch.setattr(files.os, "replace", fail)
     with pytest.raises(OSError, match="No space left"):
-        fohw.identify(paper[0].u, paper[0].y, **S).to_json(path)
+        fohw.save_result(fohw.identify(paper[0].u, paper[0].y, **S), path)
     assert path.read_bytes() == before
     assert os.listdir(path.parent) == ["old.json"]
 
@@ -93,7 +93,7 @@ def test_the_cli_save_that_fails_at_the_end_keeps_the_old_file(old_file, paper, 
     def fail(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(jsonio.os, "replace", fail)
+    monkeypatch.setattr(files.os, "replace", fail)
     status, _, err = run_cli(["identify", paper[1], "--na", 2, "--nb", 2, "--f-basis", 2,
                               "--g-basis", 3, "--save", path])
     assert status == 2 and err.count("\n") == 1 and "No space left on device" in err, err
@@ -125,8 +125,8 @@ def test_a_save_killed_midway_keeps_the_old_file(tmp_path):
     before = target.read_bytes()
     child = subprocess.Popen(
         [sys.executable, "-c",
-         "import sys; from fohw.io.jsonio import _write_text; text = '0123456789' * 20_000_000;"
-         " print('writing', flush=True); _write_text(text, sys.argv[1])", str(target)],
+         "import sys; from fohw.io.files import write_text; text = '0123456789' * 20_000_000;"
+         " print('writing', flush=True); write_text(text, sys.argv[1])", str(target)],
         stdout=subprocess.PIPE, text=True)
     assert child.stdout.readline().strip() == "writing"
     deadline = time.monotonic() + 30
@@ -345,7 +345,7 @@ def test_select_prints_warnings_as_single_lines():
 # --- found by review ---------------------------------------------------------------------------
 
 @pytest.mark.parametrize("field, value, message", [
-    ("offset", "1", "field 'offset' must be a finite number or null"),
+    ("offset", "1", "field 'offset' must be a finite number; got '1'"),
     ("orders", {"alpha": "x"}, "field 'orders' must be an object of finite numbers"),
     ("past", [0.0, None], "field 'past' must be a pair of finite numbers"),
     ("operating_point", "ab", "field 'operating_point' must be a pair of finite numbers"),
@@ -386,7 +386,7 @@ def test_a_symlink_is_written_through(old_file, paper, tmp_path):
     link = tmp_path / "link.json"
     link.symlink_to(path)
     res = fohw.identify(paper[0].u, paper[0].y, method="structured", **S)
-    res.to_json(link)
+    fohw.save_result(res, link)
     assert link.is_symlink() and path.read_bytes() != before
     assert fohw.load_result(link).method == "structured"
 
@@ -402,9 +402,9 @@ def test_a_read_only_file_is_refused(old_file, paper, monkeypatch):
             return False
         return real_access(p, mode)
 
-    monkeypatch.setattr(jsonio.os, "access", access)
+    monkeypatch.setattr(files.os, "access", access)
     with pytest.raises(fohw.DataFileError, match="is read-only; fohw does not replace it"):
-        fohw.identify(paper[0].u, paper[0].y, **S).to_json(path)
+        fohw.save_result(fohw.identify(paper[0].u, paper[0].y, **S), path)
     assert path.read_bytes() == before
 
 
@@ -428,7 +428,7 @@ def test_the_selection_csv_is_saved_atomically(tmp_path, monkeypatch):
     def fail(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(jsonio.os, "replace", fail)
+    monkeypatch.setattr(files.os, "replace", fail)
     with pytest.raises(OSError, match="No space left"):
         sel.to_csv(path)
     assert path.read_text() == "old\n" and os.listdir(tmp_path) == ["rows.csv"]

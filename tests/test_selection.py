@@ -257,7 +257,7 @@ def test_extrapolation_warning_fires_outside_the_estimation_range_only(paper, tm
     with pytest.warns(fohw.ExtrapolationWarning, match=r"beyond the range \[-1, 1\]"):
         res.simulate(paper.u[600:])                                 # reaches +-1.7
     path = tmp_path / "r.json"
-    res.to_json(path)
+    fohw.save_result(res, path)
     assert fohw.load_result(path).input_range == res.input_range
 
 

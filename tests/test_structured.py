@@ -234,7 +234,7 @@ def test_structured_standard_errors_are_those_of_the_structured_jacobian():
 def test_structured_result_round_trips_through_json(tmp_path):
     data = fohw.datasets.paper_example(800, random_state=10)
     r = fohw.identify(data.u, data.y, method="structured", **STRUCT)
-    r.to_json(tmp_path / "r.json")
+    fohw.save_result(r, tmp_path / "r.json")
     back = fohw.load_result(tmp_path / "r.json")
     assert back.method == "structured"
     assert back.standard_errors() == pytest.approx(r.standard_errors(), rel=1e-12)

@@ -37,7 +37,7 @@ from .exceptions import (
     RankDeficiencyWarning,
     SimulationDivergedError,
 )
-from .io.jsonio import load_model, load_result, save_model
+from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.basis import Basis, as_basis, polynomial_basis
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
@@ -118,6 +118,7 @@ __all__ = [
     "load_result",
     "monte_carlo",
     "save_model",
+    "save_result",
     "polynomial_basis",
     "simulate",
     "simulate_theta",

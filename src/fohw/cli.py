@@ -146,7 +146,7 @@ def _check_file_out(path, flag, inputs=()):
     Not a folder, in a folder that exists, and not one of the files the run reads.
     """
     from .exceptions import DataFileError
-    from .io.jsonio import check_output_path
+    from .io.files import check_output_path
 
     if path is None:
         return
@@ -402,7 +402,9 @@ def _identify(args):
         print(res.summary())
         print(_fit_text(check))
     if args.save:
-        res.to_json(args.save)
+        from .io.jsonio import save_result
+
+        save_result(res, args.save)
     if args.plot:
         fig, axes = check.plot() if check is not None else (None, None)
         if fig is None:
@@ -481,7 +483,9 @@ def _select(args):
               "refitted on all the data:")
         print(sel.best.summary())
         if args.save:
-            sel.best.to_json(args.save)
+            from .io.jsonio import save_result
+
+            save_result(sel.best, args.save)
     if args.csv:
         sel.to_csv(args.csv)
     if args.plot:
@@ -492,14 +496,15 @@ def _select(args):
 
 def _load_model_or_result(path):
     """A fohw-model file's model, or a fohw-result file's result (``(kind, object)``)."""
-    from .io.jsonio import _read_json, model_from_dict, result_from_dict
+    from .io.files import read_json
+    from .io.jsonio import model_from_dict, result_from_dict
 
-    d = _read_json(path)                       # read once; the format says which it is
+    d = read_json(path)                       # read once; the format says which it is
     if isinstance(d, dict) and d.get("format") == "fohw-result":
         return "result", result_from_dict(d, path=os.fspath(path))
     if isinstance(d, dict) and d.get("format") != "fohw-model":
         raise UsageError(f"{path} is neither a fohw-model file (fohw.save_model) nor a "
-                         "fohw-result file (fohw identify --save, result.to_json).")
+                         "fohw-result file (fohw identify --save, fohw.save_result).")
     return "model", model_from_dict(d, path=os.fspath(path))
 
 
@@ -526,9 +531,9 @@ def _simulate(args):
         print(f"fohw: warning: {w.message}", file=sys.stderr)
     text = "\n".join(repr(float(v)) for v in y) + "\n"
     if args.output:
-        from .io.jsonio import _write_text
+        from .io.files import write_text
 
-        _write_text(text, args.output)
+        write_text(text, args.output)
     else:
         sys.stdout.write(text)
     return int(not np.all(np.isfinite(y)))

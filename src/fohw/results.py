@@ -1,23 +1,33 @@
-"""The result of an identification run (returned by :func:`fohw.identify`)."""
+"""The result of an identification run (returned by :func:`fohw.identify`): its data.
+
+:class:`IdentificationResult` stores each fact of an estimate once and derives the rest
+(``alpha`` from ``orders``; ``layout``, ``f_basis``, ``g_basis`` from ``structure``; ``model``
+from both and ``theta``). How it reads (summary, repr, plot) is :mod:`fohw.presentation`; how
+it is written to a file is :mod:`fohw.io.jsonio` (this module imports neither file nor CLI).
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import enum
+import types
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
-from ._validation import RANGE_TOLERANCE, input_in_range
-from .exceptions import ExtrapolationWarning
+from ._validation import RANGE_TOLERANCE, check_scalar, input_in_range
+from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
-from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.structure import Structure
 from .model.system import HammersteinWiener, simulate_parameters
+from .presentation import ResultPresentation
 
-__all__ = ["IdentificationResult", "Status"]
+__all__ = ["IdentificationResult", "Status", "recover_model", "DETAIL_KEYS"]
 
 
 class Status(enum.IntEnum):
@@ -41,33 +51,110 @@ class Status(enum.IntEnum):
     NOT_TESTED = 2
 
 
+#: The method-specific outputs fohw's estimators put in :attr:`IdentificationResult.details`;
+#: the five histories and profiles are also read as attributes of the result.
+DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
+               "alpha_profile", "simulation_sse", "start")
+
+
 def _readonly(a):
+    """A read-only float64 copy of ``a`` (no copy if it already is one)."""
     if a is None:
         return None
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and not a.flags.writeable:
+        return a
     a = np.array(a, dtype=np.float64, copy=True)
     a.setflags(write=False)
     return a
 
 
-@dataclass(frozen=True, repr=False, eq=False)
-class IdentificationResult:
+def _pair(value, name):
+    try:
+        a, b = value
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be a pair of numbers; got {value!r}.") from None
+    return check_scalar(a, f"{name}[0]"), check_scalar(b, f"{name}[1]")
+
+
+def _array_to_dict(a) -> dict:
+    return {"shape": list(a.shape), "data": [float(x) for x in a.ravel()]}
+
+
+def _array_from_dict(entry, name):
+    if not isinstance(entry, Mapping) or set(entry) != {"shape", "data"}:
+        raise ParameterError(f"`{name}` must be an array written as {{'shape': [...], "
+                             f"'data': [...]}}; got {entry!r}.")
+    data = np.array(entry["data"], dtype=np.float64)
+    try:
+        return data.reshape(entry["shape"])
+    except (TypeError, ValueError):
+        raise DimensionError(f"`{name}` has {data.size} values, which do not fill its shape "
+                             f"{entry['shape']!r}.") from None
+
+
+def _detail_to_json(value):
+    if isinstance(value, np.ndarray):
+        return _array_to_dict(value)
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (tuple, list)):
+        return [_detail_to_json(v) for v in value]
+    return value
+
+
+def _detail_from_json(value, name):
+    if isinstance(value, Mapping) and set(value) == {"shape", "data"}:
+        return _array_from_dict(value, name)
+    return value
+
+
+def _setting_to_json(value):
+    """A setting as JSON, or ``...`` when it has no JSON form (a Python object, an array)."""
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (tuple, list)):
+        items = [_setting_to_json(v) for v in value]
+        return ... if any(v is ... for v in items) else items
+    if isinstance(value, Mapping):
+        items = {str(k): _setting_to_json(v) for k, v in value.items()}
+        return ... if any(v is ... for v in items.values()) else items
+    return ...
+
+
+def _setting_from_json(value):
+    if isinstance(value, list):
+        return tuple(_setting_from_json(v) for v in value)
+    if isinstance(value, Mapping):
+        return {k: _setting_from_json(v) for k, v in value.items()}
+    return value
+
+
+@dataclass(frozen=True, repr=False, eq=False, kw_only=True)
+class IdentificationResult(ResultPresentation):
     """Estimates, diagnostics and histories of one identification run.
+
+    Each fact is stored once: the fields below are the estimate and the run's diagnostics;
+    ``alpha``, ``layout``, ``f_basis``, ``g_basis`` and ``model`` are derived from them (read-only
+    properties, so ``dataclasses.replace(result, orders=...)`` moves ``alpha`` and ``model``
+    with it, and ``replace(result, alpha=...)`` is a ``TypeError``). Method-specific outputs
+    live in the one mapping :attr:`details` and are also read as attributes
+    (:attr:`theta_history`, :attr:`alpha_history`, …).
 
     Attributes
     ----------
     method : str
         ``"hybrid"``, ``"single_innovation_gradient"``, ``"single_innovation_lm"``, ….
-    schedule : str
-        ``"recursive"`` (Table 1) or ``"iterative"`` (Steps 1–9); ``""`` where not applicable.
-    alpha : float or None
-        The first estimated free order (the paper's alpha); ``None`` when every order was fixed.
+    structure : Structure
+        The model class that was fitted (orders, bases, whether an offset is fitted, past, dt).
     theta : ndarray, shape (n,)
         Estimated ``[q ⊗ a, p ⊗ b]``.
-    model : HammersteinWiener or None
-        ``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40); ``None`` if that is undefined
-        (an ``a_i`` or ``b_i`` exactly zero; see ``message``).
+    orders : mapping
+        The estimated free orders, ``{name: value}`` in :attr:`Orders.free` order (the
+        commensurate model: ``{"alpha": alpha}``); each in ``[0, 2]``.
     J : float
-        Eq. (41): mean squared one-step error over the record at (``theta``, ``alpha``).
+        Eq. (41): mean squared one-step error over the record at (``theta``, ``orders``).
     status : Status
         Why the run stopped (an ``int``; see :class:`Status`).
     nit : int
@@ -82,25 +169,21 @@ class IdentificationResult:
         sensitivity of the free run).
     message : str
         Why the run stopped, and anything the user must know about the estimates.
-    alpha_at_bound : bool
-        Whether ``alpha`` was held at an end of ``alpha_bounds`` at least once.
-    theta_history : ndarray, shape (N, n), or None
-        ``theta(k)`` after the update at every sample of the last pass (recursive methods;
-        ``None`` for ``"varpro"``).
-    alpha_sample_history : ndarray, shape (N,), or None
-        ``alpha`` after every sample of the last pass (constant within a pass in the
-        iterative schedule; ``None`` for ``"varpro"``).
-    alpha_history, J_history : ndarray, shape (nit,)
-        ``alpha`` and ``J`` at the end of every outer iteration (for ``"varpro"``: at every
-        point of the bounded alpha search).
-    layout : ThetaLayout
-        Names and blocks of theta.
-    f_basis, g_basis : Basis
-        The basis functions used.
     n_samples : int
         ``N``.
-    options : dict
-        The settings of the run (innovation length, bounds, …).
+    schedule : str
+        ``"recursive"`` (Table 1) or ``"iterative"`` (Steps 1–9); ``""`` where not applicable.
+    offset : float
+        The estimated constant ``c`` of the equation, as :attr:`HammersteinWiener.offset`:
+        ``0.0`` when the structure fits none (``structure.offset`` is the flag saying whether
+        an offset is fitted; ``identify(offset=True)`` sets it).
+    past : (float, float)
+        The estimated levels ``(u_past, y_past)`` of the unseen past (deviations from the
+        operating point; ``(0, 0)`` under ``past="rest"``).
+    operating_point : (float, float)
+        ``(u0, y0)`` removed before fitting; :meth:`predict` and :meth:`simulate` add it back.
+    alpha_at_bound : bool
+        Whether a free order was held at an end of ``alpha_bounds`` at least once.
     covariance : ndarray, shape (d, d), or None
         Asymptotic covariance ``s^2 (G^T G)^{-1}`` of the ``d`` estimates in
         :attr:`estimate_names` order (the paper's model: ``(theta, alpha)``, ``alpha`` last),
@@ -113,26 +196,18 @@ class IdentificationResult:
         would then be meaningless.
     noise_variance : float or None
         ``s^2 = RSS / (N - d)``, with ``covariance``.
-    alpha_profile : ndarray, shape (2, n_grid), or None
-        ``"varpro"``: the coarse scan, alpha in row 0 and ``J(alpha)`` in row 1. With several
-        free orders the scan moves them together, each at the same relative position in its
-        bounds, and row 0 is the first order (zeros when only past levels are free).
-    structure : Structure
-        The model class that was fitted (orders, bases, offset, past, dt).
-    orders : dict
-        The estimated free orders, ``{name: value}`` in :attr:`Orders.free` order (the
-        commensurate model: ``{"alpha": alpha}``).
-    offset : float or None
-        The estimated constant (``None`` without ``offset=True``).
-    past : (float, float)
-        The estimated levels ``(u_past, y_past)`` of the unseen past (deviations from the
-        operating point; ``(0, 0)`` under ``past="rest"``).
-    operating_point : (float, float)
-        ``(u0, y0)`` removed before fitting; :meth:`predict` and :meth:`simulate` add it back.
     input_range : (float, float) or None
         The smallest and largest input of the estimation record (data units), set by
         :func:`fohw.identify`; :meth:`simulate` warns (:class:`fohw.ExtrapolationWarning`) on an
         input that goes beyond it by more than 5 % of its span.
+    options : mapping
+        The settings of the run (innovation length, bounds, …), nothing it computed.
+    details : mapping
+        Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
+        ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
+        ``alpha_profile`` (see the properties of those names), ``simulation_sse`` (the
+        simulation-error sum of squares of ``"output_error"``) and ``start`` (which start an
+        ``"output_error"`` or ``"structured"`` fit began from).
 
     Notes
     -----
@@ -142,52 +217,149 @@ class IdentificationResult:
     """
 
     method: str
-    schedule: str
-    alpha: float
+    structure: Structure
     theta: np.ndarray
-    model: HammersteinWiener | None
+    orders: Mapping = field(default_factory=dict)
     J: float
     status: Status
     nit: int
     nfev: int
     message: str
-    alpha_at_bound: bool
-    theta_history: np.ndarray
-    alpha_sample_history: np.ndarray
-    alpha_history: np.ndarray
-    J_history: np.ndarray
-    layout: ThetaLayout
-    f_basis: Basis
-    g_basis: Basis
     n_samples: int
-    options: dict = field(default_factory=dict)
-    covariance: np.ndarray | None = None
-    noise_variance: float | None = None
-    alpha_profile: np.ndarray | None = None
-    structure: Structure | None = None
-    orders: dict | None = None
-    offset: float | None = None
+    schedule: str = ""
+    offset: float = 0.0
     past: tuple = (0.0, 0.0)
     operating_point: tuple = (0.0, 0.0)
+    alpha_at_bound: bool = False
+    covariance: np.ndarray | None = None
+    noise_variance: float | None = None
     input_range: tuple | None = None
+    options: Mapping = field(default_factory=dict)
+    details: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
-        object.__setattr__(self, "status", Status(self.status))
-        if self.structure is None:          # the paper's commensurate model
-            object.__setattr__(self, "structure", Structure(
-                Orders.preset("commensurate", na=self.layout.na, nb=self.layout.nb),
-                self.f_basis, self.g_basis))
-        if self.orders is None:
-            object.__setattr__(self, "orders", {} if self.alpha is None else
-                               dict.fromkeys(self.structure.orders.free, float(self.alpha)))
-        object.__setattr__(self, "orders", {k: float(v) for k, v in self.orders.items()})
-        object.__setattr__(self, "past", tuple(float(v) for v in self.past))
-        object.__setattr__(self, "operating_point",
-                           tuple(float(v) for v in self.operating_point))
-        for name in ("theta", "theta_history", "alpha_sample_history", "alpha_history",
-                     "J_history", "covariance", "alpha_profile"):
-            object.__setattr__(self, name, _readonly(getattr(self, name)))
+        def put(name, value):
+            object.__setattr__(self, name, value)
 
+        s = self.structure
+        if not isinstance(s, Structure):
+            raise ParameterError(f"`structure` must be a Structure; got {type(s).__name__}.")
+        put("status", Status(self.status))
+        put("theta", _readonly(self.theta))
+        if self.theta.shape != (s.layout.n_params,):
+            raise DimensionError(f"`theta` must have {s.layout.n_params} entries "
+                                 f"({', '.join(s.layout.names)}); got shape {self.theta.shape}.")
+        put("orders", types.MappingProxyType(s.orders.free_mapping(self.orders, "orders")))
+        if s.offset:
+            put("offset", check_scalar(self.offset, "offset"))
+        elif self.offset != 0.0:
+            raise ParameterError(f"`offset` is {self.offset!r}, but the structure fits no offset "
+                                 "(structure.offset is False): it must be 0.")
+        else:
+            put("offset", 0.0)
+        put("past", _pair(self.past, "past"))
+        if s.past == "rest" and self.past != (0.0, 0.0):
+            raise ParameterError(f"`past` is {self.past}, but the structure has past='rest': "
+                                 "it must be (0, 0).")
+        put("operating_point", _pair(self.operating_point, "operating_point"))
+        if self.input_range is not None:
+            put("input_range", _pair(self.input_range, "input_range"))
+            if self.input_range[0] > self.input_range[1]:
+                raise ParameterError(f"`input_range` must be (smallest, largest) input; got "
+                                     f"{self.input_range} (reversed).")
+        put("covariance", _readonly(self.covariance))
+        d = s.n_linear + s.n_nonlinear
+        if self.covariance is not None and self.covariance.shape != (d, d):
+            raise DimensionError(f"`covariance` must have shape ({d}, {d}) (the estimates "
+                                 f"{', '.join(self.estimate_names)}); got {self.covariance.shape}.")
+        put("options", types.MappingProxyType(dict(self.options)))
+        put("details", types.MappingProxyType(
+            {k: _readonly(v) if isinstance(v, np.ndarray) else v
+             for k, v in self.details.items()}))
+
+    def __reduce__(self):
+        # the mappings are read-only views, which pickle cannot store: rebuild from plain dicts
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        values.update(orders=dict(self.orders), options=dict(self.options),
+                      details=dict(self.details))
+        return (_rebuild, (type(self), values))
+
+    # ---- derived facts ------------------------------------------------------------------------
+    @property
+    def alpha(self) -> float | None:
+        """The first estimated free order (the paper's alpha); ``None`` when every order is fixed."""
+        return next(iter(self.orders.values()), None)
+
+    @property
+    def layout(self) -> ThetaLayout:
+        """Names and blocks of theta (``structure.layout``)."""
+        return self.structure.layout
+
+    @property
+    def f_basis(self) -> Basis:
+        """The input basis functions (``structure.f_basis``)."""
+        return self.structure.f_basis
+
+    @property
+    def g_basis(self) -> Basis:
+        """The output basis functions (``structure.g_basis``)."""
+        return self.structure.g_basis
+
+    @cached_property
+    def model(self) -> HammersteinWiener | None:
+        """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40).
+
+        ``None`` if that is undefined (an ``a_i`` or ``b_i`` exactly zero; ``message`` says so).
+        """
+        return recover_model(self.structure, self.theta, self.orders, offset=self.offset,
+                             past=self.past, operating_point=self.operating_point)[0]
+
+    # ---- method-specific outputs (in `details`) ------------------------------------------------
+    @property
+    def theta_history(self) -> np.ndarray | None:
+        """``theta(k)`` after the update at every sample of the last pass, shape (N, n).
+
+        Recursive methods; ``None`` for the batch ones (``"varpro"``, …).
+        """
+        return self.details.get("theta_history")
+
+    @property
+    def alpha_sample_history(self) -> np.ndarray | None:
+        """``alpha`` after every sample of the last pass, shape (N,), or ``None``.
+
+        Constant within a pass in the iterative schedule; ``None`` for the batch methods.
+        """
+        return self.details.get("alpha_sample_history")
+
+    @property
+    def alpha_history(self) -> np.ndarray:
+        """``alpha`` at the end of every outer iteration, shape (nit,).
+
+        For ``"varpro"``: at every point of the bounded alpha search. A method that keeps no
+        history gives ``[alpha]`` (empty when every order is fixed).
+        """
+        if "alpha_history" in self.details:
+            return self.details["alpha_history"]
+        return _readonly([] if self.alpha is None else [self.alpha])
+
+    @property
+    def J_history(self) -> np.ndarray:
+        """``J`` at the end of every outer iteration, shape (nit,) (``[J]`` without a history)."""
+        if "J_history" in self.details:
+            return self.details["J_history"]
+        return _readonly([self.J])
+
+    @property
+    def alpha_profile(self) -> np.ndarray | None:
+        """``"varpro"``'s coarse scan: alpha in row 0, ``J(alpha)`` in row 1; else ``None``.
+
+        With several free orders the scan moves them together, each at the same relative
+        position in its bounds, and row 0 is the first order (zeros when only past levels
+        are free).
+        """
+        return self.details.get("alpha_profile")
+
+    # ---- views of the estimate ------------------------------------------------------------------
     @property
     def linear(self) -> np.ndarray:
         """The linear parameters: theta, then the offset if there is one."""
@@ -236,6 +408,60 @@ class IdentificationResult:
         """Input lag order."""
         return self.layout.nb
 
+    # ---- serialisation ----------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """A JSON-ready dict with one entry per field (:func:`fohw.save_result` writes it).
+
+        Arrays are ``{"shape": [...], "data": [...]}``; floats are kept exact. Settings that
+        have no JSON form (a ``start`` result, arrays) are left out of ``options``;
+        ``details["start"]`` says which start was used.
+        """
+        def number(x):
+            return None if x is None else float(x)
+
+        settings = {str(k): _setting_to_json(v) for k, v in self.options.items()}
+        return {
+            "method": self.method, "structure": self.structure.to_dict(),
+            "theta": _array_to_dict(self.theta), "orders": dict(self.orders),
+            "J": float(self.J), "status": int(self.status), "nit": int(self.nit),
+            "nfev": int(self.nfev), "message": self.message, "n_samples": int(self.n_samples),
+            "schedule": self.schedule, "offset": float(self.offset), "past": list(self.past),
+            "operating_point": list(self.operating_point),
+            "alpha_at_bound": bool(self.alpha_at_bound),
+            "covariance": None if self.covariance is None else _array_to_dict(self.covariance),
+            "noise_variance": number(self.noise_variance),
+            "input_range": None if self.input_range is None else list(self.input_range),
+            "options": {k: v for k, v in settings.items() if v is not ...},
+            "details": {str(k): _detail_to_json(v) for k, v in self.details.items()},
+        }
+
+    @classmethod
+    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> IdentificationResult:
+        """Inverse of :meth:`to_dict` (custom bases passed again, checked by their names).
+
+        Raises
+        ------
+        ParameterError, DimensionError
+            A field is missing, unknown or inconsistent with another (the message names it).
+        """
+        names = {f.name for f in dataclasses.fields(cls)}
+        if not isinstance(d, Mapping) or set(d) != names:
+            missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)
+            unknown = sorted(set(d) - names) if isinstance(d, Mapping) else []
+            raise ParameterError(f"a result dict has one entry per field of IdentificationResult; "
+                                 f"missing {missing}, unknown {unknown}.")
+        values = dict(d)
+        values["structure"] = Structure.from_dict(d["structure"], f_basis=f_basis,
+                                                  g_basis=g_basis)
+        values["theta"] = _array_from_dict(d["theta"], "theta")
+        if d["covariance"] is not None:
+            values["covariance"] = _array_from_dict(d["covariance"], "covariance")
+        values["options"] = {k: _setting_from_json(v) for k, v in d["options"].items()}
+        values["details"] = {k: _detail_from_json(v, f"details[{k!r}]")
+                             for k, v in d["details"].items()}
+        return cls(**values)
+
+    # ---- statistics ----------------------------------------------------------------------------
     def _require_covariance(self):
         if self.covariance is not None:
             return
@@ -287,8 +513,6 @@ class IdentificationResult:
         """
         from scipy.stats import norm
 
-        from ._validation import check_scalar
-
         level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
                              upper_inclusive=False)
         z = float(norm.ppf(0.5 + level / 2))
@@ -312,6 +536,7 @@ class IdentificationResult:
         est = self.theta_history if history else self.theta
         return np.linalg.norm(est - theta_true, axis=-1) / np.linalg.norm(theta_true)
 
+    # ---- using the estimate ------------------------------------------------------------------------
     def predict(self, u, y):
         """One-step-ahead prediction ``yhat[k] = phi[k] @ [theta, c] + y0`` (Eq. 19).
 
@@ -373,146 +598,18 @@ class IdentificationResult:
 
         return compare(self, u, y, **kwargs)
 
-    def to_dict(self) -> dict:
-        """A JSON-ready dict (see :mod:`fohw.io.jsonio`)."""
-        from .io.jsonio import result_to_dict
 
-        return result_to_dict(self)
-
-    def to_json(self, path):
-        """Write the result to a versioned JSON file.
-
-        :func:`fohw.load_result` reads it back with every float exact.
-        """
-        from .io.jsonio import _write_json
-
-        _write_json(self.to_dict(), path)
-
-    def _display_names(self):
-        """The free orders and past levels first (alpha, as the paper lists it), then theta."""
-        return list(self.structure.nonlinear_names) + list(self.structure.linear_names)
-
-    def _repr_html_(self):
-        import html
-
-        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
-        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{est[n]:.6g}</td></tr>"
-                       for n in self._display_names())
-        return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
-                f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
-                f"<small>{html.escape(self.message)}</small>"
-                f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
-
-    def summary(self) -> str:
-        """A text table of the estimates and the run's diagnostics."""
-        lines = [f"fohw identification: method={self.method!r}"
-                 + (f", schedule={self.schedule!r}" if self.schedule else ""),
-                 f"  samples N = {self.n_samples}, na = {self.structure.na}, "
-                 f"nb = {self.structure.nb}, f_basis = {self.f_basis!r}, "
-                 f"g_basis = {self.g_basis!r}"]
-        if not self.structure.is_paper_model:
-            lines.append(f"  model: {self.structure.describe()}")
-        if self.operating_point != (0.0, 0.0):
-            lines.append(f"  operating point (u0, y0) = ({self.operating_point[0]:.6g}, "
-                         f"{self.operating_point[1]:.6g}), removed before fitting")
-        lines += [f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "
-                  f"evaluations = {self.nfev}, J (Eq. 41) = {self.J:.6g}",
-                  f"  {self.message}",
-                  ""]
-        names = self._display_names()
-        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
-        if self.model is not None:
-            est = self._estimates()
-        if self.covariance is not None:
-            se = self.standard_errors()
-            ci = self.confidence_intervals()
-            width = max(12, max(len(n) for n in names) + 2)
-            lines.append(f"  {'parameter':<{width}}{'estimate':>14}{'std err':>12}"
-                         f"{'95% CI low':>14}{'95% CI high':>14}")
-
-            def row(n):
-                return (f"  {n:<{width}}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
-                        f"{ci[n][1]:>14.6g}")
-            lines += [row(n) for n in names]
-            if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
-                lines += ["", "  p and q estimated directly (structured least squares):"
-                          if self.method == "structured" else
-                          "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]
-                lines += [row(n) for n in self.layout.model_parameter_names
-                          if n[0] in "pq"]
-            lines += ["", f"  noise variance estimate s^2 = {self.noise_variance:.6g}"]
-        else:
-            width = max(12, max(len(n) for n in names) + 2)
-            lines.append(f"  {'parameter':<{width}}{'estimate':>14}")
-            lines += [f"  {n:<{width}}{est[n]:>14.6g}" for n in names]
-            if self.model is not None:
-                lines += ["", "  recovered by Eqs. (39)-(40):"]
-                for name in "abpq":
-                    vals = ", ".join(f"{v:.6g}" for v in getattr(self.model, name))
-                    lines.append(f"  {name} = [{vals}]")
-        if self.alpha_at_bound:
-            lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
-        return "\n".join(lines)
-
-    def __repr__(self):
-        orders = ", ".join(f"{k}={v:.6g}" for k, v in self.orders.items())
-        return (f"IdentificationResult(method={self.method!r}, schedule={self.schedule!r}, "
-                f"{orders + ', ' if orders else ''}J={self.J:.6g}, status={self.status.name}, "
-                f"nit={self.nit}, n_params={self.theta.shape[0]})")
-
-    def plot(self, theta_true=None):
-        """Histories of theta (or delta, given ``theta_true``), alpha and J.
-
-        Returns
-        -------
-        fig, axes
-            Matplotlib figure and its three axes; nothing is shown.
-        """
-        import matplotlib.pyplot as plt
-
-        fig, axes = plt.subplots(3, 1, figsize=(8, 7))
-        k = np.arange(1, self.n_samples + 1)
-        if self.theta_history is None:       # batch methods: no per-sample history
-            names = ("alpha",) + self.parameter_names
-            axes[0].bar(range(len(names)), [self.alpha, *self.theta])
-            axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
-            axes[0].set_ylabel("estimate")
-            if self.alpha_profile is not None:
-                axes[1].plot(*self.alpha_profile, marker=".")
-                axes[1].set_xlabel("alpha")
-                axes[1].set_ylabel("J(alpha), profile")
-            axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
-            axes[2].set_xlabel("evaluation")
-            axes[2].set_ylabel("J")
-            fig.tight_layout()
-            return fig, axes
-        if theta_true is None:
-            axes[0].plot(k, self.theta_history, lw=0.8)
-            axes[0].set_ylabel("theta(k)")
-        else:
-            axes[0].semilogy(k, self.relative_error(theta_true, history=True))
-            axes[0].set_ylabel("delta(k)")
-        axes[0].set_xlabel("sample k (last pass)")
-        axes[1].plot(k, self.alpha_sample_history)
-        axes[1].set_ylabel("alpha(k)")
-        axes[1].set_xlabel("sample k (last pass)")
-        axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
-        axes[2].set_ylabel("J (Eq. 41)")
-        axes[2].set_xlabel("iteration m")
-        fig.tight_layout()
-        return fig, axes
+def _rebuild(cls, values):
+    return cls(**values)
 
 
-def recover_model(structure, theta, orders, *, offset=None, past=(0.0, 0.0),
+def recover_model(structure, theta, orders, *, offset=0.0, past=(0.0, 0.0),
                   operating_point=(0.0, 0.0)):
     """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
-    from .exceptions import ParameterError
-
     try:
         return HammersteinWiener.from_theta(
-            theta, orders, na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
+            theta, dict(orders), na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
             g_basis=structure.g_basis, orders=structure.orders, dt=structure.dt,
-            offset=0.0 if offset is None else offset, past=past,
-            operating_point=operating_point), ""
+            offset=offset, past=past, operating_point=operating_point), ""
     except ParameterError as exc:
         return None, f" No model: {exc}"

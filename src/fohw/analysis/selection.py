@@ -126,7 +126,7 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
         n = len(y_est)
         d = res.linear.size + res.nonlinear.size
         row["n_params"] = int(d)
-        criterion = (res.options.get("simulation_sse", np.nan) / n
+        criterion = (res.details.get("simulation_sse", np.nan) / n
                      if res.method == "output_error" else res.J)
         if np.isfinite(criterion) and criterion > 0:
             row["aic"] = aic(criterion, n, d)
@@ -258,9 +258,9 @@ class Selection:
             writer.writerow({k: _describe(v) if k in extra else v for k, v in r.items()})
         text = buf.getvalue()
         if path is not None:
-            from ..io.jsonio import _write_text
+            from ..io.files import write_text
 
-            _write_text(text, path)          # atomic, as every fohw save
+            write_text(text, path)          # atomic, as every fohw save
         return text
 
     def to_frame(self):

@@ -116,8 +116,8 @@ def check_finite_estimate(method, theta, alpha, where=""):
 def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha_at_bound=False,
            schedule="", options=None, Phi=None, rank_factor=None, covariance=None,
            noise_variance=None, theta_history=None, alpha_sample_history=None,
-           alpha_history=None, J_history=None, alpha_profile=None, operating_point=(0.0, 0.0),
-           stacklevel=5):
+           alpha_history=None, J_history=None, alpha_profile=None, details=None,
+           operating_point=(0.0, 0.0), stacklevel=5):
     """Check an estimate, say what the user must know, and wrap it as an IdentificationResult.
 
     ``linear`` are the linear parameters of the builder's structure (theta, then the offset)
@@ -126,6 +126,11 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
     information matrix (``rank_factor``, or a factorisation of ``Phi`` made here) turns the
     status into ``RANK_DEFICIENT`` with a :class:`RankDeficiencyWarning` naming the dependent
     columns; a run that did not converge warns :class:`ConvergenceWarning`.
+
+    ``options`` are the run's settings; the histories, the profile and ``details`` (other
+    method-specific outputs: ``simulation_sse``, ``start``) go to the result's ``details``.
+    A history that only repeats the final estimate (``alpha_history == [alpha]``,
+    ``J_history == [J]``) is not stored: the result derives it.
     """
     structure = builder.structure
     linear = np.asarray(linear, dtype=np.float64)
@@ -156,24 +161,30 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         warnings.warn(f"fohw.identify({method!r}" + (f", schedule={schedule!r}" if schedule else "")
                       + f"): {message}", ConvergenceWarning, stacklevel=stacklevel)
     n_theta = structure.layout.n_params
-    theta, offset = linear[:n_theta], (float(linear[n_theta]) if structure.offset else None)
+    theta, offset = linear[:n_theta], (float(linear[n_theta]) if structure.offset else 0.0)
     orders, past = structure.split_nonlinear(params)
     alpha = next(iter(orders.values()), None)
-    model, note = recover_model(structure, theta, orders, offset=offset, past=past,
-                                operating_point=operating_point)
+    _, note = recover_model(structure, theta, orders, offset=offset, past=past,
+                            operating_point=operating_point)
+    histories = dict(theta_history=theta_history, alpha_sample_history=alpha_sample_history,
+                     alpha_history=alpha_history, J_history=J_history, alpha_profile=alpha_profile)
+    out = {}
+    for key, value in histories.items():
+        if value is not None:
+            out[key] = np.array(value, dtype=float)
+            out[key].setflags(write=False)
+    derived = {"alpha_history": [] if alpha is None else [alpha], "J_history": [J]}
+    for key, value in derived.items():       # a history that only repeats the estimate
+        if key in out and np.array_equal(out[key], value):
+            del out[key]
+    out.update(details or {})
     return IdentificationResult(
-        method=method, schedule=schedule, alpha=alpha, theta=theta, model=model, J=J,
-        status=status, nit=int(nit), nfev=int(nfev), message=message + note,
-        alpha_at_bound=bool(alpha_at_bound), theta_history=theta_history,
-        alpha_sample_history=alpha_sample_history,
-        alpha_history=np.array([] if alpha_history is None and alpha is None
-                               else [alpha] if alpha_history is None else alpha_history,
-                               dtype=float),
-        J_history=np.array([J] if J_history is None else J_history, dtype=float),
-        layout=structure.layout, f_basis=structure.f_basis, g_basis=structure.g_basis,
-        n_samples=builder.n_samples, options=dict(options or {}), covariance=covariance,
-        noise_variance=noise_variance, alpha_profile=alpha_profile, structure=structure,
-        orders=orders, offset=offset, past=past, operating_point=operating_point)
+        method=method, schedule=schedule, structure=structure, theta=theta, orders=orders,
+        offset=offset, past=past, operating_point=operating_point, J=J, status=status,
+        nit=int(nit), nfev=int(nfev), message=message + note,
+        alpha_at_bound=bool(alpha_at_bound), n_samples=builder.n_samples,
+        options=dict(options or {}), covariance=covariance, noise_variance=noise_variance,
+        details=out)
 
 
 def bound_note(name, lo, hi, at_lower, at_upper):

@@ -339,14 +339,14 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0))
     lower, upper = bounds
     linear0, params0, J0, origin = _start(builder, options, lower, upper)
     record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))
-    if options.start is not None:
-        record["start"] = origin
+    details = {} if options.start is None else {"start": origin}
     Phi0 = builder.matrix(params0)
     fac = _linalg.factor(Phi0, with_q=False)
     if fac.rank < fac.n_columns:        # not identifiable: no fit (it would drift along the
         return finish(builder, method="output_error", linear=linear0, params=params0,  # null
                       status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0,        # space)
-                      rank_factor=fac, options=record, operating_point=operating_point,
+                      rank_factor=fac, options=record, details=details,
+                      operating_point=operating_point,
                       message=f"no simulation-error fit: the start ({origin}) is rank deficient.")
     fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
                            n_init=options.n_init, max_nfev=options.max_nfev)
@@ -359,14 +359,14 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0))
     for j, name in enumerate(s.orders.free):
         if fit.at_lower[j] or fit.at_upper[j]:
             message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j])
-    record["simulation_sse"] = fit.sse
+    details["simulation_sse"] = fit.sse
     Phi = builder.matrix(fit.params)
     J = float(np.mean((builder.y - Phi @ fit.linear) ** 2))
     alpha_history = [params0[0], fit.params[0]] if s.orders.free else None
     return finish(builder, method="output_error", linear=fit.linear, params=fit.params,
                   status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
                   alpha_at_bound=bool(np.any(fit.at_lower) or np.any(fit.at_upper)),
-                  options=record, Phi=Phi, covariance=fit.covariance,
+                  options=record, details=details, Phi=Phi, covariance=fit.covariance,
                   noise_variance=fit.noise_variance, alpha_history=alpha_history,
                   J_history=[J0, J] if alpha_history else None,
                   operating_point=operating_point)

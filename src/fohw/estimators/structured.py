@@ -162,8 +162,8 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     for j, name in enumerate(s.orders.free):
         if active[j]:
             message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0)
-    record["start"] = "varpro (rank-one recovery)"
     return finish(builder, method="structured", linear=linear, params=params, status=status,
                   nit=vp.nit + int(ls.njev), nfev=vp.nfev + int(ls.nfev), message=message,
                   alpha_at_bound=bool(np.any(active != 0)), options=record,
+                  details={"start": "varpro (rank-one recovery)"},
                   covariance=covariance, noise_variance=s2, operating_point=operating_point)

@@ -1,44 +1,154 @@
-"""Saving and loading models and identification results as versioned JSON (never pickle).
+"""Model and result files: versioned JSON (never pickle), validated field by field on reading.
 
-Floats are written with Python's shortest round-trip representation, so every number reads
-back bit for bit. Polynomial bases are stored by degree; any other basis is stored by the
-names of its functions only (code is never serialised), and loading then needs the same basis
-passed in, checked by those names.
+A file is a header (``"format"``: ``"fohw-model"`` or ``"fohw-result"``, ``"version"``) and the
+object's own dict (:meth:`fohw.HammersteinWiener.to_dict`,
+:meth:`fohw.IdentificationResult.to_dict`), which stores each fact once. Floats are written
+with Python's shortest round-trip representation, so every number reads back bit for bit.
+Polynomial bases are stored by degree; any other basis by the names of its functions only (code
+is never serialised), and loading then needs the same basis passed in, checked by those names.
+Files are written atomically (:mod:`fohw.io.files`).
+
+Reading checks every field for its type and, for numbers, finiteness (and the covariance for
+symmetry and non-negative variances) before anything is built, and refuses a file whose facts
+contradict each other: a :class:`~fohw.DataFileError` naming the file and the field, never a
+result that fails later. Files of the previous layout (version 2, which stored ``alpha``,
+``layout``, the bases and ``parameter_names`` beside what they derive from, and outputs in
+``options``) are read too, after checking that those copies agree.
 """
 
 from __future__ import annotations
 
-import json
+import dataclasses
 import os
-import tempfile
 
 import numpy as np
 
+from ..estimators.identify import METHODS
 from ..exceptions import DataFileError, ParameterError
-from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis, as_basis, polynomial_basis
-from ..model.orders import Orders
-from ..model.structure import Structure
+from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis
+from ..model.orders import ORDER_RANGE
 from ..model.system import HammersteinWiener
+from ..results import IdentificationResult, Status
+from .files import read_json, write_json
 
-__all__ = ["save_model", "load_model", "load_result", "MODEL_FORMAT_VERSION",
-           "RESULT_FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "save_result", "load_result", "model_from_dict",
+           "result_from_dict", "MODEL_FORMAT_VERSION", "RESULT_FORMAT_VERSION"]
 
-#: Version of the model files this fohw writes (it reads the versions in ``_READS``): 2 added
-#: the structure (orders per term, dt, offset, past levels, operating point).
-MODEL_FORMAT_VERSION = 2
-#: Version of the result files: 2 replaced ``n_iter``/``converged`` by ``status``/``nit``/``nfev``
-#: and added the structure and its estimates (orders, offset, past, operating point).
-RESULT_FORMAT_VERSION = 2
-_READS = {"fohw-model": (1, 2), "fohw-result": (1, 2)}
-
-
-def _basis_to_dict(basis: Basis) -> dict:
-    if basis.is_polynomial:
-        return {"kind": "polynomial", "degree": len(basis)}
-    return {"kind": "custom", "names": list(basis.names)}
+#: Version of the model files this fohw writes (it reads the versions in ``READS``): 3 stores
+#: each fact once (2 also stored the offset and past flags beside the values they follow from).
+MODEL_FORMAT_VERSION = 3
+#: Version of the result files: 3 stores each fact once (the estimate, the structure with its
+#: bases, the settings in ``options`` and the method's outputs in ``details``).
+RESULT_FORMAT_VERSION = 3
+#: The versions read, per format.
+READS = {"fohw-model": (2, 3), "fohw-result": (2, 3)}
+_HEADER = ("format", "version")
 
 
-def _basis_from_dict(d: dict, given, name: str, path: str) -> Basis:
+# ---- fields -----------------------------------------------------------------------------------
+def _check_header(d, kind, path):
+    if not isinstance(d, dict) or d.get("format") != kind:
+        raise DataFileError(f"{path} is not a {kind} file (field 'format' must be {kind!r}).")
+    version = d.get("version")
+    if isinstance(version, bool) or not isinstance(version, int) or version not in READS[kind]:
+        readable = " or ".join(str(v) for v in READS[kind])
+        what = f"the string {version!r}" if isinstance(version, str) else repr(version)
+        raise DataFileError(f"{path}: field 'version' is {what}; this fohw reads {kind} files "
+                            f"of version {readable}, written as a JSON integer.")
+    return version
+
+
+def _require_fields(d, names, kind, version, path):
+    """Exactly the fields ``names``: a missing one or one the format does not have is an error."""
+    for key in names:
+        if key not in d:
+            raise DataFileError(f"{path}: missing field {key!r}.")
+    unknown = sorted(set(d) - set(names) - set(_HEADER))
+    if unknown:
+        raise DataFileError(f"{path}: field {unknown[0]!r} is not part of a {kind} file of version "
+                            f"{version} (it stores each fact once, in the fields "
+                            f"{', '.join(sorted(names))}).")
+
+
+def _bad(d, key, need, path):
+    raise DataFileError(f"{path}: field {key!r} must be {need}; got {d.get(key)!r}.")
+
+
+def _is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _number(d, key, path, lower=None, optional=False):
+    value = d.get(key)
+    if value is None and optional:
+        return
+    if not _is_number(value) or not np.isfinite(value) or (lower is not None and value < lower):
+        _bad(d, key, "a finite number" + ("" if lower is None else f" >= {lower:g}")
+             + (" or null" if optional else ""), path)
+
+
+def _integer(d, key, path, lower):
+    value = d.get(key)
+    if isinstance(value, bool) or not isinstance(value, int) or value < lower:
+        _bad(d, key, f"an integer >= {lower}", path)
+
+
+def _finite_pair(d, key, path, optional=False):
+    value = d.get(key)
+    if value is None and optional:
+        return
+    if not isinstance(value, list) or len(value) != 2 or not all(
+            _is_number(v) and np.isfinite(v) for v in value):
+        raise DataFileError(f"{path}: field {key!r} must be a pair of finite numbers"
+                            + (" or null" if optional else "") + f"; got {value!r}.")
+
+
+def _finite_list(d, key, path):
+    value = d.get(key)
+    if not isinstance(value, list) or not value or not all(
+            _is_number(v) and np.isfinite(v) for v in value):
+        _bad(d, key, "a non-empty list of finite numbers", path)
+
+
+def _orders_field(d, key, path):
+    orders = d.get(key)
+    if not isinstance(orders, dict) or not all(
+            _is_number(v) and np.isfinite(v) for v in orders.values()):
+        _bad(d, key, "an object of finite numbers (the estimated orders)", path)
+    lo, hi = ORDER_RANGE
+    for name, value in orders.items():
+        if not lo <= value <= hi:
+            raise DataFileError(f"{path}: field {key!r}: order {name!r} is {value!r}, outside "
+                                f"[{lo:g}, {hi:g}], the orders fohw's models allow.")
+
+
+def _array_field(d, key, path, *, name=None):
+    """Check an array written as ``{"shape": [...], "data": [...]}`` (or null); return it."""
+    name = name or key
+    entry = d.get(key)
+    if entry is None:
+        return None
+    if not isinstance(entry, dict) or set(entry) != {"shape", "data"} \
+            or not isinstance(entry.get("data"), list) or not isinstance(entry.get("shape"), list):
+        raise DataFileError(f"{path}: field {name!r} must be null or an object with 'shape' and "
+                            "'data' lists.")
+    data = entry["data"]
+    if not all(_is_number(v) for v in data):
+        raise DataFileError(f"{path}: field {name!r} holds an entry that is not a number.")
+    arr = np.array(data, dtype=np.float64)
+    if not np.all(np.isfinite(arr)):
+        i = int(np.flatnonzero(~np.isfinite(arr))[0])
+        raise DataFileError(f"{path}: field {name!r} holds a non-finite value ({float(arr[i])!r} "
+                            f"at entry {i}).")
+    if not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in entry["shape"]) \
+            or int(np.prod(entry["shape"])) != arr.size:
+        raise DataFileError(f"{path}: field {name!r} has {arr.size} values, which do not fill "
+                            f"its shape {entry['shape']!r}.")
+    return arr.reshape(entry["shape"])
+
+
+def _basis(d, given, name, path) -> Basis:
+    """The basis stored as ``d`` (a custom one is ``given``, checked by its names)."""
     if not isinstance(d, dict):
         raise DataFileError(f"{path}: field {name!r} must be an object such as "
                             f'{{"kind": "polynomial", "degree": 2}}; got {d!r}.')
@@ -46,195 +156,84 @@ def _basis_from_dict(d: dict, given, name: str, path: str) -> Basis:
     if kind == "polynomial":
         degree = d.get("degree")
         if isinstance(degree, bool) or not isinstance(degree, int) \
-                or not 1 <= degree <= MAX_POLYNOMIAL_DEGREE:
+                or not 1 <= degree <= MAX_POLYNOMIAL_DEGREE or set(d) != {"kind", "degree"}:
             raise DataFileError(f"{path}: field {name!r}: 'degree' must be an integer from 1 to "
                                 f"{MAX_POLYNOMIAL_DEGREE}; got {degree!r}.")
-        stored = polynomial_basis(degree)
-        if given is not None and as_basis(given, name) != stored:
-            raise ParameterError(f"`{name}` does not match the polynomial basis of degree "
-                                 f"{degree} stored in {path}.")
-        return stored
-    if kind != "custom":
+    elif kind == "custom":
+        names = d.get("names")
+        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+            raise DataFileError(f"{path}: field {name!r}: 'names' must be a non-empty list of "
+                                f"strings; got {names!r}.")
+        if given is None:
+            raise ParameterError(f"{path} was saved with a custom `{name}` ({names}); its "
+                                 f"functions are code, which fohw never stores: load it in "
+                                 f"Python and pass the same basis, fohw.load_model(path, "
+                                 f"{name}=...) or fohw.load_result(path, {name}=...) (the "
+                                 "command line cannot).")
+    else:
         raise DataFileError(f"{path}: field {name!r} has kind {kind!r}; fohw writes 'polynomial' "
                             "(a degree) or 'custom' (names of functions passed again on loading).")
-    names = d.get("names")
-    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-        raise DataFileError(f"{path}: field {name!r}: 'names' must be a non-empty list of "
-                            f"strings; got {names!r}.")
-    if given is None:
-        raise ParameterError(f"{path} was saved with a custom `{name}` ({names}); its functions "
-                             f"are code, which fohw never stores: load it in Python and pass the "
-                             f"same basis, fohw.load_model(path, {name}=...) or "
-                             f"fohw.load_result(path, {name}=...) (the command line cannot).")
-    basis = as_basis(given, name)
-    if list(basis.names) != names:
-        raise ParameterError(f"`{name}` has functions {list(basis.names)}, but {path} was saved "
-                             f"with {names}.")
-    return basis
+    try:
+        return Basis.from_dict(d, given, name=name)
+    except ParameterError as exc:            # `given` does not match what was saved
+        raise ParameterError(f"{path}: {exc}") from None
 
 
-def _floats(a) -> list:
-    return [float(x) for x in np.asarray(a, dtype=np.float64).ravel()]
-
-
-def _structure_from_dict(d, f_basis, g_basis) -> Structure:
-    return Structure(Orders.from_dict(d["orders"]), f_basis, g_basis, offset=d["offset"],
-                     past=d["past"], dt=d["dt"])
-
-
+# ---- models -----------------------------------------------------------------------------------
 def model_to_dict(model: HammersteinWiener) -> dict:
-    """A JSON-ready dict of a model."""
-    return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION,
-            "a": _floats(model.a), "b": _floats(model.b), "p": _floats(model.p),
-            "q": _floats(model.q), "orders": dict(model.orders),
-            "structure": model.structure.to_dict(), "offset": float(model.offset),
-            "past": list(model.past), "operating_point": list(model.operating_point),
-            "f_basis": _basis_to_dict(model.f_basis), "g_basis": _basis_to_dict(model.g_basis)}
+    """The content of a model file: the header and :meth:`HammersteinWiener.to_dict`."""
+    return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION, **model.to_dict()}
+
+
+def _model_from_v2(d, path):
+    """A version-2 model file's fields in the current layout, after checking its copies agree."""
+    _require_fields(d, ("a", "b", "p", "q", "orders", "structure", "offset", "past",
+                        "operating_point", "f_basis", "g_basis"), "fohw-model", 2, path)
+    s = d["structure"]
+    if not isinstance(s, dict) or set(s) != {"orders", "offset", "past", "dt"}:
+        _bad(d, "structure", "an object with 'orders', 'offset', 'past' and 'dt'", path)
+    _number(d, "offset", path)
+    _finite_pair(d, "past", path)
+    if s["offset"] != (d["offset"] != 0.0):
+        raise DataFileError(f"{path}: field 'structure.offset' is {s['offset']!r}, but field "
+                            f"'offset' is {d['offset']!r}: the file contradicts itself.")
+    past = "rest" if d["past"] == [0.0, 0.0] else "estimate"
+    if s["past"] != past:
+        raise DataFileError(f"{path}: field 'structure.past' is {s['past']!r}, but field 'past' "
+                            f"is {d['past']!r}: the file contradicts itself.")
+    return {"a": d["a"], "b": d["b"], "p": d["p"], "q": d["q"], "orders": d["orders"],
+            "terms": s["orders"], "f_basis": d["f_basis"], "g_basis": d["g_basis"],
+            "dt": s["dt"], "offset": d["offset"], "past": d["past"],
+            "operating_point": d["operating_point"]}
 
 
 def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> HammersteinWiener:
-    """Inverse of :func:`model_to_dict` (version 1 files: the paper's model).
+    """The model of a model file's content (:func:`model_to_dict`; version 2 files too).
 
     Fields of the wrong type or value are a :class:`~fohw.DataFileError` naming the file.
     """
     version = _check_header(d, "fohw-model", path)
-    for key in ("f_basis", "g_basis"):
-        if key not in d:
-            raise DataFileError(f"{path}: missing field {key!r}.")
-    f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
-    g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
+    body = {k: v for k, v in d.items() if k not in _HEADER}
+    if version == 2:
+        body = _model_from_v2(body, path)
+    _require_fields(body, HammersteinWiener.DICT_FIELDS, "fohw-model", version, path)
+    for key in "abpq":
+        _finite_list(body, key, path)
+    _orders_field(body, "orders", path)
+    _number(body, "dt", path)
+    _number(body, "offset", path)
+    _finite_pair(body, "past", path)
+    _finite_pair(body, "operating_point", path)
+    f = _basis(body["f_basis"], f_basis, "f_basis", path)
+    g = _basis(body["g_basis"], g_basis, "g_basis", path)
     try:
-        if version == 1:
-            return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["alpha"], f_basis=f,
-                                     g_basis=g)
-        structure = _structure_from_dict(d["structure"], f, g)
-        return HammersteinWiener(d["a"], d["b"], d["p"], d["q"], d["orders"], f_basis=f,
-                                 g_basis=g, orders=structure.orders, dt=structure.dt,
-                                 offset=d["offset"], past=tuple(d["past"]),
-                                 operating_point=tuple(d["operating_point"]))
-    except KeyError as exc:
-        raise DataFileError(f"{path}: missing field {exc.args[0]!r}.") from None
+        return HammersteinWiener.from_dict(body, f_basis=f, g_basis=g)
     except (TypeError, ValueError, AttributeError) as exc:    # ParameterError is a ValueError
         raise DataFileError(f"{path}: malformed fohw-model file: {exc}") from None
 
 
-def _check_header(d, kind, path):
-    if not isinstance(d, dict) or d.get("format") != kind:
-        raise DataFileError(f"{path} is not a {kind} file (field 'format' must be {kind!r}).")
-    version = d.get("version")
-    if isinstance(version, bool) or not isinstance(version, int) or version not in _READS[kind]:
-        readable = " or ".join(str(v) for v in _READS[kind])
-        what = f"the string {version!r}" if isinstance(version, str) else repr(version)
-        raise DataFileError(f"{path}: field 'version' is {what}; this fohw reads {kind} files "
-                            f"of version {readable}, written as a JSON integer.")
-    return version
-
-
-def _read_json(path) -> dict:
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise DataFileError(f"{path!r} is a directory, not a fohw JSON file.")
-    try:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
-    except json.JSONDecodeError as exc:
-        raise DataFileError(f"{path} is not valid JSON: {exc}.") from None
-    except UnicodeDecodeError:
-        raise DataFileError(f"{path} is not UTF-8 text, so not a fohw JSON file.") from None
-    except FileNotFoundError:
-        raise
-    except OSError as exc:
-        raise DataFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
-
-
-def _non_finite(obj, where=""):
-    """The first place in a JSON-ready object holding a NaN or an infinity, or None."""
-    if isinstance(obj, float):
-        return None if np.isfinite(obj) else (where or "the value", obj)
-    if isinstance(obj, dict):
-        items = obj.items()
-        if set(obj) == {"shape", "data"}:           # an array: name it, not its 'data'
-            items = [(None, obj["data"])]
-    elif isinstance(obj, (list, tuple)):
-        items = ((f"[{i}]", v) for i, v in enumerate(obj))
-    else:
-        return None
-    for key, value in items:
-        inner = where if key is None else (f"{where}.{key}" if where and not key.startswith("[")
-                                           else f"{where}{key}")
-        found = _non_finite(value, inner)
-        if found is not None:
-            return found
-    return None
-
-
-def check_output_path(path, what="the output") -> str:
-    """Check, before any work, that a file can be written at ``path``; return it as a string.
-
-    Raises
-    ------
-    DataFileError
-        ``path`` is a directory, its folder does not exist, or the folder is not writable.
-    """
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise DataFileError(f"{what} {path!r} is a directory; give a file name.")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise DataFileError(f"{what} {path!r}: the folder {folder!r} does not exist.")
-    if not os.access(folder, os.W_OK):
-        raise DataFileError(f"{what} {path!r}: the folder {folder!r} is not writable.")
-    return path
-
-
-def _write_json(obj, path):
-    """Write ``obj`` as JSON, atomically (see :func:`_write_text`).
-
-    Non-finite numbers are refused before anything is written (JSON has none).
-    """
-    path = check_output_path(path, "the JSON file")
-    bad = _non_finite(obj)
-    if bad is not None:
-        raise ParameterError(f"cannot save to {path}: field {bad[0]!r} is {bad[1]!r}, and JSON "
-                             "holds finite numbers only; nothing was written (an existing file "
-                             "is unchanged).")
-    _write_text(json.dumps(obj, indent=1, allow_nan=False) + "\n", path)
-
-
-def _write_text(text, path):
-    """Write ``text`` to ``path`` atomically: all of it, or nothing.
-
-    The text goes to a temporary file in the same folder, flushed to disk, which then replaces
-    ``path`` in one step (:func:`os.replace`), so an interrupted or failed save never truncates
-    a file: an existing one survives byte for byte. A symbolic link is written through (its
-    target is replaced, the link kept); a read-only file is refused.
-    """
-    path = check_output_path(path, "the output file")
-    path = os.path.realpath(path)             # write through a symbolic link, not over it
-    if os.path.exists(path) and not os.access(path, os.W_OK):
-        raise DataFileError(f"{path!r} is read-only; fohw does not replace it.")
-    folder, name = os.path.split(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        if os.path.exists(path):                    # keep the permissions the file had
-            os.chmod(tmp, os.stat(path).st_mode & 0o7777)
-        else:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def save_model(model, path):
-    """Write a model to a JSON file.
+    """Write a model to a JSON file (atomically; :func:`load_model` reads it back exactly).
 
     Examples
     --------
@@ -247,145 +246,117 @@ def save_model(model, path):
     """
     if not isinstance(model, HammersteinWiener):
         raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
-    _write_json(model_to_dict(model), path)
+    write_json(model_to_dict(model), path)
 
 
 def load_model(path, *, f_basis=None, g_basis=None):
     """Read a model written by :func:`save_model` (custom bases must be passed again)."""
-    return model_from_dict(_read_json(path), f_basis=f_basis, g_basis=g_basis,
+    return model_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
                            path=os.fspath(path))
 
 
-_ARRAYS = ("theta", "theta_history", "alpha_sample_history", "alpha_history", "J_history",
-           "covariance", "alpha_profile")
+# ---- results ----------------------------------------------------------------------------------
+_RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(IdentificationResult))
+_V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
+                 "alpha_profile")
 
 
 def result_to_dict(result) -> dict:
-    """A JSON-ready dict of an :class:`fohw.IdentificationResult`."""
-    d = {"format": "fohw-result", "version": RESULT_FORMAT_VERSION}
-    for key in ("method", "schedule", "alpha", "J", "nit", "nfev", "message",
-                "alpha_at_bound", "n_samples", "noise_variance"):
-        value = getattr(result, key)
-        d[key] = value.item() if isinstance(value, np.generic) else value
-    d["status"] = int(result.status)
-    for key in _ARRAYS:
-        value = getattr(result, key)
-        d[key] = None if value is None else {"shape": list(value.shape), "data": _floats(value)}
-    d["layout"] = {"na": result.layout.na, "nb": result.layout.nb}
-    d["f_basis"] = _basis_to_dict(result.f_basis)
-    d["g_basis"] = _basis_to_dict(result.g_basis)
-    d["structure"] = result.structure.to_dict()
-    d["orders"] = dict(result.orders)
-    d["offset"] = result.offset
-    d["past"] = list(result.past)
-    d["operating_point"] = list(result.operating_point)
-    d["input_range"] = None if result.input_range is None else list(result.input_range)
-    d["options"] = {k: _jsonable(v) for k, v in result.options.items()
-                    if isinstance(v, (int, float, str, bool, tuple, dict, type(None)))}
-    d["parameter_names"] = list(result.parameter_names)
-    return d
+    """The content of a result file: the header and :meth:`IdentificationResult.to_dict`."""
+    return {"format": "fohw-result", "version": RESULT_FORMAT_VERSION, **result.to_dict()}
 
 
-def _jsonable(value):
-    if isinstance(value, tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    return value
+def _result_from_v2(d, path):
+    """A version-2 result file's fields in the current layout, and its copies of derived facts.
 
-
-def _from_json(value):
-    if isinstance(value, list):
-        return tuple(_from_json(v) for v in value)
-    if isinstance(value, dict):
-        return {k: _from_json(v) for k, v in value.items()}
-    return value
-
-
-def _check_fields(d, path, version):
-    """Every scalar field of a result file has its type and a finite value, before use."""
-    from ..results import Status
-
-    def bad(key, need):
-        raise DataFileError(f"{path}: field {key!r} must be {need}; got {d.get(key)!r}.")
-
-    def number(key, lower=None, optional=False):
-        value = d.get(key)
-        if value is None and optional:
-            return
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not np.isfinite(value) or (lower is not None and value < lower):
-            bad(key, "a finite number" + ("" if lower is None else f" >= {lower:g}")
-                + (" or null" if optional else ""))
-
-    def integer(key, lower):
-        value = d.get(key)
-        if isinstance(value, bool) or not isinstance(value, int) or value < lower:
-            bad(key, f"an integer >= {lower}")
-
-    for key in ("method", "message"):
-        if not isinstance(d.get(key), str):
-            bad(key, "a string")
-    if d.get("schedule") is not None and not isinstance(d["schedule"], str):
-        bad("schedule", "a string or null")
-    number("J", lower=0.0)
-    number("alpha", optional=True)
-    number("noise_variance", lower=0.0, optional=True)
-    integer("n_samples", 1)
-    if not isinstance(d.get("alpha_at_bound"), bool):
-        bad("alpha_at_bound", "true or false")
-    if version == 1:
-        integer("n_iter", 0)
-        if not isinstance(d.get("converged"), bool):
-            bad("converged", "true or false")
+    Version 2 also stored ``alpha``, ``layout`` and ``parameter_names`` (checked against what
+    they derive from once the result is built), the bases beside the structure, the histories
+    as fields (now ``details``, a history that only repeats the estimate dropped), an offset of
+    ``null`` when none was fitted (now ``0.0``), and ``simulation_sse`` and a ``start``
+    description among the settings (now ``details``).
+    """
+    v2 = ("method", "schedule", "alpha", "J", "nit", "nfev", "message", "alpha_at_bound",
+          "n_samples", "noise_variance", "status", "theta", "covariance", "layout", "f_basis",
+          "g_basis", "structure", "orders", "offset", "past", "operating_point", "input_range",
+          "options", "parameter_names") + _V2_HISTORIES
+    _require_fields(d, v2, "fohw-result", 2, path)
+    _number(d, "alpha", path, optional=True)
+    _number(d, "J", path, lower=0.0)
+    _orders_field(d, "orders", path)
+    s = d["structure"]
+    if not isinstance(s, dict) or set(s) != {"orders", "offset", "past", "dt"}:
+        _bad(d, "structure", "an object with 'orders', 'offset', 'past' and 'dt'", path)
+    if d["offset"] is None:
+        if s["offset"] is True:
+            raise DataFileError(f"{path}: field 'offset' is null, but field 'structure.offset' "
+                                "says an offset was fitted: the file contradicts itself.")
+        offset = 0.0
     else:
-        integer("nit", 0)
-        integer("nfev", 0)
-        if isinstance(d.get("status"), bool) or d.get("status") not in {int(s) for s in Status}:
-            bad("status", f"one of {sorted(int(s) for s in Status)} (fohw.Status)")
-        number("offset", optional=True)
-        orders = d.get("orders")
-        if not isinstance(orders, dict) or not all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-                for v in orders.values()):
-            bad("orders", "an object of finite numbers (the estimated orders)")
-        for key in ("past", "operating_point"):
-            _finite_pair(d, key, path, optional=False)
+        _number(d, "offset", path, optional=True)
+        offset = d["offset"]
+    if not isinstance(d["options"], dict):
+        _bad(d, "options", "an object (the run's settings)", path)
+    options, details = dict(d["options"]), {}
+    if isinstance(options.get("start"), str):       # a description of the start, not a setting
+        details["start"] = options.pop("start")
+    if "simulation_sse" in options:
+        details["simulation_sse"] = options.pop("simulation_sse")
+    alpha = next(iter(d["orders"].values()), None)
+    derived = {"alpha_history": [] if alpha is None else [alpha], "J_history": [d["J"]]}
+    for key in _V2_HISTORIES:
+        entry = d[key]
+        if entry is None or (key in derived and isinstance(entry, dict)
+                             and entry.get("data") == derived[key]):
+            continue
+        details[key] = entry
+    body = {key: d[key] for key in _RESULT_FIELDS if key in d}
+    body.update(structure=dict(s, f_basis=d["f_basis"], g_basis=d["g_basis"]), offset=offset,
+                schedule="" if d["schedule"] is None else d["schedule"], options=options,
+                details=details)
+    return body, {key: d[key] for key in ("alpha", "layout", "parameter_names")}
+
+
+def _check_result_fields(d, version, path):
+    """Every field of a result's content has its type and a finite value, before use."""
+    _require_fields(d, _RESULT_FIELDS, "fohw-result", version, path)
+    for key in ("method", "message", "schedule"):
+        if not isinstance(d[key], str):
+            _bad(d, key, "a string", path)
+    if d["method"] not in METHODS:
+        _bad(d, "method", f"one of fohw's methods {METHODS}", path)
+    _number(d, "J", path, lower=0.0)
+    _number(d, "noise_variance", path, lower=0.0, optional=True)
+    _integer(d, "n_samples", path, 1)
+    _integer(d, "nit", path, 0)
+    _integer(d, "nfev", path, 0)
+    if isinstance(d["status"], bool) or d["status"] not in {int(s) for s in Status}:
+        _bad(d, "status", f"one of {sorted(int(s) for s in Status)} (fohw.Status)", path)
+    if not isinstance(d["alpha_at_bound"], bool):
+        _bad(d, "alpha_at_bound", "true or false", path)
+    _number(d, "offset", path)
+    _orders_field(d, "orders", path)
+    _finite_pair(d, "past", path)
+    _finite_pair(d, "operating_point", path)
     _finite_pair(d, "input_range", path, optional=True)
-
-
-def _finite_pair(d, key, path, optional):
-    value = d.get(key)
-    if value is None and optional:
-        return
-    if not isinstance(value, list) or len(value) != 2 or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-            for v in value):
-        raise DataFileError(f"{path}: field {key!r} must be a pair of finite numbers"
-                            + (" or null" if optional else "") + f"; got {value!r}.")
-
-
-def _array_field(d, key, path):
-    entry = d.get(key)
-    if entry is None:
-        return None
-    if not isinstance(entry, dict) or not isinstance(entry.get("data"), list) \
-            or not isinstance(entry.get("shape"), list):
-        raise DataFileError(f"{path}: field {key!r} must be null or an object with 'shape' and "
-                            "'data' lists.")
-    data = entry["data"]
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in data):
-        raise DataFileError(f"{path}: field {key!r} holds an entry that is not a number.")
-    arr = np.array(data, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        i = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise DataFileError(f"{path}: field {key!r} holds a non-finite value ({float(arr[i])!r} at "
-                            f"entry {i}).")
-    try:
-        return arr.reshape(entry["shape"])
-    except (TypeError, ValueError):
-        raise DataFileError(f"{path}: field {key!r} has {arr.size} values, which do not fill "
-                            f"its shape {entry['shape']!r}.") from None
+    if d["input_range"] is not None and d["input_range"][0] > d["input_range"][1]:
+        raise DataFileError(f"{path}: field 'input_range' is reversed ({d['input_range']!r}); it "
+                            "is the (smallest, largest) input of the estimation record.")
+    if _array_field(d, "theta", path) is None:
+        raise DataFileError(f"{path}: field 'theta' is missing (null).")
+    _array_field(d, "covariance", path)
+    for key in ("structure", "options", "details"):
+        if not isinstance(d[key], dict):
+            _bad(d, key, "an object", path)
+    for key, value in d["details"].items():
+        if isinstance(value, dict):
+            _array_field(d["details"], key, path, name=f"details.{key}")
+        elif isinstance(value, float) and not np.isfinite(value):
+            raise DataFileError(f"{path}: field 'details.{key}' is {value!r}; JSON holds finite "
+                                "numbers only.")
+    for key in ("f_basis", "g_basis"):
+        if key not in d["structure"]:
+            raise DataFileError(f"{path}: malformed fohw-result file (field {key!r} missing or "
+                                "not an object).")
 
 
 def _check_covariance(cov, n_estimates, path):
@@ -403,61 +374,87 @@ def _check_covariance(cov, n_estimates, path):
                             "none.")
 
 
+def _check_v2_copies(result, copies, path):
+    """The copies a version-2 file kept of derived facts must agree with what they derive from."""
+    if copies["alpha"] != result.alpha:
+        raise DataFileError(f"{path}: field 'alpha' is {copies['alpha']!r}, but field 'orders' "
+                            f"gives {result.alpha!r} as the first free order: the file "
+                            "contradicts itself.")
+    layout = copies["layout"]
+    if not isinstance(layout, dict) or (layout.get("na"), layout.get("nb")) \
+            != (result.layout.na, result.layout.nb):
+        raise DataFileError(f"{path}: field 'layout' is {layout!r}, but field 'structure' has "
+                            f"na = {result.layout.na}, nb = {result.layout.nb}: the file "
+                            "contradicts itself.")
+    if copies["parameter_names"] != list(result.parameter_names):
+        raise DataFileError(f"{path}: field 'parameter_names' is {copies['parameter_names']!r}, "
+                            f"but the structure names theta {list(result.parameter_names)}: the "
+                            "file contradicts itself.")
+
+
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
-    """Inverse of :func:`result_to_dict`.
+    """The result of a result file's content (:func:`result_to_dict`; version 2 files too).
 
     Every field is checked for its type and, for numbers, finiteness before use (the estimates,
     orders, offset, past levels, operating point and input range included; a covariance must
-    also be symmetric with a non-negative diagonal): a file edited or damaged by hand is a
+    also be symmetric with a non-negative diagonal), and the facts must agree with each other
+    (orders in ``[0, 2]`` and those of the structure, an offset only where one is fitted, a
+    known method, ``input_range`` in order; in a version-2 file ``alpha``, ``layout`` and
+    ``parameter_names`` as derived): a file edited or damaged by hand is a
     :class:`~fohw.DataFileError` naming the field, never a result that fails later.
     """
-    from ..results import IdentificationResult, Status, recover_model
-
     version = _check_header(d, "fohw-result", path)
-    for key in ("f_basis", "g_basis"):
-        if not isinstance(d.get(key), dict):
-            raise DataFileError(f"{path}: malformed fohw-result file (field {key!r} missing or "
-                                "not an object).")
-    _check_fields(d, path, version)
-    f = _basis_from_dict(d["f_basis"], f_basis, "f_basis", path)
-    g = _basis_from_dict(d["g_basis"], g_basis, "g_basis", path)
+    body = {k: v for k, v in d.items() if k not in _HEADER}
+    copies = None
+    if version == 2:
+        body, copies = _result_from_v2(body, path)
+    _check_result_fields(body, version, path)
+    f = _basis(body["structure"]["f_basis"], f_basis, "f_basis", path)
+    g = _basis(body["structure"]["g_basis"], g_basis, "g_basis", path)
     try:
-        arrays = {k: _array_field(d, k, path) for k in _ARRAYS}
-        if arrays["theta"] is None:
-            raise DataFileError(f"{path}: field 'theta' is missing (null).")
-        if version == 1:        # the paper's model; n_iter and converged, no status or nfev
-            structure = Structure(Orders.preset("commensurate", na=d["layout"]["na"],
-                                                nb=d["layout"]["nb"]), f, g)
-            status = Status.CONVERGED if d["converged"] else Status.MAX_ITER
-            nit = nfev = d["n_iter"]
-            orders, offset, past, point = {"alpha": d["alpha"]}, None, (0.0, 0.0), (0.0, 0.0)
-        else:
-            structure = _structure_from_dict(d["structure"], f, g)
-            status, nit, nfev = Status(d["status"]), d["nit"], d["nfev"]
-            orders, offset = d["orders"], d["offset"]
-            past, point = tuple(d["past"]), tuple(d["operating_point"])
-        model, _ = recover_model(structure, arrays["theta"], orders, offset=offset, past=past,
-                                 operating_point=point)
-        opts = {k: _from_json(v) for k, v in d["options"].items()}
-        result = IdentificationResult(
-            method=d["method"], schedule=d["schedule"], alpha=d["alpha"], model=model, J=d["J"],
-            status=status, nit=nit, nfev=nfev, message=d["message"],
-            alpha_at_bound=d["alpha_at_bound"], layout=structure.layout, f_basis=f, g_basis=g,
-            n_samples=d["n_samples"], options=opts, noise_variance=d["noise_variance"],
-            structure=structure, orders=orders, offset=offset, past=past, operating_point=point,
-            input_range=None if d.get("input_range") is None else tuple(d["input_range"]),
-            **arrays)
+        result = IdentificationResult.from_dict(body, f_basis=f, g_basis=g)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        if isinstance(exc, DataFileError):
-            raise
-        raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
-                            f"{exc}).") from None
+        raise DataFileError(f"{path}: malformed or inconsistent fohw-result file "
+                            f"({type(exc).__name__}: {exc})") from None
     _check_covariance(result.covariance, len(result.estimate_names), path)
+    if copies is not None:
+        _check_v2_copies(result, copies, path)
     return result
 
 
+def save_result(result, path):
+    """Write an identification result to a JSON file (atomically).
+
+    :func:`load_result` reads it back with every float exact. Settings without a JSON form (a
+    ``start`` result) are left out of ``options``.
+
+    Raises
+    ------
+    ParameterError
+        ``result`` is not an :class:`~fohw.IdentificationResult`, or holds a non-finite number
+        (nothing is written then; an existing file is unchanged).
+    DataFileError
+        ``path`` cannot be written.
+
+    Examples
+    --------
+    >>> import os, tempfile, fohw
+    >>> data = fohw.datasets.paper_example(300, random_state=0)
+    >>> res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     fohw.save_result(res, os.path.join(d, "r.json"))
+    ...     back = fohw.load_result(os.path.join(d, "r.json"))
+    >>> back.alpha == res.alpha and bool((back.theta == res.theta).all())
+    True
+    """
+    if not isinstance(result, IdentificationResult):
+        raise ParameterError(f"`result` must be an IdentificationResult; got "
+                             f"{type(result).__name__}.")
+    write_json(result_to_dict(result), path)
+
+
 def load_result(path, *, f_basis=None, g_basis=None):
-    """Read an identification result written by ``IdentificationResult.to_json``.
+    """Read an identification result written by :func:`save_result`.
 
     Parameters
     ----------
@@ -469,5 +466,5 @@ def load_result(path, *, f_basis=None, g_basis=None):
     -------
     IdentificationResult
     """
-    return result_from_dict(_read_json(path), f_basis=f_basis, g_basis=g_basis,
+    return result_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
                             path=os.fspath(path))

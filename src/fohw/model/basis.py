@@ -98,6 +98,66 @@ class Basis:
         """True if this is ``polynomial_basis(len(self))``."""
         return self == polynomial_basis(len(self))
 
+    def to_dict(self) -> dict:
+        """A JSON-ready description: the degree of a polynomial basis, else the function names.
+
+        Code is never serialised: a custom basis is described by its names only, and
+        :meth:`from_dict` needs the functions passed again.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fohw.polynomial_basis(2).to_dict()
+        {'kind': 'polynomial', 'degree': 2}
+        """
+        if self.is_polynomial:
+            return {"kind": "polynomial", "degree": len(self)}
+        return {"kind": "custom", "names": list(self.names)}
+
+    @classmethod
+    def from_dict(cls, d, basis=None, *, name: str = "basis") -> Basis:
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            ``{"kind": "polynomial", "degree": n}`` or ``{"kind": "custom", "names": [...]}``.
+        basis : Basis, int or callables, optional
+            The basis the caller expects: required for a custom basis (its functions are
+            code) and checked against ``d`` by its names (a polynomial one by its degree).
+        name : str
+            The argument's name in error messages (``"f_basis"``, ``"g_basis"``).
+
+        Raises
+        ------
+        ParameterError
+            ``d`` is not such a description, a custom basis was not passed, or ``basis`` does
+            not match ``d``.
+        """
+        kind = d.get("kind") if isinstance(d, Mapping) else None
+        if kind == "polynomial":
+            stored = polynomial_basis(check_int(d.get("degree"), f"{name}['degree']", minimum=1,
+                                                maximum=MAX_POLYNOMIAL_DEGREE))
+            if basis is not None and as_basis(basis, name) != stored:
+                raise ParameterError(f"`{name}` does not match the polynomial basis of degree "
+                                     f"{len(stored)} stored.")
+            return stored
+        if kind != "custom":
+            raise ParameterError(f"`{name}` must be described as {{'kind': 'polynomial', "
+                                 f"'degree': n}} or {{'kind': 'custom', 'names': [...]}}; got {d!r}.")
+        names = d.get("names")
+        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+            raise ParameterError(f"`{name}['names']` must be a non-empty list of strings; got "
+                                 f"{names!r}.")
+        if basis is None:
+            raise ParameterError(f"`{name}` is a custom basis ({names}); its functions are code, "
+                                 "which fohw never stores: pass the same basis again.")
+        basis = as_basis(basis, name)
+        if list(basis.names) != names:
+            raise ParameterError(f"`{name}` has functions {list(basis.names)}, but was saved with "
+                                 f"{names}.")
+        return basis
+
     def evaluate(self, x, name: str = "x") -> np.ndarray:
         """Evaluate every function on ``x``.
 

@@ -327,7 +327,10 @@ class Orders:
 
     @classmethod
     def from_dict(cls, d):
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict` (terms are checked as by the constructor)."""
+        if not isinstance(d, Mapping) or set(d) != {"a", "b"}:
+            raise ParameterError("`orders` must be described as {'a': [[lag, order], ...], "
+                                 f"'b': [...]}}; got {d!r}.")
         return cls(d["a"], d["b"])
 
     def __eq__(self, other):

@@ -200,9 +200,43 @@ class Structure:
         return values, past
 
     def to_dict(self) -> dict:
-        """JSON-ready description (bases by the caller: code is never serialised)."""
-        return {"orders": self.orders.to_dict(), "offset": self.offset, "past": self.past,
+        """A JSON-ready description (a custom basis by its names: code is never serialised).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> s = fohw.Structure.make(na=1, nb=1, f_basis=2, g_basis=1, offset=True)
+        >>> fohw.Structure.from_dict(s.to_dict()) == s
+        True
+        """
+        return {"orders": self.orders.to_dict(), "f_basis": self.f_basis.to_dict(),
+                "g_basis": self.g_basis.to_dict(), "offset": self.offset, "past": self.past,
                 "dt": self.dt}
+
+    @classmethod
+    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> Structure:
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            As written by :meth:`to_dict`.
+        f_basis, g_basis : Basis, optional
+            Needed for a custom basis, and checked against ``d`` (:meth:`Basis.from_dict`).
+
+        Raises
+        ------
+        ParameterError
+            A field is missing or invalid (the message names it).
+        """
+        keys = {"orders", "f_basis", "g_basis", "offset", "past", "dt"}
+        if not isinstance(d, dict) or set(d) != keys:
+            raise ParameterError(f"`structure` must have exactly the fields {sorted(keys)}; got "
+                                 f"{sorted(d) if isinstance(d, dict) else d!r}.")
+        return cls(Orders.from_dict(d["orders"]),
+                   Basis.from_dict(d["f_basis"], f_basis, name="f_basis"),
+                   Basis.from_dict(d["g_basis"], g_basis, name="g_basis"),
+                   offset=d["offset"], past=d["past"], dt=d["dt"])
 
     def __eq__(self, other):
         return (isinstance(other, Structure) and self.orders == other.orders

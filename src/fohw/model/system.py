@@ -271,11 +271,47 @@ class HammersteinWiener:
 
         return f"<pre>{html.escape(repr(self))}</pre>"
 
-    def to_json(self, path):
-        """Write the model to a versioned JSON file (:func:`fohw.save_model`)."""
-        from ..io.jsonio import save_model
+    #: The fields of :meth:`to_dict`, each fact once.
+    DICT_FIELDS = ("a", "b", "p", "q", "orders", "terms", "f_basis", "g_basis", "dt", "offset",
+                   "past", "operating_point")
 
-        save_model(self, path)
+    def to_dict(self) -> dict:
+        """A JSON-ready dict of the model, each fact once (:func:`fohw.save_model` writes it).
+
+        ``orders`` holds the values of the free orders, ``terms`` which term has which order
+        (:meth:`Orders.to_dict`); a custom basis is stored by its names only.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> m = fohw.datasets.paper_model()
+        >>> fohw.HammersteinWiener.from_dict(m.to_dict()) == m
+        True
+        """
+        return {"a": self.a.tolist(), "b": self.b.tolist(), "p": self.p.tolist(),
+                "q": self.q.tolist(), "orders": dict(self.orders),
+                "terms": self.structure.orders.to_dict(), "f_basis": self.f_basis.to_dict(),
+                "g_basis": self.g_basis.to_dict(), "dt": self.dt, "offset": self.offset,
+                "past": list(self.past), "operating_point": list(self.operating_point)}
+
+    @classmethod
+    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> HammersteinWiener:
+        """Inverse of :meth:`to_dict` (custom bases passed again, checked by their names).
+
+        Raises
+        ------
+        ParameterError, DimensionError
+            A field is missing, unknown or invalid (the message names it).
+        """
+        if not isinstance(d, dict) or set(d) != set(cls.DICT_FIELDS):
+            got = sorted(d) if isinstance(d, dict) else d
+            raise ParameterError(f"a model dict has exactly the fields {sorted(cls.DICT_FIELDS)}; "
+                                 f"got {got!r}.")
+        return cls(d["a"], d["b"], d["p"], d["q"], d["orders"],
+                   f_basis=Basis.from_dict(d["f_basis"], f_basis, name="f_basis"),
+                   g_basis=Basis.from_dict(d["g_basis"], g_basis, name="g_basis"),
+                   orders=Orders.from_dict(d["terms"]), dt=d["dt"], offset=d["offset"],
+                   past=d["past"], operating_point=d["operating_point"])
 
 
 def _output_terms(g_basis: Basis, Q: np.ndarray):

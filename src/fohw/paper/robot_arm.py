@@ -89,7 +89,7 @@ def fit_fractional_oe(u, y, n, f_basis, g_basis, lin):
                               n_f=len(fohw.as_basis(f_basis)))
     fits = [identify_quietly(u, y, **struct),
             identify_quietly(u, y, start=(linear_start(layout, lin), 1e-3), **struct)]
-    return min(fits, key=lambda r: r.options["simulation_sse"])
+    return min(fits, key=lambda r: r.details["simulation_sse"])
 
 
 def sim_fit(simulate, u, y, score):

@@ -1,0 +1,140 @@
+"""Files, safely: check where a file may go, write it atomically, read JSON with clear errors.
+
+Every file fohw writes (models, results, tables, figures' data) goes through :func:`write_text`:
+all of it or nothing, so a failed or interrupted save never truncates an existing file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from ..exceptions import DataFileError, ParameterError
+
+__all__ = ["check_output_path", "read_json", "write_json", "write_text", "first_non_finite"]
+
+
+def check_output_path(path, what="the output") -> str:
+    """Check, before any work, that a file can be written at ``path``; return it as a string.
+
+    Raises
+    ------
+    DataFileError
+        ``path`` is a directory, its folder does not exist, or the folder is not writable.
+    """
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise DataFileError(f"{what} {path!r} is a directory; give a file name.")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise DataFileError(f"{what} {path!r}: the folder {folder!r} does not exist.")
+    if not os.access(folder, os.W_OK):
+        raise DataFileError(f"{what} {path!r}: the folder {folder!r} is not writable.")
+    return path
+
+
+def read_json(path) -> dict:
+    """The JSON content of ``path``; a :class:`~fohw.DataFileError` saying why it cannot be read.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    DataFileError
+        ``path`` is a directory, not UTF-8, not valid JSON, or unreadable.
+    """
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise DataFileError(f"{path!r} is a directory, not a fohw JSON file.")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except json.JSONDecodeError as exc:
+        raise DataFileError(f"{path} is not valid JSON: {exc}.") from None
+    except UnicodeDecodeError:
+        raise DataFileError(f"{path} is not UTF-8 text, so not a fohw JSON file.") from None
+    except FileNotFoundError:
+        raise
+    except OSError as exc:
+        raise DataFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
+
+
+def first_non_finite(obj, where=""):
+    """``(place, value)`` of the first NaN or infinity in a JSON-ready object, or None.
+
+    The place is a dotted path (``details.J_history``, ``past[1]``); an array written as
+    ``{"shape": ..., "data": ...}`` is named itself, not its ``data``.
+    """
+    if isinstance(obj, float):
+        return None if np.isfinite(obj) else (where or "the value", obj)
+    if isinstance(obj, dict):
+        items = obj.items()
+        if set(obj) == {"shape", "data"}:           # an array: name it, not its 'data'
+            items = [(None, obj["data"])]
+    elif isinstance(obj, (list, tuple)):
+        items = ((f"[{i}]", v) for i, v in enumerate(obj))
+    else:
+        return None
+    for key, value in items:
+        inner = where if key is None else (f"{where}.{key}" if where and not key.startswith("[")
+                                           else f"{where}{key}")
+        found = first_non_finite(value, inner)
+        if found is not None:
+            return found
+    return None
+
+
+def write_json(obj, path):
+    """Write ``obj`` as JSON, atomically (see :func:`write_text`).
+
+    Non-finite numbers are refused before anything is written (JSON has none).
+
+    Raises
+    ------
+    ParameterError
+        ``obj`` holds a NaN or an infinity (the message names where).
+    DataFileError
+        ``path`` cannot be written (:func:`check_output_path`).
+    """
+    path = check_output_path(path, "the JSON file")
+    bad = first_non_finite(obj)
+    if bad is not None:
+        raise ParameterError(f"cannot save to {path}: field {bad[0]!r} is {bad[1]!r}, and JSON "
+                             "holds finite numbers only; nothing was written (an existing file "
+                             "is unchanged).")
+    write_text(json.dumps(obj, indent=1, allow_nan=False) + "\n", path)
+
+
+def write_text(text, path):
+    """Write ``text`` to ``path`` atomically: all of it, or nothing.
+
+    The text goes to a temporary file in the same folder, flushed to disk, which then replaces
+    ``path`` in one step (:func:`os.replace`), so an interrupted or failed save never truncates
+    a file: an existing one survives byte for byte. A symbolic link is written through (its
+    target is replaced, the link kept); a read-only file is refused.
+    """
+    path = check_output_path(path, "the output file")
+    path = os.path.realpath(path)             # write through a symbolic link, not over it
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise DataFileError(f"{path!r} is read-only; fohw does not replace it.")
+    folder, name = os.path.split(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        if os.path.exists(path):                    # keep the permissions the file had
+            os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        else:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,141 @@
+"""How an identification result reads: its text summary, repr, HTML table and plot.
+
+:class:`ResultPresentation` is the presentation half of :class:`fohw.IdentificationResult`
+(which inherits it); it only reads the result's public attributes, so the data half
+(:mod:`fohw.results`) stays free of formatting and plotting.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["ResultPresentation"]
+
+
+class ResultPresentation:
+    """``summary()``, ``repr``, the notebook table and ``plot()`` of an identification result."""
+
+    __slots__ = ()
+
+    def _display_names(self):
+        """The free orders and past levels first (alpha, as the paper lists it), then theta."""
+        return list(self.structure.nonlinear_names) + list(self.structure.linear_names)
+
+    def _repr_html_(self):
+        import html
+
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{est[n]:.6g}</td></tr>"
+                       for n in self._display_names())
+        return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
+                f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
+                f"<small>{html.escape(self.message)}</small>"
+                f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
+
+    def summary(self) -> str:
+        """A text table of the estimates and the run's diagnostics."""
+        lines = [f"fohw identification: method={self.method!r}"
+                 + (f", schedule={self.schedule!r}" if self.schedule else ""),
+                 f"  samples N = {self.n_samples}, na = {self.structure.na}, "
+                 f"nb = {self.structure.nb}, f_basis = {self.f_basis!r}, "
+                 f"g_basis = {self.g_basis!r}"]
+        if not self.structure.is_paper_model:
+            lines.append(f"  model: {self.structure.describe()}")
+        if self.operating_point != (0.0, 0.0):
+            lines.append(f"  operating point (u0, y0) = ({self.operating_point[0]:.6g}, "
+                         f"{self.operating_point[1]:.6g}), removed before fitting")
+        lines += [f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "
+                  f"evaluations = {self.nfev}, J (Eq. 41) = {self.J:.6g}",
+                  f"  {self.message}",
+                  ""]
+        names = self._display_names()
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        if self.model is not None:
+            est = self._estimates()
+        if self.covariance is not None:
+            lines += self._estimate_table(names, est)
+        else:
+            width = max(12, max(len(n) for n in names) + 2)
+            lines.append(f"  {'parameter':<{width}}{'estimate':>14}")
+            lines += [f"  {n:<{width}}{est[n]:>14.6g}" for n in names]
+            if self.model is not None:
+                lines += ["", "  recovered by Eqs. (39)-(40):"]
+                for name in "abpq":
+                    vals = ", ".join(f"{v:.6g}" for v in getattr(self.model, name))
+                    lines.append(f"  {name} = [{vals}]")
+        if self.alpha_at_bound:
+            lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
+        return "\n".join(lines)
+
+    def _estimate_table(self, names, est):
+        """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""
+        se = self.standard_errors()
+        ci = self.confidence_intervals()
+        width = max(12, max(len(n) for n in names) + 2)
+        lines = [f"  {'parameter':<{width}}{'estimate':>14}{'std err':>12}"
+                 f"{'95% CI low':>14}{'95% CI high':>14}"]
+
+        def row(n):
+            return (f"  {n:<{width}}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
+                    f"{ci[n][1]:>14.6g}")
+        lines += [row(n) for n in names]
+        if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
+            lines += ["", "  p and q estimated directly (structured least squares):"
+                      if self.method == "structured" else
+                      "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]
+            lines += [row(n) for n in self.layout.model_parameter_names if n[0] in "pq"]
+        lines += ["", f"  noise variance estimate s^2 = {self.noise_variance:.6g}"]
+        return lines
+
+    def __repr__(self):
+        orders = ", ".join(f"{k}={v:.6g}" for k, v in self.orders.items())
+        return (f"IdentificationResult(method={self.method!r}, schedule={self.schedule!r}, "
+                f"{orders + ', ' if orders else ''}J={self.J:.6g}, status={self.status.name}, "
+                f"nit={self.nit}, n_params={self.theta.shape[0]})")
+
+    def plot(self, theta_true=None):
+        """Histories of theta (or delta, given ``theta_true``), alpha and J.
+
+        Returns
+        -------
+        fig, axes
+            Matplotlib figure and its three axes; nothing is shown.
+        """
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(3, 1, figsize=(8, 7))
+        if self.theta_history is None:       # batch methods: no per-sample history
+            self._plot_batch(axes)
+        else:
+            self._plot_recursive(axes, theta_true)
+        fig.tight_layout()
+        return fig, axes
+
+    def _plot_batch(self, axes):
+        names = ("alpha",) + self.parameter_names
+        axes[0].bar(range(len(names)), [self.alpha, *self.theta])
+        axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
+        axes[0].set_ylabel("estimate")
+        if self.alpha_profile is not None:
+            axes[1].plot(*self.alpha_profile, marker=".")
+            axes[1].set_xlabel("alpha")
+            axes[1].set_ylabel("J(alpha), profile")
+        axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
+        axes[2].set_xlabel("evaluation")
+        axes[2].set_ylabel("J")
+
+    def _plot_recursive(self, axes, theta_true):
+        k = np.arange(1, self.n_samples + 1)
+        if theta_true is None:
+            axes[0].plot(k, self.theta_history, lw=0.8)
+            axes[0].set_ylabel("theta(k)")
+        else:
+            axes[0].semilogy(k, self.relative_error(theta_true, history=True))
+            axes[0].set_ylabel("delta(k)")
+        axes[0].set_xlabel("sample k (last pass)")
+        axes[1].plot(k, self.alpha_sample_history)
+        axes[1].set_ylabel("alpha(k)")
+        axes[1].set_xlabel("sample k (last pass)")
+        axes[2].plot(np.arange(1, len(self.J_history) + 1), self.J_history, marker="o")
+        axes[2].set_ylabel("J (Eq. 41)")
+        axes[2].set_xlabel("iteration m")

@@ -1,0 +1,348 @@
+"""One source of truth for a result, and its files: every field survives the JSON round trip,
+derived facts cannot disagree with what they derive from, and files of the previous layout
+(version 2, tests/data/*_v2_*.json, written by fohw before format 3) still load to the same
+result.
+"""
+
+import dataclasses
+import functools
+import json
+import pickle
+import warnings
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fohw
+from fohw.io.jsonio import RESULT_FORMAT_VERSION
+
+DATA = Path(__file__).resolve().parent / "data"
+FIELDS = tuple(f.name for f in dataclasses.fields(fohw.IdentificationResult))
+DERIVED = tuple(sorted(
+    name for name in dir(fohw.IdentificationResult)
+    if isinstance(getattr(fohw.IdentificationResult, name), (property, functools.cached_property))))
+
+
+def _fit(n=200, **kw):
+    data = fohw.datasets.paper_example(300, random_state=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fohw.identify(data.u[:n], data.y[:n], **kw)
+
+
+PAPER = dict(na=2, nb=2, f_basis=2, g_basis=3)
+FITS = {
+    "varpro": lambda: _fit(**PAPER),
+    "hybrid": lambda: _fit(n=80, method="hybrid", innovation_length=3, **PAPER),
+    "hybrid_iterative": lambda: _fit(n=80, method="hybrid", schedule="iterative", max_iter=3,
+                                     **PAPER),
+    "rls": lambda: _fit(n=80, method="rls", **PAPER),
+    "structured": lambda: _fit(method="structured", **PAPER),
+    "output_error_mixed": lambda: _fit(method="output_error", na=1, nb=1, f_basis=2, g_basis=1,
+                                       orders="mixed", offset=True, past="estimate",
+                                       n=300, max_nfev=10, operating_point=(0.05, -0.1)),
+    "output_error_from_a_result": lambda: _fit(method="output_error", start=_fit(**PAPER),
+                                               max_nfev=5, **PAPER),
+    "fixed_order": lambda: _fit(na=1, nb=2, f_basis=1, g_basis=1, orders=0.5),
+    "per_lag_dt": lambda: _fit(na=2, nb=1, f_basis=1, g_basis=2, orders="per_lag", dt=0.1),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(FITS))
+def result(request):
+    return FITS[request.param]()
+
+
+def same(a, b):
+    """Equal, arrays bit for bit and of the same shape, mappings entry by entry."""
+    if isinstance(a, fohw.IdentificationResult) and isinstance(b, fohw.IdentificationResult):
+        return all(same(getattr(a, n), getattr(b, n)) for n in FIELDS)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape
+                and a.dtype == b.dtype and np.array_equal(a, b))
+    if isinstance(a, Mapping) and isinstance(b, Mapping):
+        return list(a.keys()) == list(b.keys()) and all(same(a[k], b[k]) for k in a)
+    if isinstance(a, (tuple, list)) and isinstance(b, (tuple, list)):
+        return type(a) is type(b) and len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    return type(a) is type(b) and a == b
+
+
+def _json_settings(options):
+    """The settings a file can hold: those with a JSON form (not a start result)."""
+    return {k: v for k, v in options.items()
+            if not isinstance(v, fohw.IdentificationResult)}
+
+
+def test_the_dict_has_one_entry_per_field(result):
+    d = result.to_dict()
+    assert set(d) == set(FIELDS)
+    json.dumps(d, allow_nan=False)                 # JSON-ready as it stands
+
+
+def test_every_field_and_derived_fact_survives_the_file(result, tmp_path):
+    path = tmp_path / "r.json"
+    fohw.save_result(result, path)
+    assert json.loads(path.read_text())["version"] == RESULT_FORMAT_VERSION
+    back = fohw.load_result(path)
+    for name in FIELDS:
+        want = getattr(result, name)
+        if name == "options":
+            want = _json_settings(want)
+        assert same(getattr(back, name), want), name
+    for name in DERIVED:
+        assert same(getattr(back, name), getattr(result, name)), name
+    assert back.summary() == result.summary() and repr(back) == repr(result)
+
+
+def test_a_pickled_result_is_the_same(result):
+    back = pickle.loads(pickle.dumps(result))
+    for name in FIELDS + DERIVED:
+        assert same(getattr(back, name), getattr(result, name)), name
+
+
+def test_the_round_trip_test_sees_a_new_field():
+    # a field the dict does not carry fails test_the_dict_has_one_entry_per_field
+    @dataclasses.dataclass(frozen=True, repr=False, eq=False, kw_only=True)
+    class Extended(fohw.IdentificationResult):
+        extra: int = 0
+
+    r = FITS["varpro"]()
+    values = {f: getattr(r, f) for f in FIELDS}
+    grown = Extended(**values, extra=1)
+    assert set(grown.to_dict()) != {f.name for f in dataclasses.fields(Extended)}
+
+
+@pytest.mark.parametrize("name", ["alpha", "layout", "f_basis", "g_basis", "model",
+                                  "theta_history", "J_history", "alpha_profile"])
+def test_a_derived_fact_cannot_be_replaced(name):
+    r = FITS["varpro"]()
+    with pytest.raises(TypeError):
+        dataclasses.replace(r, **{name: getattr(r, name)})
+    with pytest.raises(AttributeError):
+        setattr(r, name, None)
+
+
+def test_replacing_what_facts_derive_from_moves_them():
+    r = FITS["varpro"]()
+    moved = dataclasses.replace(r, orders={"alpha": 0.3})
+    assert moved.alpha == 0.3 and moved.model.alpha == 0.3 and moved.orders == {"alpha": 0.3}
+    assert r.alpha != 0.3 and r.model.alpha == r.alpha       # the original is untouched
+    theta = r.theta * 2
+    assert np.array_equal(dataclasses.replace(r, theta=theta).model.theta,
+                          fohw.HammersteinWiener.from_theta(theta, r.alpha, na=2, nb=2,
+                                                            f_basis=2, g_basis=3).theta)
+    s = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=3, offset=True)
+    with_offset = dataclasses.replace(r, structure=s, offset=0.5, covariance=None)
+    assert with_offset.model.offset == 0.5 and with_offset.estimate_names[-2] == "offset"
+
+
+@pytest.mark.parametrize("change, error, match", [
+    (dict(orders={"alpha": 2.5}), fohw.ParameterError, r"`orders\['alpha'\]` must be in \[0, 2\]"),
+    (dict(orders={"nu": 0.5}), fohw.ParameterError, r"unknown \['nu'\]"),
+    (dict(offset=1.0), fohw.ParameterError, "the structure fits no offset"),
+    (dict(past=(1.0, 0.0)), fohw.ParameterError, "past='rest'"),
+    (dict(input_range=(1.0, -1.0)), fohw.ParameterError, "reversed"),
+    (dict(theta=np.ones(3)), fohw.DimensionError, "`theta` must have 10 entries"),
+    (dict(structure=fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1)),
+     fohw.DimensionError, "`theta` must have 2 entries"),
+    (dict(covariance=np.eye(3)), fohw.DimensionError, r"`covariance` must have shape \(11, 11\)"),
+])
+def test_a_result_whose_facts_disagree_cannot_be_made(change, error, match):
+    with pytest.raises(error, match=match):
+        dataclasses.replace(FITS["varpro"](), **change)
+
+
+def test_the_mappings_and_arrays_are_read_only():
+    r = FITS["hybrid"]()
+    for mapping in (r.orders, r.options, r.details):
+        with pytest.raises(TypeError):
+            mapping["alpha"] = 0.1
+    for array in (r.theta, r.theta_history, r.J_history, r.alpha_history):
+        with pytest.raises(ValueError):
+            array[0] = 0.0
+
+
+def test_outputs_live_in_details_and_settings_in_options():
+    r = FITS["output_error_mixed"]()
+    assert set(r.details) == {"simulation_sse", "alpha_history", "J_history"}
+    assert "simulation_sse" not in r.options and r.options["start"] is None
+    started = FITS["output_error_from_a_result"]()
+    assert started.details["start"] == "the given start"
+    assert isinstance(started.options["start"], fohw.IdentificationResult)
+    assert FITS["structured"]().details["start"] == "varpro (rank-one recovery)"
+    # a history that only repeats the estimate is derived, not stored
+    fixed = FITS["fixed_order"]()
+    assert dict(fixed.details) == {} and fixed.alpha is None and fixed.alpha_history.shape == (0,)
+    assert np.array_equal(fixed.J_history, [fixed.J])
+
+
+def test_offset_is_a_value_and_the_structure_says_whether_it_is_fitted():
+    r = FITS["varpro"]()
+    assert r.offset == 0.0 and not r.structure.offset and r.linear.shape == r.theta.shape
+    o = FITS["output_error_mixed"]()
+    assert o.structure.offset and o.offset == o.linear[-1] == o.model.offset
+
+
+# ---- version 2 files, written by fohw before format 3 (tests/data/make_v2_results.py) ----------
+V2 = sorted(p.name[len("result_v2_"):-len(".json")] for p in DATA.glob("result_v2_*.json")
+            if not p.name.endswith(".view.json"))
+
+
+def test_there_are_version_2_fixtures():
+    assert V2 == ["fixed_order", "hybrid", "output_error_mixed", "varpro"]
+
+
+def _plain(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (tuple, list)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "keys"):
+        return {k: _plain(value[k]) for k in value}
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@pytest.mark.parametrize("name", V2)
+def test_a_version_2_file_loads_to_the_same_result(name):
+    """Every attribute as the fohw that wrote the file read it back (its ``.view.json``)."""
+    view = json.loads((DATA / f"result_v2_{name}.view.json").read_text())
+    r = fohw.load_result(DATA / f"result_v2_{name}.json")
+    options = dict(view.pop("options"))
+    if "simulation_sse" in options:                   # an output, now in details
+        assert r.details["simulation_sse"] == options.pop("simulation_sse")
+    assert _plain(r.options) == options
+    offset = view.pop("offset")                       # null meant "none fitted": now 0.0
+    assert r.offset == (0.0 if offset is None else offset)
+    assert [r.layout.na, r.layout.nb, list(r.layout.names)] == view.pop("layout")
+    assert list(r.f_basis.names) == view.pop("f_basis")
+    assert list(r.g_basis.names) == view.pop("g_basis")
+    structure = r.structure.to_dict()
+    assert {k: structure[k] for k in ("orders", "offset", "past", "dt")} == view.pop("structure")
+    assert (None if r.model is None else repr(r.model)) == view.pop("model")
+    assert repr(r) == view.pop("repr") and r.summary() == view.pop("summary")
+    for key, want in view.items():
+        assert _plain(getattr(r, key)) == want, key
+    d = json.loads((DATA / f"result_v2_{name}.json").read_text())
+    assert np.array_equal(r.theta, d["theta"]["data"]) and r.alpha == d["alpha"]
+
+
+@pytest.mark.parametrize("name", ["paper", "mixed"])
+def test_a_version_2_model_file_loads_to_the_same_model(name):
+    view = json.loads((DATA / f"model_v2_{name}.view.json").read_text())
+    m = fohw.load_model(DATA / f"model_v2_{name}.json")
+    assert repr(m) == view["repr"]
+    d = json.loads((DATA / f"model_v2_{name}.json").read_text())
+    assert all(np.array_equal(getattr(m, k), d[k]) for k in "abpq")
+    assert (m.offset, list(m.past), m.orders) == (d["offset"], d["past"], d["orders"])
+
+
+def test_a_version_2_result_resaved_is_format_3(tmp_path):
+    r = fohw.load_result(DATA / "result_v2_output_error_mixed.json")
+    fohw.save_result(r, tmp_path / "r.json")
+    back = fohw.load_result(tmp_path / "r.json")
+    for name in FIELDS + DERIVED:
+        assert same(getattr(back, name), getattr(r, name)), name
+
+
+def _v2_file(tmp_path, name="varpro", **change):
+    d = json.loads((DATA / f"result_v2_{name}.json").read_text())
+    for key, value in change.items():
+        if "." in key:
+            outer, inner = key.split(".")
+            d[outer][inner] = value
+        else:
+            d[key] = value
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(alpha=0.1), "field 'alpha' is 0.1, but field 'orders' gives 0.602"),
+    (dict(layout={"na": 1, "nb": 2}), "field 'layout' is .* but field 'structure' has na = 2"),
+    (dict(parameter_names=["a1"]), "field 'parameter_names' is"),
+    (dict(orders={"alpha": 2.5}), "order 'alpha' is 2.5, outside \\[0, 2\\]"),
+    (dict(input_range=[2.0, 1.0]), "field 'input_range' is reversed"),
+    (dict(method="magic"), "field 'method' must be one of fohw's methods"),
+    (dict(offset=0.5), "the structure fits no offset"),
+    (dict(alpha=float("nan")), "field 'alpha' must be a finite number or null; got nan"),
+    (dict(extra=1), "field 'extra' is not part of a fohw-result file of version 2"),
+])
+def test_a_version_2_file_that_contradicts_itself_is_refused(tmp_path, change, match):
+    with pytest.raises(fohw.DataFileError, match=match):
+        fohw.load_result(_v2_file(tmp_path, **change))
+
+
+def test_a_version_2_file_with_a_null_offset_where_one_was_fitted_is_refused(tmp_path):
+    with pytest.raises(fohw.DataFileError, match="field 'offset' is null, but field "
+                                                 "'structure.offset' says an offset was fitted"):
+        fohw.load_result(_v2_file(tmp_path, "output_error_mixed", offset=None))
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(offset=1.0), "field 'structure.offset' is False, but field 'offset' is 1.0"),
+    (dict(past=[0.5, 0.0]), "field 'structure.past' is 'rest', but field 'past' is"),
+])
+def test_a_version_2_model_file_that_contradicts_itself_is_refused(tmp_path, change, match):
+    d = json.loads((DATA / "model_v2_paper.json").read_text())
+    d.update(change)
+    (tmp_path / "m.json").write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match=match):
+        fohw.load_model(tmp_path / "m.json")
+
+
+@pytest.mark.parametrize("model", [
+    fohw.datasets.paper_model(),
+    fohw.HammersteinWiener([0.5, 0.2], [1.0, 0.3], [1, 0.2], [1], alpha=0.4, orders="mixed",
+                           dt=0.5, offset=0.25, past=(0.1, -0.2), operating_point=(1.0, 2.0)),
+    fohw.HammersteinWiener([0.5], [1.0, 0.3], [1], [1], orders=0.0),
+])
+def test_a_model_round_trips_through_its_dict_and_its_file(model, tmp_path):
+    d = model.to_dict()
+    assert set(d) == set(fohw.HammersteinWiener.DICT_FIELDS)
+    assert fohw.HammersteinWiener.from_dict(json.loads(json.dumps(d))) == model
+    fohw.save_model(model, tmp_path / "m.json")
+    assert fohw.load_model(tmp_path / "m.json") == model
+
+
+def test_structure_and_basis_dicts_round_trip():
+    s = fohw.Structure.make(na=2, nb=1, f_basis=3, g_basis=1, orders="per_lag", offset=True,
+                            past="estimate", dt=0.25)
+    assert fohw.Structure.from_dict(json.loads(json.dumps(s.to_dict()))) == s
+    custom = fohw.Basis((np.tanh, np.sin), names=("tanh", "sin"))
+    with pytest.raises(fohw.ParameterError, match="pass the same basis again"):
+        fohw.Basis.from_dict(custom.to_dict())
+    assert fohw.Basis.from_dict(custom.to_dict(), custom) is custom
+    with pytest.raises(fohw.ParameterError, match="has functions"):
+        fohw.Basis.from_dict(custom.to_dict(), fohw.Basis((np.sin,), names=("sin",)))
+
+
+V2_FITS = {      # as in tests/data/make_v2_results.py
+    "varpro": dict(n=300, method="varpro", **PAPER),
+    "hybrid": dict(n=100, method="hybrid", innovation_length=3, **PAPER),
+    "output_error_mixed": dict(n=300, method="output_error", na=1, nb=1, f_basis=2, g_basis=1,
+                               orders="mixed", offset=True, past="estimate", max_nfev=20),
+    "fixed_order": dict(n=300, method="varpro", na=1, nb=2, f_basis=1, g_basis=1, orders=0.5),
+}
+
+
+@pytest.mark.parametrize("name", V2)
+def test_todays_fit_is_the_one_the_version_2_file_holds(name):
+    """No number moved: today's fit of the same data matches the old file (golden tolerances)."""
+    old = fohw.load_result(DATA / f"result_v2_{name}.json")
+    new = _fit(**V2_FITS[name])
+    assert (new.method, new.status, new.nit, new.nfev) == (old.method, old.status, old.nit,
+                                                           old.nfev)
+    assert set(new.details) == set(old.details) and list(new.orders) == list(old.orders)
+    for name_ in ("theta", "J", "offset", "past", "covariance", "noise_variance",
+                  "alpha_history", "J_history", "theta_history", "alpha_sample_history",
+                  "alpha_profile", "nonlinear"):
+        a, b = getattr(new, name_), getattr(old, name_)
+        if a is None or b is None:
+            assert a is b, name_
+        else:
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12, err_msg=name_)
