@@ -7,7 +7,7 @@
 On the paper's example (uniform input, seed 0, N samples) the varpro start is computed once per
 N; from it the simulation-error fit (``fit_output_error``) runs with the exact Jacobian (the
 default: ``-S`` from ``fohw.model.sensitivity.simulation_jacobian``) and with scipy's forward
-differences (``_jacobian="2-point"``, the code before, one simulation per parameter per
+differences (``tests/reference_estimators.py``, the code before, one simulation per parameter per
 Jacobian), interleaved, in this process. Printed: medians of ``--repeats`` runs (one run at
 N >= 1e5), their ratio, the solver's iterations (Jacobians), the simulations each path ran
 (residuals, plus one per parameter per Jacobian for finite differences, plus one per exact
@@ -33,16 +33,23 @@ compiled and pure (pure at N <= 1e5 only), to choose ``sensitivity._LEAF`` and
 """
 
 import argparse
+import contextlib
 import os
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
-import fohw
-from fohw.estimators.output_error import fit_output_error
-from fohw.estimators.varpro import separable_least_squares
-from fohw.model import _compiled, sensitivity
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from reference_estimators import finite_difference_output_error  # noqa: E402
+
+import fohw  # noqa: E402
+from fohw.estimators.output_error import fit_output_error  # noqa: E402
+from fohw.estimators.varpro import VarproOptions, separable_least_squares  # noqa: E402
+from fohw.model import _compiled, sensitivity  # noqa: E402
 
 # ruff: noqa: B023   (the timed callables run inside their loop iteration)
 
@@ -51,10 +58,12 @@ STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
 def fit(builder, start, jacobian):
     t0 = time.perf_counter()
-    with warnings.catch_warnings():
+    fd = jacobian == "2-point"
+    with warnings.catch_warnings(), (finite_difference_output_error() if fd
+                                     else contextlib.nullcontext()):
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
         res = fit_output_error(builder, start.linear, start.params, lower=np.array([0.0]),
-                               upper=np.array([1.0]), max_nfev=100, _jacobian=jacobian)
+                               upper=np.array([1.0]), max_nfev=100)
     return time.perf_counter() - t0, res
 
 
@@ -167,7 +176,8 @@ def main(argv=None):
         d = fohw.datasets.paper_example(n, random_state=0)
         builder = fohw.RegressorBuilder(d.u, d.y, **STRUCT)
         t0 = time.perf_counter()
-        start = separable_least_squares(builder, bounds=(np.array([0.0]), np.array([1.0])))
+        start = separable_least_squares(builder, bounds=(np.array([0.0]), np.array([1.0])),
+                                        options=VarproOptions())
         t_start = time.perf_counter() - t0
         repeats = args.repeats if n < 100_000 else 1
         runs = {"2-point": [], "exact": []}

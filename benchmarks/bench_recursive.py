@@ -4,25 +4,31 @@
 
 The hybrid (Table 1, P = 5, paper example, uniform input, seed 0) at the current code
 (windows from the GL weights expanded in alpha, ``fohw.model.gl_expansion``) and at the
-reference implementation kept in the code (``run_alternation(_reference=True)``: each window
+reference implementation kept with the tests (``tests/reference_estimators.py``: each window
 rebuilt from the weights at every sample, O(N^2), the code before the expansion), side by side
 in this run, with the largest difference of their alpha paths. The reference at 10^5 takes
 minutes, so it runs once there (``--repeats`` applies to everything else). ``--million`` adds
-one run of the current code at 10^6. MI-RLS (P = 1) the same way (``MultiInnovationRLS._reference``)
+one run of the current code at 10^6. MI-RLS (P = 1) the same way (``ReferenceRLS`` there)
 at 10^4, and the current code alone at 10^5. Targets (issue 15): hybrid at 10^5 <= 5 s and
 >= 20x faster than the reference.
 """
 
 import argparse
+import contextlib
 import os
+import sys
 import time
-import warnings
+from pathlib import Path
 
 import numpy as np
 
-import fohw
-from fohw._validation import AlphaBounds
-from fohw.estimators.hybrid import HybridOptions, run_alternation
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from reference_estimators import ReferenceRLS, rebuilt_windows  # noqa: E402
+
+import fohw  # noqa: E402
+from fohw._validation import AlphaBounds  # noqa: E402
+from fohw.estimators.hybrid import HybridOptions, run_alternation  # noqa: E402
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -31,11 +37,9 @@ def hybrid_run(n, reference):
     d = fohw.datasets.paper_example(n, random_state=0)
     t0 = time.perf_counter()
     builder = fohw.RegressorBuilder(d.u, d.y, **STRUCT)
-    options = HybridOptions().check(n, AlphaBounds((0.0, 1.0)))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        res = run_alternation(builder, "hybrid", options, AlphaBounds((0.0, 1.0)),
-                              _reference=reference)
+    options = HybridOptions().check(n_samples=n, bounds=(0.0, 1.0))
+    with rebuilt_windows() if reference else contextlib.nullcontext():
+        res = run_alternation(builder, "hybrid", options, AlphaBounds((0.0, 1.0)))
     return time.perf_counter() - t0, res.alpha_sample_history
 
 
@@ -47,8 +51,7 @@ def median_run(n, reference, repeats):
 def rls_run(n, reference):
     d = fohw.datasets.paper_example(n, random_state=0)
     t0 = time.perf_counter()
-    est = fohw.MultiInnovationRLS(**STRUCT)
-    est._reference = reference
+    est = (ReferenceRLS if reference else fohw.MultiInnovationRLS)(**STRUCT)
     est.fit(d.u, d.y)
     return time.perf_counter() - t0, est.alpha_history_
 

@@ -4,9 +4,9 @@
 
 Issue 15, item 5. For each N and each path, a fresh process (``OPENBLAS_NUM_THREADS=1``)
 simulates the paper's example (``fohw.datasets.paper_example(N, random_state=1)``), then runs
-``varpro_result`` (the builder included, as ``fohw.identify`` does) with ``_reference=True``
-(the full N x n matrix and its QR at every point: what varpro did before) or without (blocks of
-rows, TSQR). It reports
+``varpro_result`` (the builder included, as ``fohw.identify`` does) with the full-matrix reference
+of ``tests/reference_estimators.py`` in place (the full N x n matrix and its QR at every point:
+what varpro did before) or without (blocks of rows, TSQR). It reports
 
 * the time: the median of the repeats (3 up to 1e5, 1 at 1e6), the first run included;
 * the peak RSS: VmHWM of that process after its first run (``run.high_water_mb``), and the
@@ -26,17 +26,21 @@ import subprocess
 import sys
 import time
 import tracemalloc
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from run import STRUCT, high_water_mb  # noqa: E402
 
 
 def _fit(n, reference):
+    import contextlib
+
+    from reference_estimators import full_matrix_varpro
+
     import fohw
     from fohw.estimators.varpro import VarproOptions, varpro_result
 
@@ -44,10 +48,10 @@ def _fit(n, reference):
     bounds = (np.array([0.0]), np.array([1.0]))
 
     def run():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        with full_matrix_varpro() if reference else contextlib.nullcontext():
             builder = fohw.RegressorBuilder(d.u, d.y, **STRUCT)
-            return varpro_result(builder, VarproOptions().check(), bounds, _reference=reference)
+            options = VarproOptions().check(n_samples=n, bounds=bounds)
+            return varpro_result(builder, options, bounds)
     return run
 
 

@@ -33,7 +33,6 @@ import subprocess
 import sys
 import time
 import tracemalloc
-import warnings
 from pathlib import Path
 
 import matplotlib
@@ -140,9 +139,7 @@ def stage(name, n):
             "rls": dict(method="rls", innovation_length=1)}[name]
 
     def run():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-            fohw.identify(d.u, d.y, **STRUCT, **opts)
+        fohw.identify(d.u, d.y, **STRUCT, **opts)
     return run
 
 

@@ -3,7 +3,7 @@
 The weights and their derivatives are compared, weight by weight, with exact rational values
 (``fractions``); the windows, at every sample, with the literal double sums of
 ``tests/reference.py``; the recursions' alpha paths with the reference implementation that
-rebuilds each window from the weights (``_reference=True``).
+rebuilds each window from the weights (``tests/reference_estimators.py``).
 """
 
 import warnings
@@ -12,6 +12,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import reference
+from reference_estimators import ReferenceRLS, rebuilt_windows
 
 import fohw
 from fohw._validation import AlphaBounds
@@ -148,13 +149,12 @@ def test_recursive_methods_follow_the_reference_alpha_path(method, options):
     n = 1500
     d = fohw.datasets.paper_example(n, random_state=3)
     b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
-    o = options.check(n, AlphaBounds((0.0, 1.0)))
-    runs = []
-    with warnings.catch_warnings():
+    o = options.check(n_samples=n, bounds=(0.0, 1.0))
+    with warnings.catch_warnings():     # max_iter=2 may stop at max_iter: not what is tested
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        for ref in (True, False):
-            runs.append(run_alternation(b, method, o, AlphaBounds((0.0, 1.0)), _reference=ref))
-    slow, fast = runs
+        with rebuilt_windows():
+            slow = run_alternation(b, method, o, AlphaBounds((0.0, 1.0)))
+        fast = run_alternation(b, method, o, AlphaBounds((0.0, 1.0)))
     assert np.ptp(slow.alpha_sample_history) > 1e-3            # alpha does move
     np.testing.assert_allclose(fast.alpha_sample_history, slow.alpha_sample_history, rtol=0,
                                atol=1e-12)
@@ -195,9 +195,7 @@ def test_rls_follows_the_reference_path_within_its_rounding_sensitivity(P):
     STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3, innovation_length=P)
 
     def run(u, reference):
-        est = fohw.MultiInnovationRLS(**STRUCT)
-        est._reference = reference
-        return est.fit(u, d.y)
+        return (ReferenceRLS if reference else fohw.MultiInnovationRLS)(**STRUCT).fit(u, d.y)
 
     ref = run(d.u, True)
     fast = run(d.u, False)

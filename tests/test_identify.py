@@ -1,7 +1,5 @@
 """The alternating driver: contracts, errors, convergence reporting and golden runs."""
 
-import warnings
-
 import numpy as np
 import pytest
 
@@ -15,12 +13,10 @@ def data2000():
     return fohw.datasets.paper_example(2000, random_state=0)
 
 
-def quiet_identify(u, y, **kw):
-    """The paper's methods (default: the hybrid), their ConvergenceWarning silenced."""
+def paper_identify(u, y, **kw):
+    """The paper's methods (default: the hybrid) on the paper's structure."""
     kw.setdefault("method", "hybrid")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        return fohw.identify(u, y, **{**STRUCT, **kw})
+    return fohw.identify(u, y, **{**STRUCT, **kw})
 
 
 # Golden values: our own seeded runs (paper_example(2000, random_state=0)), recorded when the
@@ -38,7 +34,7 @@ GOLDEN_ITERATIVE_RECORD = dict(
 
 
 def test_golden_recursive_hybrid(data2000):
-    res = quiet_identify(data2000.u, data2000.y, innovation_length=5)
+    res = paper_identify(data2000.u, data2000.y, innovation_length=5)
     np.testing.assert_allclose(res.theta, GOLDEN_RECURSIVE_P5["theta"], rtol=1e-9, atol=1e-12)
     assert res.alpha == pytest.approx(GOLDEN_RECURSIVE_P5["alpha"], rel=1e-10)
     assert res.J == pytest.approx(GOLDEN_RECURSIVE_P5["J"], rel=1e-10)
@@ -68,7 +64,8 @@ def test_iterative_J_is_eq_41(data2000):
     import reference
 
     u, y = data2000.u[:300], data2000.y[:300]
-    res = quiet_identify(u, y, schedule="iterative", max_iter=3)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 3"):
+        res = paper_identify(u, y, schedule="iterative", max_iter=3)
     yhat = reference.one_step_prediction(u, y, res.theta, res.alpha, **STRUCT)
     np.testing.assert_allclose(res.predict(u, y), yhat, rtol=0, atol=1e-12)
     assert res.J == pytest.approx(np.mean((y - yhat) ** 2), rel=1e-10)
@@ -80,26 +77,27 @@ def test_stopping_at_max_iter_warns_and_says_so(data2000):
                             max_iter=3, tol=1e-12, **STRUCT)
     assert not res.converged and res.nit == 3 and "max_iter = 3" in res.message
     assert res.status == fohw.Status.MAX_ITER and res.nfev == 3
-    with pytest.warns(fohw.ConvergenceWarning, match="one pass only"):
-        res = fohw.identify(data2000.u[:300], data2000.y[:300], method="hybrid", **STRUCT)
+    # One pass of Table 1 does not test convergence by design: no warning, status NOT_TESTED.
+    res = fohw.identify(data2000.u[:300], data2000.y[:300], method="hybrid", **STRUCT)
     assert not res.converged and res.status == fohw.Status.NOT_TESTED
+    assert "one pass only" in res.message
 
 
 def test_single_innovation_gradient_is_hybrid_with_P1(data2000):
-    a = quiet_identify(data2000.u, data2000.y, method="single_innovation_gradient")
-    b = quiet_identify(data2000.u, data2000.y, method="hybrid", innovation_length=1)
+    a = paper_identify(data2000.u, data2000.y, method="single_innovation_gradient")
+    b = paper_identify(data2000.u, data2000.y, method="hybrid", innovation_length=1)
     np.testing.assert_array_equal(a.theta, b.theta)
     assert a.alpha == b.alpha
     # P = 1 is what the baseline is; asking for another P is an error, not silently overridden.
     assert "innovation_length" not in a.options
     with pytest.raises(fohw.ParameterError, match="has no option `innovation_length`"):
-        quiet_identify(data2000.u, data2000.y, method="single_innovation_gradient",
+        paper_identify(data2000.u, data2000.y, method="single_innovation_gradient",
                        innovation_length=5)
 
 
 def test_single_innovation_lm_runs_and_differs(data2000):
-    lm = quiet_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_lm")
-    gd = quiet_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_gradient")
+    lm = paper_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_lm")
+    gd = paper_identify(data2000.u[:500], data2000.y[:500], method="single_innovation_gradient")
     assert lm.method == "single_innovation_lm" and lm.theta_history.shape == (500, 10)
     assert not np.allclose(lm.theta, gd.theta)
 
@@ -110,9 +108,12 @@ def test_iterative_single_innovation_lm_makes_lm_steps(data2000):
     fohw 0.1 ran the gradient baseline here and labelled it LM (bit-identical results).
     """
     u, y = data2000.u[:600], data2000.y[:600]
-    lm = quiet_identify(u, y, method="single_innovation_lm", schedule="iterative", max_iter=2)
-    gd = quiet_identify(u, y, method="single_innovation_gradient", schedule="iterative",
-                        max_iter=2)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 2"):
+        lm = paper_identify(u, y, method="single_innovation_lm", schedule="iterative",
+                            max_iter=2)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 2"):
+        gd = paper_identify(u, y, method="single_innovation_gradient", schedule="iterative",
+                            max_iter=2)
     assert not np.allclose(lm.theta, gd.theta)
     # Independent reference: the first iteration's alpha step is the hybrid's; then, at that
     # alpha, a theta pass of LM steps written out from Eq. (48) with P = 1.
@@ -127,7 +128,7 @@ def test_iterative_single_innovation_lm_makes_lm_steps(data2000):
         step = (2 / 600) * np.linalg.solve((2 / 600) * jac.T @ jac + np.eye(10),
                                            jac.T @ (y[k:k + 1] - jac @ theta))
         theta = theta + step
-    one = quiet_identify(u, y, method="single_innovation_lm", schedule="iterative", max_iter=1)
+    one = paper_identify(u, y, method="single_innovation_lm", schedule="iterative", max_iter=1)
     assert one.alpha == pytest.approx(alpha, rel=1e-12)
     np.testing.assert_allclose(one.theta, theta, rtol=1e-10, atol=1e-14)
 
@@ -136,22 +137,23 @@ def test_recursive_pass_of_hybrid_with_fixed_alpha_is_migd(data2000):
     # With a huge LM damping alpha cannot move, so Table 1's theta recursion must be the MIGD
     # pass at alpha0 (the windows being rebuilt per sample, exactly, from full memory).
     u, y = data2000.u[:600], data2000.y[:600]
-    res = quiet_identify(u, y, alpha0=0.6, lm_lambda=1e300, innovation_length=3)
+    res = paper_identify(u, y, alpha0=0.6, lm_lambda=1e300, innovation_length=3)
     migd = fohw.MultiInnovationGradient(alpha=0.6, innovation_length=3, **STRUCT).fit(u, y)
     assert np.all(res.alpha_sample_history == 0.6)
     np.testing.assert_allclose(res.theta_history, migd.theta_history_, rtol=1e-10, atol=1e-13)
 
 
 def test_alpha_held_at_bound_is_reported(data2000):
-    res = quiet_identify(data2000.u, data2000.y, schedule="iterative", alpha_window="record",
-                         restart_r=True, lm_lambda=1e-8, alpha_bounds=(0.3, 0.5), alpha0=0.4,
-                         max_iter=5)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 5"):
+        res = paper_identify(data2000.u, data2000.y, schedule="iterative",
+                             alpha_window="record", restart_r=True, lm_lambda=1e-8,
+                             alpha_bounds=(0.3, 0.5), alpha0=0.4, max_iter=5)
     assert res.alpha_at_bound and "bound" in res.message
     assert 0.3 < res.alpha < 0.5
 
 
 def test_result_object(data2000):
-    res = quiet_identify(data2000.u[:400], data2000.y[:400])
+    res = paper_identify(data2000.u[:400], data2000.y[:400])
     assert res.parameter_names[2] == "q2a1"
     text = res.summary()
     for word in ("alpha", "q3a2", "p2b2", "J (Eq. 41)", "status = NOT_TESTED (2)"):
@@ -172,7 +174,7 @@ def test_result_plot_returns_figure(data2000):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    res = quiet_identify(data2000.u[:300], data2000.y[:300])
+    res = paper_identify(data2000.u[:300], data2000.y[:300])
     fig, axes = res.plot(theta_true=fohw.datasets.paper_model().theta)
     assert len(axes) == 3
     plt.close(fig)
@@ -183,23 +185,27 @@ def test_hybrid_identifier_estimator(data2000):
     assert est.get_params()["innovation_length"] == 3
     with pytest.raises(fohw.NotFittedError):
         est.predict(data2000.u, data2000.y)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 40"):
         assert est.fit(data2000.u, data2000.y) is est
     assert est.theta_.shape == (10,) and est.result_.options["innovation_length"] == 3
     assert est.alpha_ == est.result_.alpha and est.result_.method == "hybrid"
     # The same run as fohw.identify with those options.
-    direct = quiet_identify(data2000.u, data2000.y, innovation_length=3, schedule="iterative",
-                            max_iter=40)
+    with pytest.warns(fohw.ConvergenceWarning, match="max_iter = 40"):
+        direct = paper_identify(data2000.u, data2000.y, innovation_length=3,
+                                schedule="iterative", max_iter=40)
     np.testing.assert_array_equal(est.theta_, direct.theta)
     # predict uses what was fitted: changing a setting afterwards changes nothing.
     before = est.predict(data2000.u, data2000.y)
     est.set_params(innovation_length=1, alpha0=0.9)
     np.testing.assert_array_equal(est.predict(data2000.u, data2000.y), before)
-    with pytest.raises(TypeError, match="unexpected keyword argument 'P'"):
+    with pytest.raises(TypeError, match="unexpected keyword argument 'P'; its parameters are na"):
         fohw.HybridIdentifier(P=3, **STRUCT)
-    with pytest.raises(fohw.ParameterError, match="runs the paper's hybrid method"):
+    with pytest.raises(TypeError, match="unexpected keyword argument 'method'"):
         fohw.HybridIdentifier(method="varpro", **STRUCT)
+    with pytest.raises(TypeError, match="missing required keyword argument"):
+        fohw.HybridIdentifier(na=2, nb=2)
+    with pytest.raises(TypeError):              # keyword-only
+        fohw.HybridIdentifier(2, 2, 2, 3)
 
 
 @pytest.mark.parametrize(
@@ -248,16 +254,64 @@ def test_paper_claim_larger_P_measured_on_the_paper_example():
     d1, d5 = [], []
     for seed in range(3):
         data = fohw.datasets.paper_example(3000, random_state=seed)
-        d1.append(quiet_identify(data.u, data.y, innovation_length=1).relative_error(
+        d1.append(paper_identify(data.u, data.y, innovation_length=1).relative_error(
             data.model.theta))
-        d5.append(quiet_identify(data.u, data.y, innovation_length=5).relative_error(
+        d5.append(paper_identify(data.u, data.y, innovation_length=5).relative_error(
             data.model.theta))
     assert abs(np.median(d1) - np.median(d5)) < 0.05 * np.median(d1)
     assert 0.3 < np.median(d5) < 0.8
 
 
 def test_notebook_reprs(data2000):
-    res = quiet_identify(data2000.u[:300], data2000.y[:300], method="varpro")
+    res = paper_identify(data2000.u[:300], data2000.y[:300], method="varpro")
     html = res._repr_html_()
     assert "<table>" in html and "q3a2" in html and "varpro" in html
     assert "HammersteinWiener(a=[0.1, 0.2]" in fohw.datasets.paper_model()._repr_html_()
+
+
+def test_every_option_is_declared_once_and_checked_by_one_check():
+    from fohw.estimators.identify import OPTIONS
+    from fohw.estimators.migd import MigdOptions
+
+    for cls in (*OPTIONS.values(), MigdOptions):
+        # A constraint for every field, and one check signature for every class.
+        assert set(cls.constraints) == set(cls.names()), cls
+        checked = cls().check(n_samples=100, bounds=(0.0, 1.0))
+        assert type(checked) is cls and checked.check(n_samples=100, bounds=(0.0, 1.0)) == checked
+    # The estimator classes take their settings, defaults included, from the dataclasses.
+    for est, cls in ((fohw.HybridIdentifier, fohw.HybridOptions),
+                     (fohw.MultiInnovationRLS, fohw.RlsOptions),
+                     (fohw.MultiInnovationGradient, MigdOptions)):
+        params = est(**STRUCT, **({"alpha": 0.6} if cls is MigdOptions else {})).get_params()
+        assert {k: v for k, v in params.items() if k in cls.names()} == cls.defaults()
+
+
+def test_rls_class_and_method_share_the_alpha0_default(data2000):
+    # alpha0 defaults to the middle of alpha_bounds for both (the class once started at 0.5,
+    # outside these bounds).
+    u, y = data2000.u[:300], data2000.y[:300]
+    est = fohw.MultiInnovationRLS(alpha_bounds=(1.0, 2.0), estimate_alpha=False, **STRUCT)
+    assert est.fit(u, y).alpha_ == 1.5
+    res = fohw.identify(u, y, method="rls", alpha_bounds=(1.0, 2.0), estimate_alpha=False,
+                        **STRUCT)
+    assert res.alpha == 1.5 and res.options["alpha0"] == 1.5
+    np.testing.assert_array_equal(res.theta, est.theta_)
+
+
+def test_an_option_of_another_method_says_which_methods_have_it(data2000):
+    with pytest.raises(fohw.ParameterError, match="`max_iter` is an option of 'hybrid'"):
+        fohw.identify(data2000.u, data2000.y, method="output_error", max_iter=3, **STRUCT)
+    with pytest.raises(fohw.ParameterError, match="`max_nfev` is an option of 'output_error', "
+                                                  "'structured', 'varpro'"):
+        fohw.identify(data2000.u, data2000.y, method="hybrid", max_nfev=3, **STRUCT)
+
+
+def test_which_structures_a_method_supports_is_declared_with_it():
+    from fohw.estimators import hybrid, rls, varpro
+
+    paper = fohw.datasets.paper_model().structure
+    mixed = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, orders="mixed")
+    for method in (*hybrid.METHODS, rls.METHOD):
+        assert method.supports(paper) is None
+        assert "implements the paper's commensurate model" in method.supports(mixed)
+    assert varpro.METHOD.supports(mixed) is None

@@ -63,7 +63,8 @@ def test_migd_noise_free_innovation_goes_to_zero(seed):
 
 def test_migd_paper_example_noise_free_innovation_decreases():
     data = fohw.datasets.paper_example(4000, noise_variance=0.0, random_state=0)
-    est = fohw.MultiInnovationGradient(2, 2, 2, 3, 0.6, innovation_length=5).fit(data.u, data.y)
+    est = fohw.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6,
+                                       innovation_length=5).fit(data.u, data.y)
     inn = est.innovation_history_
     assert np.sqrt(np.mean(inn[-1000:] ** 2)) < np.sqrt(np.mean(inn[:1000] ** 2))
 
@@ -73,7 +74,8 @@ def test_longer_innovation_converges_faster_on_a_well_conditioned_system(seed):
     m, u, y = simple_record(seed)
     delta = {}
     for P in (1, 5):
-        est = fohw.MultiInnovationGradient(1, 1, 1, 1, 0.6, innovation_length=P).fit(u, y)
+        est = fohw.MultiInnovationGradient(na=1, nb=1, f_basis=1, g_basis=1, alpha=0.6,
+                                           innovation_length=P).fit(u, y)
         delta[P] = np.linalg.norm(est.theta_ - m.theta) / np.linalg.norm(m.theta)
     assert delta[5] < delta[1]
 
@@ -132,7 +134,7 @@ def test_windowed_regressors_equal_the_full_matrix():
 
 
 def test_migd_estimator_contract():
-    est = fohw.MultiInnovationGradient(2, 2, 2, 3, 0.6)
+    est = fohw.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6)
     with pytest.raises(fohw.NotFittedError, match="not fitted"):
         est.predict(np.zeros(10), np.zeros(10))
     assert est.get_params()["innovation_length"] == 5

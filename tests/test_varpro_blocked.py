@@ -2,18 +2,19 @@
 
 Issue 15, item 5: the profile solve, the Golub–Pereyra Jacobian and the covariance are computed
 from triangular factors accumulated over blocks of rows. Each is compared here with the
-full-matrix computation it replaces (``_FullMatrixProfile``, what varpro did before), at the same
+full-matrix computation it replaces (``FullMatrixProfile`` in ``tests/reference_estimators.py``,
+what varpro did before), at the same
 point, with tolerances from the conditioning of the problem; and whole fits are compared with a
 tolerance from the solver's stopping rule.
 """
 
-import warnings
-
 import numpy as np
 import pytest
+from reference_estimators import FullMatrixBuilder, FullMatrixProfile, full_matrix_varpro
 
 import fohw
-from fohw.estimators import varpro
+from fohw.estimators import profile
+from fohw.estimators.profile import Profile
 from fohw.estimators.varpro import VarproOptions, varpro_result
 
 EPS = np.finfo(float).eps
@@ -56,7 +57,7 @@ def _gamma(n_rows, n_cols):
     return n_rows * n_cols * EPS
 
 
-# The records have 3000 rows, one block at the default _BLOCK_ROWS; 1000 gives three blocks, 7
+# The records have 3000 rows, one block at the default BLOCK_ROWS; 1000 gives three blocks, 7
 # (fewer rows than columns) 429 pieces, so the stacked triangles are reduced again on the way.
 BLOCK_ROWS = [None, 1000, 7]
 
@@ -64,7 +65,7 @@ BLOCK_ROWS = [None, 1000, 7]
 @pytest.fixture(params=BLOCK_ROWS, ids=lambda r: f"block_rows={r}")
 def block_rows(request, monkeypatch):
     if request.param is not None:
-        monkeypatch.setattr(varpro, "_BLOCK_ROWS", request.param)
+        monkeypatch.setattr(profile, "BLOCK_ROWS", request.param)
     return request.param
 
 
@@ -73,8 +74,8 @@ def test_profile_solve_equals_the_full_matrix_solve(name, block_rows):
     model = SYSTEMS[name]()
     b = _builder(model)
     for params in (model.nonlinear, 0.9 * np.asarray(model.nonlinear) + 0.05):
-        x_new, rss_new, f_new = varpro._Profile(b)(params)
-        x_ref, rss_ref, f_ref = varpro._FullMatrixProfile(b)(params)
+        x_new, rss_new, f_new = Profile(b)(params)
+        x_ref, rss_ref, f_ref = FullMatrixProfile(b)(params)
         assert (f_new.rank, list(f_new.dependent)) == (f_ref.rank, list(f_ref.dependent))
         # Both are backward stable least-squares solves of A_s = Phi / scale; their solutions
         # differ by at most twice the perturbation bound (Higham, Thm 20.1):
@@ -95,7 +96,7 @@ def test_golub_pereyra_and_covariance_equal_the_full_matrix_ones(name, block_row
     model = SYSTEMS[name]()
     b = _builder(model)
     params = np.asarray(model.nonlinear, dtype=float)
-    new, ref = varpro._Profile(b), varpro._FullMatrixProfile(varpro._FullMatrixBuilder(b))
+    new, ref = Profile(b), FullMatrixProfile(FullMatrixBuilder(b))
     linear, rss, _ = ref(params)
     G = b.jacobian(linear, params)
     sv = np.linalg.svd(G / np.linalg.norm(G, axis=0), compute_uv=False)
@@ -127,8 +128,8 @@ def test_rank_deficient_profile_names_the_same_columns(block_rows):
     y = fohw.simulate(_paper(), u, noise_std=0.05, random_state=4)
     dup = fohw.Basis((lambda v: v, lambda v: 1.0 * v), names=("x", "x_again"))
     b = fohw.RegressorBuilder(u, y, na=2, nb=2, f_basis=dup, g_basis=3)
-    x_new, rss_new, f_new = varpro._Profile(b)(0.6)
-    x_ref, rss_ref, f_ref = varpro._FullMatrixProfile(b)(0.6)
+    x_new, rss_new, f_new = Profile(b)(0.6)
+    x_ref, rss_ref, f_ref = FullMatrixProfile(b)(0.6)
     assert f_new.rank == f_ref.rank == 8
     # Of two identical columns the later is named (ties go to the first column) by both paths;
     # LAPACK's pivoting alone broke the tie by rounding (the full-matrix path named b2 and p2b1
@@ -154,12 +155,10 @@ def test_fit_equals_the_full_matrix_fit(name, block_rows):
     b = _builder(model)
     k = len(model.structure.orders.free)
     bounds = (np.zeros(k), np.full(k, 1.5))
-    opts = VarproOptions().check()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-        new = varpro_result(b, opts, bounds, operating_point=model.operating_point)
-        ref = varpro_result(b, opts, bounds, operating_point=model.operating_point,
-                            _reference=True)
+    opts = VarproOptions().check(n_samples=b.n_samples, bounds=bounds)
+    new = varpro_result(b, opts, bounds, operating_point=model.operating_point)
+    with full_matrix_varpro():
+        ref = varpro_result(b, opts, bounds, operating_point=model.operating_point)
     assert new.status == ref.status == fohw.Status.CONVERGED
     # The two fits see the same residuals and Jacobians to rounding, but each stops where the
     # solver's tolerance `tol` is met, not at the minimiser: a step that lowers the cost by

@@ -157,7 +157,7 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         covariance = noise_variance = None
         warnings.warn(f"fohw.identify({method!r}): {note}", RankDeficiencyWarning,
                       stacklevel=stacklevel)
-    elif status in (Status.MAX_ITER, Status.NOT_TESTED, Status.FAILED):
+    elif status in (Status.MAX_ITER, Status.FAILED):
         warnings.warn(f"fohw.identify({method!r}" + (f", schedule={schedule!r}" if schedule else "")
                       + f"): {message}", ConvergenceWarning, stacklevel=stacklevel)
     n_theta = structure.layout.n_params
@@ -200,3 +200,19 @@ def bound_note(name, lo, hi, at_lower, at_upper):
     limit = "0" if at_lower else "2"
     return (f" {name} ended at the {side} bound of alpha_bounds = ({lo:g}, {hi:g}); widen that "
             f"bound (towards {limit}, the widest fohw allows) if the order may lie beyond it.")
+
+
+def paper_model_only(structure):
+    """``supports`` of the recursive methods: the paper's commensurate model (Eq. 16) only."""
+    if structure.is_paper_model:
+        return None
+    return ("implements the paper's commensurate model (Eq. 16: one order for every term, no "
+            f"offset, rest before k = 0, dt = 1); this structure is {structure.describe()}. Use "
+            "method='varpro', 'structured' or 'output_error' for it.")
+
+
+def bounds_record(structure, lo, hi):
+    """``alpha_bounds`` as given back in the result: a pair, or one pair per free order."""
+    if len(set(zip(lo.tolist(), hi.tolist()))) <= 1 and lo.size:
+        return (float(lo[0]), float(hi[0]))
+    return {name: (float(a), float(b)) for name, a, b in zip(structure.orders.free, lo, hi)}

@@ -52,19 +52,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._base import BaseEstimator, check_is_fitted
-from .._validation import check_int, check_scalar
+from .._base import REQUIRED, BaseEstimator, check_is_fitted
+from .._validation import AlphaBounds
 from ..exceptions import ParameterError
-from ..model.gl import _weights
 from ..model.gl_expansion import ExpandedWindows, GLExpansion
 from ..results import Status
-from ._common import check_finite_estimate, finish
+from ._common import check_finite_estimate, finish, paper_model_only
 from .migd import NORMALISATIONS, migd_pass, migd_update
-from .milm import alpha_update, check_sensitivity, milm_pass, milm_step, sensitivity_weights
-from .options import MethodOptions
+from .milm import SENSITIVITIES, alpha_update, milm_pass, milm_step
+from .options import (
+    ALPHA0,
+    FORGETTING,
+    INNOVATION_LENGTH,
+    POSITIVE,
+    Boolean,
+    Choice,
+    Integer,
+    Method,
+    MethodOptions,
+    Real,
+)
+from .problem import fit_method
 
 __all__ = ["HybridOptions", "SingleInnovationGradientOptions", "SingleInnovationLMOptions",
-           "run_alternation", "HybridIdentifier", "SCHEDULES"]
+           "run_alternation", "HybridIdentifier", "SCHEDULES", "METHODS"]
 
 SCHEDULES = ("recursive", "iterative")
 ALPHA_WINDOWS = ("innovation", "record")
@@ -98,6 +109,11 @@ class SingleInnovationLMOptions(MethodOptions):
         Samples of the alpha step in the iterative schedule (see the module notes).
     """
 
+    constraints = {"schedule": Choice(SCHEDULES), "alpha0": ALPHA0,
+                   "max_iter": Integer(1, 10**6, none=True), "tol": POSITIVE, "p0": POSITIVE,
+                   "lm_lambda": POSITIVE, "delta_alpha": Real(0.0, 0.1, closed="right"),
+                   "sensitivity": Choice(SENSITIVITIES), "alpha_window": Choice(ALPHA_WINDOWS)}
+
     schedule: str = "recursive"
     alpha0: float | None = None
     max_iter: int | None = None
@@ -108,27 +124,16 @@ class SingleInnovationLMOptions(MethodOptions):
     sensitivity: str = "finite_difference"
     alpha_window: str = "innovation"
 
-    def check(self, n_samples, bounds):
-        """Validated copy with the defaults that depend on the schedule and bounds filled in."""
-        if self.schedule not in SCHEDULES:
-            raise ParameterError(f"`schedule` must be one of {SCHEDULES}; got {self.schedule!r}.")
-        if self.alpha_window not in ALPHA_WINDOWS:
-            raise ParameterError(f"`alpha_window` must be 'innovation' or 'record'; got "
-                                 f"{self.alpha_window!r}.")
+    def complete(self, context):
+        """``alpha0`` and ``max_iter`` defaults (from the bounds and the schedule); combinations."""
         if self.alpha_window == "record" and self.schedule == "recursive":
             raise ParameterError("`alpha_window='record'` applies to the iterative schedule only; "
                                  "the recursive schedule (Table 1) uses the last "
                                  "`innovation_length` samples.")
-        alpha0 = 0.5 * (bounds.lo + bounds.hi) if self.alpha0 is None else check_scalar(
-            self.alpha0, "alpha0", lower=bounds.lo, upper=bounds.hi, lower_inclusive=False,
-            upper_inclusive=False)
+        alpha0 = (float(0.5 * (context.lower[0] + context.upper[0])) if self.alpha0 is None
+                  else self.alpha0)
         max_iter = _DEFAULT_MAX_ITER[self.schedule] if self.max_iter is None else self.max_iter
-        return self.replace(
-            alpha0=alpha0, max_iter=check_int(max_iter, "max_iter", minimum=1, maximum=10**6),
-            tol=check_scalar(self.tol, "tol", lower=0.0, lower_inclusive=False),
-            p0=check_scalar(self.p0, "p0", lower=0.0, lower_inclusive=False),
-            lm_lambda=check_scalar(self.lm_lambda, "lm_lambda", lower=0.0, lower_inclusive=False),
-            delta_alpha=check_sensitivity(self.sensitivity, self.delta_alpha))
+        return self.replace(alpha0=alpha0, max_iter=max_iter)
 
     @property
     def P(self):
@@ -153,21 +158,13 @@ class SingleInnovationGradientOptions(SingleInnovationLMOptions):
     Also every attribute of :class:`SingleInnovationLMOptions`.
     """
 
+    constraints = {**SingleInnovationLMOptions.constraints,
+                   "normalisation": Choice(NORMALISATIONS), "forgetting": FORGETTING,
+                   "restart_r": Boolean()}
+
     normalisation: str = "window"
     forgetting: float = 1.0
     restart_r: bool = False
-
-    def check(self, n_samples, bounds):
-        """Validated copy."""
-        out = SingleInnovationLMOptions.check(self, n_samples, bounds)
-        if self.normalisation not in NORMALISATIONS:
-            raise ParameterError(f"`normalisation` must be one of {NORMALISATIONS}; got "
-                                 f"{self.normalisation!r}.")
-        if not isinstance(self.restart_r, (bool, np.bool_)):
-            raise ParameterError(f"`restart_r` must be True or False; got {self.restart_r!r}.")
-        return out.replace(forgetting=check_scalar(self.forgetting, "forgetting", lower=0.0,
-                                                   upper=1.0, lower_inclusive=False),
-                           restart_r=bool(self.restart_r))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -183,13 +180,10 @@ class HybridOptions(SingleInnovationGradientOptions):
     :class:`SingleInnovationLMOptions`.
     """
 
-    innovation_length: int = 5
+    constraints = {**SingleInnovationGradientOptions.constraints,
+                   "innovation_length": INNOVATION_LENGTH}
 
-    def check(self, n_samples, bounds):
-        """Validated copy."""
-        out = SingleInnovationGradientOptions.check(self, n_samples, bounds)
-        return out.replace(innovation_length=check_int(
-            self.innovation_length, "innovation_length", minimum=1, maximum=n_samples))
+    innovation_length: int = 5
 
     @property
     def P(self):
@@ -201,8 +195,7 @@ def _criterion(J_prev, J):
     return abs(J - J_prev) / abs(J_prev) if J_prev != 0 else (0.0 if J == 0 else np.inf)
 
 
-def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0.0),
-                    _reference=False):
+def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0.0)):
     """The paper's alternation of MIGD (theta) and MI-LM (alpha) under one schedule.
 
     Parameters
@@ -215,11 +208,6 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
     bounds : AlphaBounds
     operating_point : (float, float)
         Removed from the data before; recorded in the result.
-    _reference : bool
-        Private: rebuild each window of the recursive schedule from the GL weights at every
-        sample (``O(N^2)`` per pass, the implementation before the expansion in alpha) instead
-        of :mod:`fohw.model.gl_expansion` (``O(M N log N)``); the tests and
-        ``benchmarks/bench_recursive.py`` compare the two.
 
     Returns
     -------
@@ -231,7 +219,9 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
     alpha come from the GL weights expanded in Chebyshev polynomials of alpha on
     ``[lo, hi + delta_alpha]`` (:class:`fohw.model.gl_expansion.GLExpansion`, whose proven
     bound keeps the windows within ``1e-16 max|x|`` of the exact ones): the alpha path equals
-    that of the direct rebuild to rounding (measured: 2e-15 at ``N = 10**4``).
+    that of the direct rebuild to rounding (measured: 2e-15 at ``N = 10**4``;
+    ``tests/reference_estimators.py`` keeps the direct rebuild, which the tests and
+    ``benchmarks/bench_recursive.py`` put in place of :func:`expanded_windows`).
     """
     n_samples = builder.n_samples
     o = options
@@ -244,9 +234,9 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
     alpha_hist, J_hist = [], []
     status = Status.MAX_ITER
     Phi = None              # the information matrix at the current alpha, once built
-    windows = None          # the recursive schedule's expanded windows, built once for all passes
-    if o.schedule == "recursive" and not _reference:
-        windows = _expanded_windows(builder, bounds, o.P, o.sensitivity, o.delta_alpha)
+    windows = None          # the recursive schedule's windows, built once for all passes
+    if o.schedule == "recursive":
+        windows = expanded_windows(builder, bounds, o.P, o.sensitivity, o.delta_alpha)
     for m in range(1, o.max_iter + 1):
         if getattr(o, "restart_r", False):
             r = 1.0
@@ -254,7 +244,7 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
             theta, alpha, r, theta_path, alpha_path = _recursive_pass(
                 builder, theta, alpha, r, bounds, method=method, joint=lm, P=o.P,
                 normalisation=normalisation, forgetting=forgetting, lm_lambda=o.lm_lambda,
-                delta_alpha=o.delta_alpha, sensitivity=o.sensitivity, windows=windows)
+                windows=windows)
             Phi = builder.matrix(alpha)
         else:
             k_now = 0 if m == 1 else n_samples - 1
@@ -303,27 +293,39 @@ def run_alternation(builder, method, options, bounds, *, operating_point=(0.0, 0
                   alpha_history=alpha_hist, J_history=J_hist)
 
 
-def _expanded_windows(builder, bounds, P, sensitivity, delta_alpha):
+def expanded_windows(builder, bounds, P, sensitivity, delta_alpha):
     """The recursion's windows from GL weights expanded in alpha (:mod:`fohw.model.gl_expansion`).
 
     The interval covers every order the pass evaluates: ``alpha`` stays in ``bounds`` and the
     finite difference of Eq. (44) also needs ``alpha + delta_alpha``.
+
+    Returns
+    -------
+    callable
+        ``window(k, alpha)``: ``Phi(P, k)^T`` and its derivative in alpha (the finite
+        difference of Eq. 44 or the exact one), shape ``(2, rows, n)``, ``O(M N log N)`` for a
+        whole pass.
     """
     hi = bounds.hi + (delta_alpha if sensitivity == "finite_difference" else 0.0)
     expansion = GLExpansion(bounds.lo, hi, builder.n_samples)
-    return ExpandedWindows(builder.signals, builder._lags, expansion, P)
+    windows = ExpandedWindows(builder.signals, builder._lags, expansion, P)
+    vectors = np.empty((2, expansion.degree + 1))
+
+    def window(k, alpha):
+        expansion.basis_pair(alpha, sensitivity=sensitivity, delta_alpha=delta_alpha,
+                             out=vectors)
+        return windows.rows(k, vectors)
+
+    return window
 
 
 def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, normalisation,
-                    forgetting, lm_lambda, delta_alpha, sensitivity, windows=None):
+                    forgetting, lm_lambda, windows):
     """One pass of Table 1: at each k, theta by Eq. (29) then alpha by Eq. (48).
 
     With ``joint=True`` (the single-innovation LM baseline) both are updated together by the
-    step of Eq. (48) applied to ``(theta, alpha)``. The windows come from the GL weights
-    expanded in alpha (``windows``, an :class:`ExpandedWindows` built once for all passes:
-    ``O(M N log N)``); ``windows=None`` rebuilds them from the weights at every sample instead
-    (``O(N^2)``, the implementation before the expansion, kept to test that both give the same
-    path).
+    step of Eq. (48) applied to ``(theta, alpha)``. ``windows(k, alpha)`` gives the window
+    ``Phi(P, k)^T`` and its sensitivity (:func:`expanded_windows`).
     """
     y = builder.y
     n_samples = builder.n_samples
@@ -331,21 +333,8 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     theta_path = np.empty((n_samples, n))
     alpha_path = np.empty(n_samples)
     inner_lo, inner_hi = bounds.inner
-    reference = windows is None
-    if not reference:
-        expansion = windows.expansion
-        vectors = np.empty((2, expansion.degree + 1))
     for k in range(n_samples):
-        if reference:
-            length = max(k, 1)
-            beta = _weights(alpha, length)
-            windows_k = np.stack(builder.window(k, P, [
-                beta, sensitivity_weights(alpha, length, sensitivity=sensitivity,
-                                          delta_alpha=delta_alpha, beta=beta)]))
-        else:
-            expansion.basis_pair(alpha, sensitivity=sensitivity, delta_alpha=delta_alpha,
-                                 out=vectors)
-            windows_k = windows.rows(k, vectors)        # (2, rows, n): Phi(P, k)^T, dPhi/dalpha
+        windows_k = windows(k, alpha)                   # (2, rows, n): Phi(P, k)^T, dPhi/dalpha
         phi_w = windows_k[0]
         y_w = y[k:k - phi_w.shape[0]:-1] if k - phi_w.shape[0] >= 0 else y[k::-1]
         if joint:
@@ -368,6 +357,23 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     return theta, alpha, r, theta_path, alpha_path
 
 
+def _runner(method):
+    """The run of a paper method: its one free order's bounds as :class:`AlphaBounds`."""
+    def run(builder, options, bounds, *, operating_point):
+        lo, hi = bounds
+        return run_alternation(builder, method, options, AlphaBounds((float(lo[0]), float(hi[0]))),
+                               operating_point=operating_point)
+    return run
+
+
+#: The paper's methods as :func:`fohw.identify` dispatches them (the commensurate model only).
+METHODS = tuple(Method(name, options, _runner(name), supports=paper_model_only)
+                for name, options in (("hybrid", HybridOptions),
+                                      ("single_innovation_gradient",
+                                       SingleInnovationGradientOptions),
+                                      ("single_innovation_lm", SingleInnovationLMOptions)))
+
+
 class HybridIdentifier(BaseEstimator):
     """The paper's hybrid method as an estimator (scikit-learn conventions, no dependency).
 
@@ -377,12 +383,12 @@ class HybridIdentifier(BaseEstimator):
     Parameters
     ----------
     na, nb, f_basis, g_basis
-        Model structure, as in :func:`fohw.identify`.
+        Model structure, as in :func:`fohw.identify` (keywords, as every parameter).
     alpha_bounds : (float, float), optional
         Interval for alpha (default ``(0, 1)``, the paper's).
-    innovation_length, schedule, alpha0, max_iter, tol, p0, normalisation, forgetting, \
-lm_lambda, delta_alpha, sensitivity, alpha_window, restart_r
-        The options of the hybrid method (:class:`HybridOptions`).
+    schedule, alpha0, max_iter, tol, p0, lm_lambda, delta_alpha, sensitivity, alpha_window, \
+normalisation, forgetting, restart_r, innovation_length
+        The options of the hybrid method, with their defaults (:class:`HybridOptions`).
 
     Attributes
     ----------
@@ -392,53 +398,25 @@ lm_lambda, delta_alpha, sensitivity, alpha_window, restart_r
 
     Examples
     --------
-    >>> import warnings, fohw
+    >>> import fohw
     >>> data = fohw.datasets.paper_example(1000, random_state=0)
-    >>> est = fohw.HybridIdentifier(na=2, nb=2, f_basis=2, g_basis=3, schedule="iterative",
-    ...                             max_iter=30)
+    >>> est = fohw.HybridIdentifier(na=2, nb=2, f_basis=2, g_basis=3, innovation_length=3)
     >>> est.get_params()["schedule"]
-    'iterative'
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-    ...     est = est.fit(data.u, data.y)
-    >>> est.theta_.shape
+    'recursive'
+    >>> est.fit(data.u, data.y).theta_.shape
     (10,)
+    >>> est.status_.name        # one pass of Table 1: convergence is not tested, no warning
+    'NOT_TESTED'
     """
 
-    _renamed = {"method": "it runs the paper's hybrid method; for another method call "
-                          "fohw.identify(u, y, method=...), which returns the same result.",
-                "random_state": "the hybrid method draws no random numbers."}
-
-    def __init__(self, na, nb, f_basis, g_basis, alpha_bounds=(0.0, 1.0), innovation_length=5,
-                 schedule="recursive", alpha0=None, max_iter=None, tol=1e-4, p0=1e6,
-                 normalisation="window", forgetting=1.0, lm_lambda=1.0, delta_alpha=1e-3,
-                 sensitivity="finite_difference", alpha_window="innovation", restart_r=False):
-        self.na = na
-        self.nb = nb
-        self.f_basis = f_basis
-        self.g_basis = g_basis
-        self.alpha_bounds = alpha_bounds
-        self.innovation_length = innovation_length
-        self.schedule = schedule
-        self.alpha0 = alpha0
-        self.max_iter = max_iter
-        self.tol = tol
-        self.p0 = p0
-        self.normalisation = normalisation
-        self.forgetting = forgetting
-        self.lm_lambda = lm_lambda
-        self.delta_alpha = delta_alpha
-        self.sensitivity = sensitivity
-        self.alpha_window = alpha_window
-        self.restart_r = restart_r
+    _model = (("na", REQUIRED), ("nb", REQUIRED), ("f_basis", REQUIRED), ("g_basis", REQUIRED),
+              ("alpha_bounds", (0.0, 1.0)))
+    _options = HybridOptions
 
     def fit(self, u, y):
         """Identify from ``(u, y)``; return ``self``."""
-        from .identify import identify
-
-        params = self.get_params()
-        structure = {k: params.pop(k) for k in ("na", "nb", "f_basis", "g_basis", "alpha_bounds")}
-        self.result_ = identify(u, y, method="hybrid", **structure, options=params)
+        model = {name: getattr(self, name) for name, _ in self._model}
+        self.result_ = fit_method(METHODS[0], self._given_options(), u, y, **model)
         self.theta_ = np.array(self.result_.theta)
         self.alpha_ = self.result_.alpha
         self.model_ = self.result_.model

@@ -1,92 +1,30 @@
 """The one-call entry point :func:`fohw.identify` and its table of methods (dispatch only).
 
-The paper's alternating method lives in :mod:`fohw.estimators.hybrid`; the estimators beyond
-the paper in :mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.structured`,
-:mod:`~fohw.estimators.output_error` and :mod:`~fohw.estimators.rls`. Each method's settings
-are its own options class (:mod:`fohw.estimators.options`).
+Each method is declared in its own module (a :class:`~fohw.estimators.options.Method`: its
+name, options class, run and the structures it supports): the paper's alternating methods in
+:mod:`fohw.estimators.hybrid`, the estimators beyond the paper in
+:mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.structured`,
+:mod:`~fohw.estimators.output_error` and :mod:`~fohw.estimators.rls`. The record and the model
+class are checked by :mod:`fohw.estimators.problem`.
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
-from dataclasses import replace
 
-import numpy as np
+from ..exceptions import ParameterError
+from . import hybrid, output_error, rls, structured, varpro
+from .problem import OPERATING_POINTS, fit_method
 
-from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from ..exceptions import DataWarning, ParameterError
-from ..model.regressors import RegressorBuilder
-from ..model.structure import Structure
-from ._common import rms_scale
-from .hybrid import (
-    HybridOptions,
-    SingleInnovationGradientOptions,
-    SingleInnovationLMOptions,
-    run_alternation,
-)
-from .output_error import OutputErrorOptions, output_error_result
-from .rls import RlsOptions, rls_result
-from .structured import StructuredOptions, structured_result
-from .varpro import VarproOptions, varpro_result
+__all__ = ["identify", "METHODS", "OPTIONS", "OPERATING_POINTS"]
 
-__all__ = ["identify", "METHODS", "OPTIONS"]
-
-
-def _alternation(method):
-    def run(builder, options, bounds, operating_point):
-        bounds = _paper_bounds(method, builder, bounds)
-        return run_alternation(builder, method, options.check(builder.n_samples, bounds), bounds,
-                               operating_point=operating_point)
-    return run
-
-
-def _paper_bounds(method, builder, bounds):
-    """The recursive methods implement the paper's commensurate model: its one order's bounds."""
-    s = builder.structure
-    if not s.is_paper_model:
-        raise ParameterError(
-            f"method {method!r} implements the paper's commensurate model (Eq. 16: one order for "
-            "every term, no offset, rest before k = 0, dt = 1); this structure is "
-            f"{s.describe()}. Use method='varpro', 'structured' or 'output_error' for it.")
-    lo, hi = bounds
-    return AlphaBounds((float(lo[0]), float(hi[0])))
-
-
-def _varpro(builder, options, bounds, operating_point):
-    return varpro_result(builder, options.check(), bounds, operating_point=operating_point)
-
-
-def _output_error(builder, options, bounds, operating_point):
-    return output_error_result(builder, options, bounds, operating_point=operating_point)
-
-
-def _structured(builder, options, bounds, operating_point):
-    return structured_result(builder, options, bounds, operating_point=operating_point)
-
-
-def _rls(builder, options, bounds, operating_point):
-    return rls_result(builder, options, _paper_bounds("rls", builder, bounds),
-                      operating_point=operating_point)
-
-
-#: Every method: its options class and the function that runs it.
-_TABLE = {
-    "varpro": (VarproOptions, _varpro),
-    "output_error": (OutputErrorOptions, _output_error),
-    "structured": (StructuredOptions, _structured),
-    "hybrid": (HybridOptions, _alternation("hybrid")),
-    "single_innovation_gradient": (SingleInnovationGradientOptions,
-                                   _alternation("single_innovation_gradient")),
-    "single_innovation_lm": (SingleInnovationLMOptions, _alternation("single_innovation_lm")),
-    "rls": (RlsOptions, _rls),
-}
-#: ``operating_point`` spellings besides an explicit ``(u0, y0)``.
-OPERATING_POINTS = ("initial", "mean")
+#: Every method, the recommended one first.
+_TABLE = {m.name: m for m in (varpro.METHOD, output_error.METHOD, structured.METHOD,
+                              *hybrid.METHODS, rls.METHOD)}
 #: The method names, the recommended one first.
 METHODS = tuple(_TABLE)
 #: ``{method: options class}``.
-OPTIONS = {name: cls for name, (cls, _) in _TABLE.items()}
+OPTIONS = {name: m.options for name, m in _TABLE.items()}
 
 
 def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commensurate",
@@ -181,8 +119,9 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     Warns
     -----
     ConvergenceWarning
-        The run stopped at its iteration limit, or a recursive method made its passes without
-        testing convergence; the result then has ``converged=False``.
+        The run stopped at its iteration limit or failed; the result then has
+        ``converged=False``. A recursive pass that does not test convergence by design (the
+        paper's Table 1, ``"rls"``) does not warn: its status is ``NOT_TESTED``.
     RankDeficiencyWarning
         The information matrix is rank deficient: the message names the parameters that cannot
         be identified; ``status == Status.RANK_DEFICIENT``.
@@ -199,17 +138,14 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     >>> res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> res.method, res.status.name, round(res.alpha, 2)
     ('varpro', 'CONVERGED', 0.6)
-    >>> import warnings
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore", fohw.ConvergenceWarning)
-    ...     paper = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3,
-    ...                           method="hybrid", innovation_length=3)
+    >>> paper = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3,
+    ...                       method="hybrid", innovation_length=3)
     >>> paper.status.name, paper.nit
     ('NOT_TESTED', 1)
     """
     if method not in _TABLE:
         raise ParameterError(f"`method` must be one of {METHODS}; got {method!r}.")
-    options_class, run = _TABLE[method]
+    declared = _TABLE[method]
     if options is not None and method_options:
         if not isinstance(options, Mapping):
             raise ParameterError("pass a method's options either as keywords or as `options=`, "
@@ -220,103 +156,7 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
         options = {**options, **method_options}
     elif method_options:
         options = method_options
-    opts = options_class.build(method, options, others=OPTIONS)
-    u = check_array(u, "u")
-    y = check_array(y, "y")
-    check_same_length(u, y, "u", "y")
-    point = _operating_point(operating_point, u, y)
-    if not isinstance(offset, (bool, np.bool_)):
-        raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
-    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
-                               f_basis=f_basis, g_basis=g_basis, orders=orders,
-                               offset=bool(offset), past=past, dt=dt)
-    bounds = _order_bounds(structure, alpha_bounds)
-    u_dev = u - point[0] if point[0] else u
-    y_dev = y - point[1] if point[1] else y
-    _check_offset(structure, u_dev)
-    if operating_point is None and not structure.offset:
-        _warn_levels(u, y)
-    _warn_tiny(y_dev)
-    builder = RegressorBuilder(u_dev, y_dev, structure=structure)
-    # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
-    # and criterion for finiteness and raises EstimationDivergedError with the reason.
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        result = run(builder, opts, bounds, point)
-    return replace(result, input_range=(float(u.min()), float(u.max())))
-
-
-def _operating_point(spec, u, y):
-    if spec is None:
-        return (0.0, 0.0)
-    if isinstance(spec, str):
-        if spec == "initial":
-            return (float(u[0]), float(y[0]))
-        if spec == "mean":
-            return (float(np.mean(u)), float(np.mean(y)))
-        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
-                             f"pair (u0, y0); got {spec!r}.")
-    try:
-        u0, y0 = spec
-    except (TypeError, ValueError):
-        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
-                             f"pair (u0, y0); got {spec!r}.") from None
-    return (check_scalar(u0, "operating_point[0]"), check_scalar(y0, "operating_point[1]"))
-
-
-def _order_bounds(structure, alpha_bounds):
-    """``(lower, upper)`` arrays over the free orders from a pair or a dict by name."""
-    free = structure.orders.free
-    if isinstance(alpha_bounds, Mapping):
-        unknown = sorted(set(alpha_bounds) - set(free))
-        missing = [n for n in free if n not in alpha_bounds]
-        if unknown or missing:
-            raise ParameterError(f"`alpha_bounds` by name must give exactly the free orders "
-                                 f"{list(free)}; unknown {unknown}, missing {missing}.")
-        pairs = [AlphaBounds(alpha_bounds[n], name=f"alpha_bounds[{n!r}]") for n in free]
-    else:                   # a pair is checked even when nothing is free: never ignored
-        b = AlphaBounds(alpha_bounds)
-        pairs = [b] * len(free)
-    return np.array([b.lo for b in pairs]), np.array([b.hi for b in pairs])
-
-
-def _warn_tiny(y):
-    """Warn when squares of ``y`` underflow: J, the noise variance and the covariance cannot."""
-    scale = rms_scale(y)
-    if np.any(y) and scale * scale < np.finfo(np.float64).tiny:
-        warnings.warn(
-            f"fohw.identify: `y` has RMS {scale:.3g}, whose square is below the smallest normal "
-            "double (2.2e-308): J, the noise variance and the standard errors are squares of "
-            "it and come out 0 or NaN (basis columns such as y**3 may underflow as well). "
-            "Rescale the data (e.g. y * 1e150; fohw's models follow a change of units).",
-            DataWarning, stacklevel=3)
-
-
-def _warn_levels(u, y):
-    """Warn when a signal sits far from 0 and the model has no way to represent the level."""
-    for name, x in (("u", u), ("y", y)):
-        scale = float(np.max(np.abs(x)))
-        if scale == 0.0:
-            continue
-        mean, sd = float(np.mean(x / scale)), float(np.std(x / scale))   # no overflow
-        if abs(mean) > sd:
-            mean *= scale
-            ratio = (f"{abs(mean) / sd:.1f} times its standard deviation" if sd > 0
-                     else "and it is constant")
-            warnings.warn(
-                f"fohw.identify: `{name}` has mean {mean:.4g}, {ratio}, "
-                "and the model has neither `offset` nor `operating_point`: it then assumes the "
-                "signals rested at 0 before k = 0 and must explain the level with its dynamics, "
-                "which commonly drives the fractional orders to 0. Pass operating_point='mean' "
-                "(or 'initial', or (u0, y0)) or offset=True (docs/real_data.md).",
-                DataWarning, stacklevel=3)
-
-
-def _check_offset(structure, u):
-    """An offset beside order-0 input terms needs an input that is not constant."""
-    if not structure.offset:
-        return
-    if any(t.order == 0.0 for t in structure.orders.input) and np.ptp(u) == 0.0:
-        raise ParameterError("`offset=True` cannot be estimated from this record: the input is "
-                             "constant, so the offset cannot be told apart from the order-0 "
-                             "input terms. Use a record where the input moves, or offset=False.")
-
+    opts = declared.options.build(method, options, others=OPTIONS)
+    return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
+                      orders=orders, offset=offset, operating_point=operating_point, past=past,
+                      dt=dt, alpha_bounds=alpha_bounds)

@@ -9,14 +9,17 @@ With the innovation window ``Phi(P, k)`` holding ``phi[k], phi[k-1], …, phi[k-
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .._base import BaseEstimator, check_is_fitted
-from .._validation import check_alpha, check_array, check_int, check_same_length, check_scalar
-from ..exceptions import DimensionError, ParameterError
+from .._base import REQUIRED, BaseEstimator, check_is_fitted
+from .._validation import check_alpha, check_array, check_same_length
 from ..model.regressors import RegressorBuilder
+from .options import FORGETTING, INNOVATION_LENGTH, POSITIVE, Choice, MethodOptions
 
-__all__ = ["migd_update", "migd_pass", "MultiInnovationGradient", "NORMALISATIONS"]
+__all__ = ["migd_update", "migd_pass", "MultiInnovationGradient", "MigdOptions",
+           "NORMALISATIONS"]
 
 #: ``"window"``: ``r += ||Phi(P, k)||_F^2`` (the paper, Eq. 31);
 #: ``"current"``: ``r += ||phi(k)||^2`` (Ding's multi-innovation stochastic gradient).
@@ -126,19 +129,29 @@ def migd_pass(Phi, y, *, innovation_length, theta0, r0=1.0, normalisation="windo
     return history, r_hist, innov
 
 
-def check_migd_options(innovation_length, p0, normalisation, forgetting, n_samples):
-    """Validate the MIGD settings shared by the estimators; return them normalised."""
-    P = check_int(innovation_length, "innovation_length", minimum=1)
-    if P > n_samples:
-        raise DimensionError(f"`innovation_length` must not exceed the record length "
-                             f"{n_samples}; got {P}.")
-    p0 = check_scalar(p0, "p0", lower=0.0, lower_inclusive=False)
-    if normalisation not in NORMALISATIONS:
-        raise ParameterError(f"`normalisation` must be one of {NORMALISATIONS}; got "
-                             f"{normalisation!r}.")
-    forgetting = check_scalar(forgetting, "forgetting", lower=0.0, upper=1.0,
-                              lower_inclusive=False)
-    return P, p0, normalisation, forgetting
+@dataclass(frozen=True, kw_only=True)
+class MigdOptions(MethodOptions):
+    """Settings of :class:`MultiInnovationGradient` (one MIGD pass at a given order).
+
+    Attributes
+    ----------
+    innovation_length : int
+        ``P``, the number of innovations per update, ``1 <= P <= N`` (default 5).
+    p0 : float
+        ``theta(0) = 1/p0`` in every entry (default ``1e6``).
+    normalisation : {"window", "current"}
+        How ``r(k)`` grows (see :func:`migd_update`). Default ``"window"`` (the paper).
+    forgetting : float
+        Forgetting factor on ``r`` in ``(0, 1]``; 1 (default) is the paper.
+    """
+
+    constraints = {"innovation_length": INNOVATION_LENGTH, "p0": POSITIVE,
+                   "normalisation": Choice(NORMALISATIONS), "forgetting": FORGETTING}
+
+    innovation_length: int = 5
+    p0: float = 1e6
+    normalisation: str = "window"
+    forgetting: float = 1.0
 
 
 class MultiInnovationGradient(BaseEstimator):
@@ -152,14 +165,8 @@ class MultiInnovationGradient(BaseEstimator):
         Input and output basis functions.
     alpha : float
         The (known or fixed) fractional order, in ``(0, 2)``.
-    innovation_length : int, optional
-        ``P``, the number of innovations per update (default 5).
-    p0 : float, optional
-        ``theta(0) = 1/p0`` in every entry (default ``1e6``).
-    normalisation : {"window", "current"}, optional
-        How ``r(k)`` grows (see :func:`migd_update`). Default ``"window"`` (the paper).
-    forgetting : float, optional
-        Forgetting factor on ``r`` in ``(0, 1]``; 1 (default) is the paper.
+    innovation_length, p0, normalisation, forgetting
+        The settings of :class:`MigdOptions`, with its defaults.
 
     Attributes
     ----------
@@ -184,17 +191,9 @@ class MultiInnovationGradient(BaseEstimator):
     (10,)
     """
 
-    def __init__(self, na, nb, f_basis, g_basis, alpha, innovation_length=5, p0=1e6,
-                 normalisation="window", forgetting=1.0):
-        self.na = na
-        self.nb = nb
-        self.f_basis = f_basis
-        self.g_basis = g_basis
-        self.alpha = alpha
-        self.innovation_length = innovation_length
-        self.p0 = p0
-        self.normalisation = normalisation
-        self.forgetting = forgetting
+    _model = (("na", REQUIRED), ("nb", REQUIRED), ("f_basis", REQUIRED), ("g_basis", REQUIRED),
+              ("alpha", REQUIRED))
+    _options = MigdOptions
 
     def fit(self, u, y):
         """Run one MIGD pass over the record; return ``self``."""
@@ -202,14 +201,14 @@ class MultiInnovationGradient(BaseEstimator):
         y = check_array(y, "y")
         check_same_length(u, y, "u", "y")
         alpha = check_alpha(self.alpha)
-        P, p0, norm, lam = check_migd_options(self.innovation_length, self.p0, self.normalisation,
-                                              self.forgetting, y.shape[0])
+        o = self._given_options().check(n_samples=y.shape[0], bounds=None)
         builder = RegressorBuilder(u, y, na=self.na, nb=self.nb, f_basis=self.f_basis,
                                    g_basis=self.g_basis)
         Phi = builder.matrix(alpha)
-        theta0 = np.full(builder.layout.n_params, 1.0 / p0)
-        hist, r_hist, innov = migd_pass(Phi, y, innovation_length=P, theta0=theta0,
-                                        normalisation=norm, forgetting=lam)
+        theta0 = np.full(builder.layout.n_params, 1.0 / o.p0)
+        hist, r_hist, innov = migd_pass(Phi, y, innovation_length=o.innovation_length,
+                                        theta0=theta0, normalisation=o.normalisation,
+                                        forgetting=o.forgetting)
         self.layout_ = builder.layout
         self._bases = (builder.f_basis, builder.g_basis)
         self.alpha_ = alpha

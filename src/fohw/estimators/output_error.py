@@ -29,21 +29,25 @@ import numpy as np
 
 from .. import _linalg
 from .._threads import thin_solves
-from .._validation import check_array, check_int, check_scalar
+from .._validation import check_array, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
 from ..model.system import simulate_parameters
 from ..results import IdentificationResult, Status
-from ._common import bound_note, bounded_least_squares, check_enough_samples, finish, rms_scale
-from .options import MethodOptions
-from .varpro import (
-    VarproOptions,
-    _bounds_record,
-    parameter_covariance,
-    separable_least_squares,
+from ._common import (
+    bound_note,
+    bounded_least_squares,
+    bounds_record,
+    check_enough_samples,
+    finish,
+    rms_scale,
 )
+from .options import N_GRID, Anything, Integer, Method, MethodOptions
+from .profile import parameter_covariance
+from .varpro import VarproOptions
+from .varpro_search import separable_least_squares
 
-__all__ = ["OutputErrorOptions", "fit_output_error"]
+__all__ = ["OutputErrorOptions", "fit_output_error", "SimulationResidual", "METHOD"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,19 +71,13 @@ class OutputErrorOptions(MethodOptions):
         each, come on top; :attr:`IdentificationResult.nfev` counts both).
     """
 
-    renamed = {"max_iter": "max_nfev"}
+    constraints = {"n_init": Integer(0, lambda c: c.n_samples - 2), "start": Anything(),
+                   "n_grid": N_GRID, "max_nfev": Integer(1)}
 
     n_init: int = 0
     start: object = None
     n_grid: int = 41
     max_nfev: int = 100
-
-    def check(self, n_samples):
-        """Validated copy."""
-        return self.replace(n_init=check_int(self.n_init, "n_init", minimum=0,
-                                             maximum=n_samples - 2),
-                            n_grid=check_int(self.n_grid, "n_grid", minimum=3, maximum=100_000),
-                            max_nfev=check_int(self.max_nfev, "max_nfev", minimum=1))
 
 
 @dataclass
@@ -98,7 +96,7 @@ class _OEFit:
     at_upper: np.ndarray
 
 
-class _SimulationError:
+class SimulationResidual:
     """The simulation-error residual ``(y - ysim(x))[n_init:]`` and its exact Jacobian.
 
     ``x`` is ``(linear, params)``. A candidate whose free run escapes (``|ysim|`` beyond
@@ -177,8 +175,7 @@ class _SimulationError:
         return np.column_stack(cols)
 
 
-def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None,
-                     _jacobian="exact"):
+def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None):
     """Fit the linear and nonlinear parameters to minimise the free-run simulation error.
 
     Parameters
@@ -195,10 +192,6 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     max_nfev : int, optional
         Limit on residual evaluations, passed to :func:`scipy.optimize.least_squares`
         (Jacobian evaluations are not counted).
-    _jacobian : {"exact", "2-point"}
-        The solver's Jacobian: the exact sensitivity of the free run (default), or scipy's
-        forward differences (one simulation per parameter; kept as a reference for tests and
-        ``benchmarks/bench_output_error.py``).
 
     Returns
     -------
@@ -212,7 +205,7 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     m = y.shape[0] - n_init
     bound_lo = np.r_[np.full(n_lin, -np.inf), lower, np.full(n_past, -np.inf)]
     bound_hi = np.r_[np.full(n_lin, np.inf), upper, np.full(n_past, np.inf)]
-    crit = _SimulationError(s, u, y, n_init, bound_lo, bound_hi)
+    crit = SimulationResidual(s, u, y, n_init, bound_lo, bound_hi)
 
     x0 = np.r_[np.asarray(linear0, dtype=np.float64), np.asarray(params0, dtype=np.float64)]
     k = s.layout.n_output_params
@@ -231,11 +224,9 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     y_scale = rms_scale(y)
 
     residual, jacobian = crit.scaled(scale, y_scale)
-    if _jacobian not in ("exact", "2-point"):
-        raise ValueError(f"`_jacobian` must be 'exact' or '2-point'; got {_jacobian!r}.")
-    z, status, ls = bounded_least_squares(
-        residual, x0 / scale, jac=jacobian if _jacobian == "exact" else "2-point",
-        lower=bound_lo / scale, upper=bound_hi / scale, max_nfev=max_nfev)
+    z, status, ls = bounded_least_squares(residual, x0 / scale, jac=jacobian,
+                                          lower=bound_lo / scale, upper=bound_hi / scale,
+                                          max_nfev=max_nfev)
     x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
@@ -255,8 +246,7 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     cov, s2 = parameter_covariance(jac, sse, m)
     active = ls.active_mask[n_lin:n_lin + n_free]
     how = (f"{crit.n_simulations} simulations, {crit.n_jacobians} of them with the exact "
-           "sensitivity" if _jacobian == "exact" else
-           f"{crit.n_simulations} simulations, finite-difference Jacobians included")
+           "sensitivity")
     message = f"output-error fit (scipy.optimize.least_squares): {ls.message} ({how})"
     if escaped:
         message = ("output-error fit failed: the free run of the estimate escapes (beyond ten "
@@ -331,14 +321,16 @@ def _start(builder, options, lower, upper):
 
 @thin_solves
 def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
-    """Equation-error start (varpro) or a given one, then the simulation-error fit."""
+    """Equation-error start (varpro) or a given one, then the simulation-error fit.
+
+    ``options`` are checked (:meth:`OutputErrorOptions.check`).
+    """
     s = builder.structure
-    options = options.check(builder.n_samples)
     check_enough_samples(builder.n_samples - options.n_init, s,
                          after=f" after n_init = {options.n_init}" if options.n_init else "")
     lower, upper = bounds
     linear0, params0, J0, origin = _start(builder, options, lower, upper)
-    record = dict(options.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))
+    record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     details = {} if options.start is None else {"start": origin}
     Phi0 = builder.matrix(params0)
     fac = _linalg.factor(Phi0, with_q=False)
@@ -370,3 +362,7 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0))
                   noise_variance=fit.noise_variance, alpha_history=alpha_history,
                   J_history=[J0, J] if alpha_history else None,
                   operating_point=operating_point)
+
+
+#: ``method="output_error"`` as :func:`fohw.identify` dispatches it (every structure).
+METHOD = Method("output_error", OutputErrorOptions, output_error_result)

@@ -31,19 +31,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, bounded_least_squares, finish, rms_scale
-from .options import MethodOptions
-from .varpro import (
-    VarproOptions,
-    _bounds_record,
-    parameter_covariance,
-    separable_least_squares,
-)
+from ._common import bound_note, bounded_least_squares, bounds_record, finish, rms_scale
+from .options import MAX_NFEV, N_GRID, POSITIVE, Method, MethodOptions
+from .profile import parameter_covariance
+from .varpro import VarproOptions
+from .varpro_search import separable_least_squares
 
-__all__ = ["StructuredOptions", "structured_result"]
+__all__ = ["StructuredOptions", "structured_result", "fit_structured", "METHOD"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -55,23 +51,18 @@ class StructuredOptions(MethodOptions):
     n_grid : int
         Points of the coarse alpha scan of the ``"varpro"`` start (default 41, at least 3).
     tol : float
-        ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in the start's
-        polish and in the structured fit (default ``1e-10``).
+        Relative change of the cost at which :func:`scipy.optimize.least_squares` stops (its
+        ``ftol``; also its ``xtol`` and ``gtol``), in the start's polish and in the structured
+        fit (default ``1e-10``).
     max_nfev : int or None
         Evaluations allowed to the structured fit (default None: scipy's ``100 * (d + 1)``).
     """
 
+    constraints = {"n_grid": N_GRID, "tol": POSITIVE, "max_nfev": MAX_NFEV}
+
     n_grid: int = 41
     tol: float = 1e-10
     max_nfev: int | None = None
-
-    def check(self):
-        """Validated copy."""
-        return self.replace(
-            n_grid=check_int(self.n_grid, "n_grid", minimum=3, maximum=100_000),
-            tol=check_scalar(self.tol, "tol", lower=0.0, lower_inclusive=False),
-            max_nfev=None if self.max_nfev is None else check_int(self.max_nfev, "max_nfev",
-                                                                  minimum=1))
 
 
 def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
@@ -126,11 +117,14 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
 
 
 def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
-    """``"varpro"``, rank-one recovery, then least squares over the structured parameters."""
+    """``"varpro"``, rank-one recovery, then least squares over the structured parameters.
+
+    ``options`` are checked (:meth:`StructuredOptions.check`).
+    """
     s = builder.structure
-    opts = options.check()
+    opts = options
     lower, upper = bounds
-    record = dict(opts.as_dict(), alpha_bounds=_bounds_record(s, lower, upper))
+    record = dict(opts.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     vp = separable_least_squares(builder, bounds=(lower, upper),
                                  options=VarproOptions(n_grid=opts.n_grid, tol=opts.tol))
     if vp.rank_factor is not None and vp.rank_factor.rank < vp.rank_factor.n_columns:
@@ -167,3 +161,7 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
                   alpha_at_bound=bool(np.any(active != 0)), options=record,
                   details={"start": "varpro (rank-one recovery)"},
                   covariance=covariance, noise_variance=s2, operating_point=operating_point)
+
+
+#: ``method="structured"`` as :func:`fohw.identify` dispatches it (every structure).
+METHOD = Method("structured", StructuredOptions, structured_result)

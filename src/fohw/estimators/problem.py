@@ -1,0 +1,190 @@
+"""One identification problem: the record and model class checked, then a method run on it.
+
+:func:`prepare` turns what :func:`fohw.identify` is given (the data, the structure keywords,
+``operating_point`` and ``alpha_bounds``) into a :class:`Problem`: the regressor builder of the
+deviations from the operating point and the bounds of the free orders, with the warnings about
+the data said once. :func:`fit_method` runs one declared :class:`~fohw.estimators.options.Method`
+on it. Both :func:`fohw.identify` and the estimator classes (:class:`fohw.HybridIdentifier`)
+call it, so the estimator modules never import :mod:`fohw.estimators.identify`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
+from ..exceptions import DataWarning, ParameterError
+from ..model.regressors import RegressorBuilder
+from ..model.structure import Structure
+from ._common import rms_scale
+
+__all__ = ["Problem", "prepare", "fit_method", "OPERATING_POINTS"]
+
+#: ``operating_point`` spellings besides an explicit ``(u0, y0)``.
+OPERATING_POINTS = ("initial", "mean")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A record ready for estimation.
+
+    Attributes
+    ----------
+    builder : RegressorBuilder
+        The deviations of ``u`` and ``y`` from the operating point, and the structure.
+    bounds : (ndarray, ndarray)
+        Lower and upper bounds of each free order.
+    operating_point : (float, float)
+        ``(u0, y0)`` removed from the data.
+    input_range : (float, float)
+        ``(min u, max u)`` of the record as given.
+    """
+
+    builder: RegressorBuilder
+    bounds: tuple
+    operating_point: tuple
+    input_range: tuple
+
+    @property
+    def structure(self):
+        """The model class (:class:`fohw.Structure`)."""
+        return self.builder.structure
+
+
+def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=False,
+            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0)):
+    """Check a record and a model class; warn about the data once; return the :class:`Problem`.
+
+    The keywords are those of :func:`fohw.identify`.
+    """
+    u = check_array(u, "u")
+    y = check_array(y, "y")
+    check_same_length(u, y, "u", "y")
+    point = _operating_point(operating_point, u, y)
+    if not isinstance(offset, (bool, np.bool_)):
+        raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
+    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
+                               f_basis=f_basis, g_basis=g_basis, orders=orders,
+                               offset=bool(offset), past=past, dt=dt)
+    bounds = _order_bounds(structure, alpha_bounds)
+    u_dev = u - point[0] if point[0] else u
+    y_dev = y - point[1] if point[1] else y
+    _check_offset(structure, u_dev)
+    if operating_point is None and not structure.offset:
+        _warn_levels(u, y)
+    _warn_tiny(y_dev)
+    builder = RegressorBuilder(u_dev, y_dev, structure=structure)
+    return Problem(builder, bounds, point, (float(u.min()), float(u.max())))
+
+
+def fit_method(method, options, u, y, **model):
+    """Run one method on a record: :func:`prepare`, the method's own checks, then its run.
+
+    Parameters
+    ----------
+    method : Method
+        The declared method (:class:`fohw.estimators.options.Method`).
+    options : MethodOptions
+        Its options, names already checked (:meth:`MethodOptions.build`); their values are
+        checked here against the record.
+    u, y : array_like
+        The record.
+    **model
+        The keywords of :func:`prepare`.
+
+    Returns
+    -------
+    IdentificationResult
+    """
+    problem = prepare(u, y, **model)
+    reason = method.supports(problem.structure)
+    if reason:
+        raise ParameterError(f"method {method.name!r} {reason}")
+    options = options.check(n_samples=problem.builder.n_samples, bounds=problem.bounds)
+    # Overflow is not left to NumPy's RuntimeWarning: every estimator checks its estimates
+    # and criterion for finiteness and raises EstimationDivergedError with the reason.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        result = method.run(problem.builder, options, problem.bounds,
+                            operating_point=problem.operating_point)
+    return replace(result, input_range=problem.input_range)
+
+
+def _operating_point(spec, u, y):
+    if spec is None:
+        return (0.0, 0.0)
+    if isinstance(spec, str):
+        if spec == "initial":
+            return (float(u[0]), float(y[0]))
+        if spec == "mean":
+            return (float(np.mean(u)), float(np.mean(y)))
+        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
+                             f"pair (u0, y0); got {spec!r}.")
+    try:
+        u0, y0 = spec
+    except (TypeError, ValueError):
+        raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
+                             f"pair (u0, y0); got {spec!r}.") from None
+    return (check_scalar(u0, "operating_point[0]"), check_scalar(y0, "operating_point[1]"))
+
+
+def _order_bounds(structure, alpha_bounds):
+    """``(lower, upper)`` arrays over the free orders from a pair or a dict by name."""
+    free = structure.orders.free
+    if isinstance(alpha_bounds, Mapping):
+        unknown = sorted(set(alpha_bounds) - set(free))
+        missing = [n for n in free if n not in alpha_bounds]
+        if unknown or missing:
+            raise ParameterError(f"`alpha_bounds` by name must give exactly the free orders "
+                                 f"{list(free)}; unknown {unknown}, missing {missing}.")
+        pairs = [AlphaBounds(alpha_bounds[n], name=f"alpha_bounds[{n!r}]") for n in free]
+    else:                   # a pair is checked even when nothing is free: never ignored
+        b = AlphaBounds(alpha_bounds)
+        pairs = [b] * len(free)
+    return np.array([b.lo for b in pairs]), np.array([b.hi for b in pairs])
+
+
+def _warn_tiny(y):
+    """Warn when squares of ``y`` underflow: J, the noise variance and the covariance cannot."""
+    scale = rms_scale(y)
+    if np.any(y) and scale * scale < np.finfo(np.float64).tiny:
+        warnings.warn(
+            f"fohw.identify: `y` has RMS {scale:.3g}, whose square is below the smallest normal "
+            "double (2.2e-308): J, the noise variance and the standard errors are squares of "
+            "it and come out 0 or NaN (basis columns such as y**3 may underflow as well). "
+            "Rescale the data (e.g. y * 1e150; fohw's models follow a change of units).",
+            DataWarning, stacklevel=5)
+
+
+def _warn_levels(u, y):
+    """Warn when a signal sits far from 0 and the model has no way to represent the level."""
+    for name, x in (("u", u), ("y", y)):
+        scale = float(np.max(np.abs(x)))
+        if scale == 0.0:
+            continue
+        mean, sd = float(np.mean(x / scale)), float(np.std(x / scale))   # no overflow
+        if abs(mean) > sd:
+            mean *= scale
+            ratio = (f"{abs(mean) / sd:.1f} times its standard deviation" if sd > 0
+                     else "and it is constant")
+            warnings.warn(
+                f"fohw.identify: `{name}` has mean {mean:.4g}, {ratio}, "
+                "and the model has neither `offset` nor `operating_point`: it then assumes the "
+                "signals rested at 0 before k = 0 and must explain the level with its dynamics, "
+                "which commonly drives the fractional orders to 0. Pass operating_point='mean' "
+                "(or 'initial', or (u0, y0)) or offset=True (docs/real_data.md).",
+                DataWarning, stacklevel=5)
+
+
+def _check_offset(structure, u):
+    """An offset beside order-0 input terms needs an input that is not constant."""
+    if not structure.offset:
+        return
+    if any(t.order == 0.0 for t in structure.orders.input) and np.ptp(u) == 0.0:
+        raise ParameterError("`offset=True` cannot be estimated from this record: the input is "
+                             "constant, so the offset cannot be told apart from the order-0 "
+                             "input terms. Use a record where the input moves, or offset=False.")
+
