@@ -55,7 +55,7 @@ import numpy as np
 from .._base import BaseEstimator, check_is_fitted
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
-from ..model.gl import _weights
+from ..model.gl import gl_weights_unchecked
 from ..model.gl_expansion import ExpandedWindows, GLExpansion
 from ..results import Status
 from ._common import check_finite_estimate, finish
@@ -311,7 +311,7 @@ def _expanded_windows(builder, bounds, P, sensitivity, delta_alpha):
     """
     hi = bounds.hi + (delta_alpha if sensitivity == "finite_difference" else 0.0)
     expansion = GLExpansion(bounds.lo, hi, builder.n_samples)
-    return ExpandedWindows(builder.signals, builder._lags, expansion, P)
+    return ExpandedWindows(builder.signals, builder.lags, expansion, P)
 
 
 def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, normalisation,
@@ -338,7 +338,7 @@ def _recursive_pass(builder, theta, alpha, r, bounds, *, method, joint, P, norma
     for k in range(n_samples):
         if reference:
             length = max(k, 1)
-            beta = _weights(alpha, length)
+            beta = gl_weights_unchecked(alpha, length)
             windows_k = np.stack(builder.window(k, P, [
                 beta, sensitivity_weights(alpha, length, sensitivity=sensitivity,
                                           delta_alpha=delta_alpha, beta=beta)]))

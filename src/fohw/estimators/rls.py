@@ -28,7 +28,7 @@ import numpy as np
 from .._base import BaseEstimator, check_is_fitted
 from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
 from ..model.basis import as_basis
-from ..model.gl import _weights, gl_weights_derivative
+from ..model.gl import gl_weights_derivative, gl_weights_unchecked
 from ..model.gl_expansion import StreamedWindows
 from ..model.params import ThetaLayout
 from ..model.regressors import RegressorBuilder, WindowKernel
@@ -201,7 +201,7 @@ class MultiInnovationRLS(BaseEstimator):
         alpha = float(x[n]) if self.estimate_alpha else float(self.alpha0)
         if self._streamed is None:             # the reference: each window from the weights
             length = max(k, 1)
-            weights = [_weights(alpha, length)]
+            weights = [gl_weights_unchecked(alpha, length)]
             if self.estimate_alpha:
                 weights.append(gl_weights_derivative(alpha, length))
             wins = self._kernel.rows(self._signals, k, self._P, weights)

@@ -195,7 +195,7 @@ class _Profile:
     """``theta(params)`` and ``rss(params)`` of the separable problem, by blocks of rows.
 
     ``Phi(params)`` is never formed: its columns are lagged views of the GL differences
-    (:meth:`fohw.RegressorBuilder._columns`), and the triangular factor of ``[Phi, y]`` is
+    (:meth:`fohw.RegressorBuilder.columns`), and the triangular factor of ``[Phi, y]`` is
     accumulated over blocks of :data:`_BLOCK_ROWS` rows (:func:`fohw._linalg.triangular`,
     TSQR); the solve, its rank decision and ``rss`` come from that ``(n + 1) x (n + 1)``
     factor (:func:`fohw._linalg.lstsq_triangular`). The columns and the factor are kept for
@@ -218,7 +218,7 @@ class _Profile:
 
     def _evaluate(self, params):
         builder = self.builder
-        columns = builder._columns(builder._params(params))
+        columns = builder.columns(builder.check_params(params))
         r = _linalg.triangular(_row_blocks(columns, (builder.y,)), columns.n_columns + 1)
         return (columns, *_linalg.lstsq_triangular(r, builder.n_samples))
 
@@ -247,13 +247,13 @@ class _Profile:
         """
         builder = self.builder
         columns, linear, _, fac = self.solve(params)
-        params = builder._params(params)
+        params = builder.check_params(params)
         resid = builder.y - columns.matvec(linear)
         k, n = fac.rank, columns.n_columns
         r_k = fac.r[:k, :k]
         v, z = [], []
         for m in range(params.shape[0]):
-            derivative = builder._columns(params, which=m)
+            derivative = builder.columns(params, which=m)
             v.append(derivative.matvec(linear))
             w = (derivative.rmatvec(resid) / fac.scale)[fac.perm[:k]]
             z.append(scipy.linalg.solve_triangular(r_k, w, trans="T", check_finite=False))
@@ -275,9 +275,9 @@ class _Profile:
         computes it from the QR of the whole.
         """
         builder = self.builder
-        params = builder._params(params)
-        columns = builder._columns(params)
-        v = [builder._columns(params, which=m).matvec(linear) for m in range(params.shape[0])]
+        params = builder.check_params(params)
+        columns = builder.columns(params)
+        v = [builder.columns(params, which=m).matvec(linear) for m in range(params.shape[0])]
         d = columns.n_columns + len(v)
         r = _linalg.triangular(_row_blocks(columns, v), d)
         s2 = rss / (builder.n_samples - d)
@@ -287,7 +287,7 @@ class _Profile:
 
 def _rank_factor(builder, params):
     """The rank-revealing factor of ``Phi(params)`` (rank, dependent columns), by blocks."""
-    columns = builder._columns(builder._params(params))
+    columns = builder.columns(builder.check_params(params))
     r = _linalg.triangular(_row_blocks(columns), columns.n_columns)
     return _linalg.factor_triangular(r, builder.n_samples)
 

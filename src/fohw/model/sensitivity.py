@@ -123,7 +123,7 @@ def _feedback_problem(structure, linear, params, u):
     E = builder.jacobian(linear, params)
     layout = structure.layout
     qa, _ = layout.blocks(linear[:layout.n_params])
-    out_nu, _, _ = builder._term_orders(params)
+    out_nu, _, _ = builder.term_orders(params)
     dg = basis_derivative(structure.g_basis, y)             # (n_g, N)
     h = structure.dt
     lags, betas, coefs = [], [], []

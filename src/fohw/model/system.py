@@ -27,7 +27,7 @@ from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
 from .basis import Basis, as_basis, polynomial_basis
-from .gl import _weights, causal_convolve, gl_weights
+from .gl import causal_convolve, gl_weights, gl_weights_unchecked, past_transient
 from .orders import Orders
 from .structure import Structure
 
@@ -323,14 +323,6 @@ _LEAF = 256
 _LEAF_COMPILED = 256
 
 
-def _transient(nu, lag, n, h):
-    """``h**-nu (S_inf(nu) - S_{k-lag}(nu))``: a past level's effect on a term (Structure notes)."""
-    out = np.full(n, 1.0 if nu == 0.0 else 0.0)
-    if n > lag:
-        out[lag:] -= np.cumsum(gl_weights(nu, n - lag))
-    return out if h == 1.0 else out * h**-nu
-
-
 def _forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, past):
     """Everything in y[k] that does not feed back: noise, offset, input branch, past levels.
 
@@ -345,7 +337,7 @@ def _forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, pas
     diffs = {}
     for t, (lag, nu) in enumerate(in_terms):
         if nu not in diffs:
-            d = F if nu == 0.0 else causal_convolve(F, _weights(nu, n))
+            d = F if nu == 0.0 else causal_convolve(F, gl_weights_unchecked(nu, n))
             diffs[nu] = d if h == 1.0 or nu == 0.0 else d * h**-nu
         if lag < n:
             w[lag:] += pb[:, t] @ diffs[nu][:, : n - lag]
@@ -355,7 +347,7 @@ def _forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, pas
         lg = g_basis.evaluate(np.array([y_past]), "y_past")[:, 0]
         for coef, levels, terms in ((pb, lf, in_terms), (qa, lg, out_terms)):
             for t, (lag, nu) in enumerate(terms):
-                w += (coef[:, t] @ levels) * _transient(nu, lag, n, h)
+                w += (coef[:, t] @ levels) * past_transient(nu, lag, n, h)
     return w
 
 
