@@ -43,18 +43,14 @@ def test_simulation_continues_from_a_measured_history(name):
 
 
 @pytest.mark.parametrize("name", sorted(set(MODELS) - {"paper"}))
-def test_fast_simulator_equals_direct_for_general_models(name):
-    from fohw.model import system
+def test_fast_simulator_equals_direct_for_general_models(name, monkeypatch):
+    from fohw.model import simulation
 
     model = MODELS[name]()
     u = np.random.default_rng(1).uniform(-1, 1, 700) + model.operating_point[0]
     direct = fohw.simulate(model, u)
-    old = system.FAST_SIMULATION_THRESHOLD
-    try:
-        system.FAST_SIMULATION_THRESHOLD = 100      # force divide and conquer at N = 700
-        fast = fohw.simulate(model, u)
-    finally:
-        system.FAST_SIMULATION_THRESHOLD = old
+    monkeypatch.setattr(simulation, "FAST_SIMULATION_THRESHOLD", 100)   # divide and conquer
+    fast = fohw.simulate(model, u)
     np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-11)
 
 
@@ -175,9 +171,11 @@ def test_orders_spellings():
 @pytest.mark.parametrize("call, match", [
     (lambda: fohw.Orders.resolve("fractional", na=1, nb=1), r"`orders` must be one of"),
     (lambda: fohw.Orders.resolve(2.5, na=1, nb=1), r"must be in \[0, 2\]; got 2.5"),
-    (lambda: fohw.Orders.from_lags(a=[-0.1], b=[0]), r"`orders`: the order of term 0 of branch 'a' must be in \[0, 2\]; got -0.1"),
+    (lambda: fohw.Orders.from_lags(a=[-0.1], b=[0]),
+     r"`orders`: the order of term 0 of branch 'a' must be in \[0, 2\]; got -0.1"),
     (lambda: fohw.Orders.from_lags(a=[(0, 0)], b=[0]), r"has the term \(lag 1, order 0"),
-    (lambda: fohw.Orders([(0, 0.5)], [(1, 0.5)]), r"the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
+    (lambda: fohw.Orders([(0, 0.5)], [(1, 0.5)]),
+     r"the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
     (lambda: fohw.Orders.resolve({"a": [0.5]}, na=1, nb=1), r"needs exactly the keys 'a' and 'b'"),
     (lambda: fohw.Orders.resolve({"a": [0.5, 0.5], "b": [0.5]}, na=1, nb=1),
      r"uses lags up to 2 \(output\)"),

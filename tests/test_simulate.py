@@ -115,7 +115,8 @@ def test_gaussian_paper_input_diverges_for_some_seeds():
     "kwargs, exc, match",
     [
         (dict(u=[0.0, np.nan, 1.0]), fohw.ParameterError, r"`u` must contain only finite.*index 1"),
-        (dict(noise=np.zeros(4)), fohw.DimensionError, r"`noise` and `u` must have the same length; got 4 and 5"),
+        (dict(noise=np.zeros(4)), fohw.DimensionError,
+         r"`noise` and `u` must have the same length; got 4 and 5"),
         (dict(noise=np.zeros(5), noise_std=0.1), fohw.ParameterError, "not both"),
         (dict(noise_std=-1.0), fohw.ParameterError, r"`noise_std` must be in \[0, inf\]"),
         (dict(random_state="seed", noise_std=0.1), fohw.ParameterError, "`random_state`"),
@@ -131,7 +132,7 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
 
 @pytest.mark.parametrize("n", [1, 127, 128, 129, 256, 257, 1000, 5000])
 def test_fast_simulator_equals_direct_recursion(n):
-    from fohw.model.system import _simulate_blocks
+    from reference import simulate_blocks
 
     rng = np.random.default_rng(n)
     m = paper_model()
@@ -139,13 +140,15 @@ def test_fast_simulator_equals_direct_recursion(n):
     v = 0.1 * rng.standard_normal(n)
     args = (m.q[:, None], m.a[None, :], np.outer(m.p, m.b), m.alpha, m.f_basis, m.g_basis, u, v,
             1e8)
-    direct = _simulate_blocks(*args, method="direct")
-    fast = _simulate_blocks(*args, method="fast")
+    direct = simulate_blocks(*args, method="direct")
+    fast = simulate_blocks(*args, method="fast")
     np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-12)
 
 
 def test_fast_simulator_general_blocks_and_divergence():
-    from fohw.model.system import FAST_SIMULATION_THRESHOLD, _simulate_blocks
+    from reference import simulate_blocks
+
+    from fohw.model.simulation import FAST_SIMULATION_THRESHOLD
 
     rng = np.random.default_rng(0)
     n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path
@@ -155,8 +158,8 @@ def test_fast_simulator_general_blocks_and_divergence():
     u = rng.uniform(-1, 1, n)
     v = 0.05 * rng.standard_normal(n)
     Q = np.eye(2)
-    auto = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8)
-    direct = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
+    auto = simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8)
+    direct = simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
     np.testing.assert_allclose(auto, direct, rtol=0, atol=1e-12)
     # The same divergence report on both paths.
     m = paper_model()
@@ -164,7 +167,7 @@ def test_fast_simulator_general_blocks_and_divergence():
     errs = []
     for method in ("direct", "fast"):
         with pytest.raises(fohw.SimulationDivergedError) as info:
-            _simulate_blocks(m.q[:, None], m.a[None, :], np.outer(m.p, m.b), 0.6, m.f_basis,
-                             m.g_basis, big, np.zeros(3000), 1e8, method=method)
+            simulate_blocks(m.q[:, None], m.a[None, :], np.outer(m.p, m.b), 0.6, m.f_basis,
+                            m.g_basis, big, np.zeros(3000), 1e8, method=method)
         errs.append(info.value.sample)
     assert errs[0] == errs[1]
