@@ -143,20 +143,11 @@ def simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="
 
 
 def simulate_any_order(structure, theta, orders, u):
-    """Free run of any theta at any finite orders, through the engine without the [0, 2] check.
+    """Free run of any theta at any finite orders: the engine's predictor, without the [0, 2] check.
 
     For test data the model class cannot express (a fractional *sum*, order < 0): ``orders``
-    is ``{free order: value}``; no offset, past levels at rest, no noise.
+    are the free orders' values in order; no offset, past levels at rest, no noise.
     """
-    import fohw
-    from fohw.model.simulation import free_run
+    from fohw.model.simulation import simulate_predictor
 
-    qa, pb = structure.layout.blocks(np.asarray(theta, dtype=float))
-    if qa.shape[0] <= qa.shape[1]:          # fewer g-signals than terms: z_j = g_j(y)
-        Q, A = np.eye(qa.shape[0]), qa
-    else:
-        Q, A = qa, np.eye(qa.shape[1])
-    u = np.asarray(u, dtype=float)
-    assert isinstance(structure, fohw.Structure) and not structure.offset
-    return free_run(structure, Q, A, qa, pb, dict(orders), u, np.zeros(u.shape[0]), offset=0.0,
-                    past=(0.0, 0.0), operating_point=(0.0, 0.0), threshold=None, history=None)
+    return simulate_predictor(structure, theta, orders, u)

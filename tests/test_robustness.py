@@ -141,7 +141,7 @@ def test_bound_advice_can_be_followed():
     from reference import simulate_any_order
 
     s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1)
-    y = simulate_any_order(s, [0.3, 1.0], {"alpha": -0.3}, u)
+    y = simulate_any_order(s, [0.3, 1.0], [-0.3], u)
     res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="varpro")
     assert res.alpha_at_bound and res.alpha == 0.0
     assert "lower bound 0" in res.message and "widen" not in res.message

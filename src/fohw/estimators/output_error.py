@@ -32,7 +32,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
-from ..model.simulation import simulate
+from ..model.simulation import simulate_predictor
 from ..results import IdentificationResult, Status
 from ._common import bound_note, bounded_least_squares, check_enough_samples, finish, rms_scale
 from .options import MethodOptions
@@ -126,7 +126,9 @@ class _SimulationError:
     def simulate(self, x):
         """Free run at ``x``; :class:`SimulationDivergedError` beyond ``guard``."""
         self.n_simulations += 1
-        return simulate(self.structure, self.u, params=x, divergence_threshold=self.guard)
+        n = self.structure.n_linear
+        return simulate_predictor(self.structure, x[:n], x[n:], self.u,
+                                  divergence_threshold=self.guard)
 
     def residual(self, x):
         """``(y - ysim(x))[n_init:]``, or the constant penalty if the run escapes."""

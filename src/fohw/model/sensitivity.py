@@ -34,7 +34,7 @@ from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
 from .gl import gl_weights
 from .regressors import RegressorBuilder
-from .simulation import simulate
+from .simulation import simulate_predictor
 from .structure import Structure
 
 __all__ = ["simulation_jacobian", "basis_derivative"]
@@ -118,7 +118,7 @@ def _feedback_problem(structure, linear, params, u):
     linear = check_array(linear, "linear")
     params = np.atleast_1d(np.asarray(params, dtype=np.float64))
     u = check_array(u, "u")
-    y = simulate(structure, u, params=np.r_[linear, params])
+    y = simulate_predictor(structure, linear, params, u)
     builder = RegressorBuilder(u, y, structure=structure)
     E = builder.jacobian(linear, params)
     layout = structure.layout

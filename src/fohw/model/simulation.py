@@ -29,8 +29,8 @@ from .gl import causal_convolve, gl_weights, gl_weights_unchecked, past_transien
 from .structure import Structure
 from .system import HammersteinWiener, check_pair
 
-__all__ = ["simulate", "equation_noise", "free_run", "forcing", "recursion", "accumulators",
-           "output_terms", "Accumulators", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE",
+__all__ = ["simulate", "simulate_predictor", "equation_noise", "free_run", "forcing", "recursion",
+           "accumulators", "output_terms", "Accumulators", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE",
            "LEAF_SIZE_COMPILED"]
 
 #: Below this record length the simulator runs the recursion directly (one dot product per
@@ -146,7 +146,7 @@ def simulate(model, u, *, params=None, operating_point=None, noise=None, noise_s
             raise ParameterError("simulating a Structure needs its parameter values `params` "
                                  f"{model.linear_names + model.nonlinear_names}.")
         linear, nonlinear = _split_params(model, params)
-        return _simulate_predictor(
+        return simulate_predictor(
             model, linear, nonlinear, u,
             operating_point=(0.0, 0.0) if operating_point is None else operating_point,
             noise=noise, noise_std=noise_std, random_state=random_state,
@@ -186,6 +186,8 @@ def _split_params(structure, params):
         raise DimensionError(f"`params` must have {len(names)} entries {names}; got "
                              f"{params.shape[0]}.")
     k = structure.n_linear
+    values, _ = structure.split_nonlinear(params[k:])
+    structure.orders.free_mapping(values, "params")          # the one rule: each order in [0, 2]
     return params[:k], params[k:]
 
 
@@ -200,14 +202,27 @@ def _simulate_model(model, u, *, noise, noise_std, random_state, divergence_thre
                     threshold=_check_threshold(divergence_threshold), history=history)
 
 
-def _simulate_predictor(structure, linear, nonlinear, u, *, operating_point, noise, noise_std,
-                        random_state, divergence_threshold, history):
-    """Any theta of a structure (the predictor an estimator fitted, before Eqs. 39–40)."""
+def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0, 0.0), noise=None,
+                       noise_std=0.0, random_state=None, divergence_threshold=None,
+                       history=None):
+    """Any theta of a structure (the predictor an estimator fitted, before Eqs. 39–40).
+
+    :func:`simulate` of a Structure, for callers inside the package that checked the orders
+    themselves (an estimator inside its bounds): they are used as given, any finite order (as
+    :func:`fohw.gl_weights` allows), so that a finite difference may step across a bound.
+    ``linear``, ``nonlinear``: :attr:`Structure.linear_names`, :attr:`Structure.nonlinear_names`.
+    """
     layout = structure.layout
+    linear = check_array(linear, "linear")
+    nonlinear = np.atleast_1d(check_array(nonlinear, "params", ndim=None, min_length=0))
+    for value, names, name in ((linear, structure.linear_names, "linear"),
+                               (nonlinear, structure.nonlinear_names, "params")):
+        if value.shape[0] != len(names):
+            raise DimensionError(f"`{name}` must have {len(names)} entries {names}; got "
+                                 f"{value.shape[0]}.")
     qa, pb = layout.blocks(linear[:layout.n_params])
     offset = float(linear[layout.n_params]) if structure.offset else 0.0
     values, past = structure.split_nonlinear(nonlinear)
-    values = structure.orders.free_mapping(values, "params")        # each order in [0, 2]
     u = check_array(u, "u")
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
     Q, A = _output_representation(qa)
