@@ -28,8 +28,8 @@ switched off), interleaved, medians of ``--repeats`` (one run at N >= 1e6); prin
 by rounding; the sensitivity's own leaves are both 128 and equal at equal input).
 
 ``--leaves``: the recursion alone (``_solve_feedback`` on the same ``E``) at leaf sizes 64..1024,
-compiled and pure (pure at N <= 1e5 only), to choose ``sensitivity._LEAF`` and
-``_LEAF_COMPILED``.
+compiled and pure (pure at N <= 1e5 only), to choose ``sensitivity.LEAF_SIZE`` and
+``LEAF_SIZE_COMPILED``.
 """
 
 import argparse

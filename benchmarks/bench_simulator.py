@@ -14,7 +14,7 @@ One run, the paper's example (``fohw.datasets.paper_model()``, the input and noi
 * **compiled**: the numba leaf (the ``fast`` extra); its one-time load (numba import and compile
   or cache load) is measured first and reported apart;
 * **floor**: the same divide and conquer with a leaf that does nothing (the FFT merges alone, on
-  the same segments; ``kernel="merges"``), at the compiled and at the pure leaf size;
+  the same segments; this script's ``merges``), at the compiled and at the pure leaf size;
 * **per-step**: the contiguous per-step recursion of ``benchmarks/run.py`` (N <= 10^5).
 
 ``--workloads`` also times ``fohw.identify(method="output_error")`` at N = 10^4 and a small
@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 import fohw
-from fohw.model import _compiled, system
+from fohw.model import _compiled, simulation
+from fohw.model._online import HalfMerge, divide_and_conquer
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -61,22 +62,35 @@ def simulate(model, u, v, kernel, leaf_size=None):
     """
     if kernel == "reference":
         return simulate_before(lambda: simulate(model, u, v, "pure"))
-    return system._run(model.structure, model.q[:, None], model.a[None, :],
-                       np.outer(model.q, model.a), np.outer(model.p, model.b), model.orders, u, v,
-                       offset=model.offset, past=model.past,
-                       operating_point=model.operating_point, threshold=None, history=None,
-                       kernel=kernel, leaf_size=leaf_size)
+    return simulation.free_run(model.structure, model.q[:, None], model.a[None, :],
+                               np.outer(model.q, model.a), np.outer(model.p, model.b),
+                               model.orders, u, v, offset=model.offset, past=model.past,
+                               operating_point=model.operating_point, threshold=None,
+                               history=None, kernel=kernel, leaf_size=leaf_size)
 
 
 def merges(model, u, v, leaf_size):
-    """The callable timing the FFT merges alone (forcing computed beforehand)."""
+    """The callable timing the FFT merges alone (forcing computed beforehand).
+
+    The recursion's divide and conquer (its setup included) with a leaf that does nothing, so
+    only the merges run, on the same segments as :func:`fohw.model.simulation.recursion`.
+    """
     out_terms = [(i, model.alpha) for i in range(1, model.a.shape[0] + 1)]
     in_terms = [(i, model.alpha) for i in range(1, model.b.shape[0] + 1)]
-    w = system._forcing(np.outer(model.p, model.b), in_terms, None, out_terms, model.f_basis,
-                        model.g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
-    return lambda: system._recursion(model.q[:, None], model.a[None, :], out_terms,
-                                     model.g_basis, w, 1e300, "fast", kernel="merges",
-                                     leaf_size=leaf_size)
+    w = simulation.forcing(np.outer(model.p, model.b), in_terms, None, out_terms, model.f_basis,
+                           model.g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
+    n = w.shape[0]
+    size = max(1, min(leaf_size, n))
+
+    def floor():
+        acc = simulation.accumulators(model.a[None, :], out_terms, 1.0, n)
+        merge = HalfMerge(acc.betas, acc.memory)
+        z = np.zeros((1, n))
+        dz = np.zeros((acc.count, n))
+        with np.errstate(over="ignore", invalid="ignore"):
+            divide_and_conquer(n, size, lambda lo, hi: None,
+                               lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    return floor
 
 
 def timed(fns, repeats):
@@ -98,7 +112,7 @@ def side_by_side(sizes):
         sys.exit("numba is not available: pip install 'fohw[fast]'")
     print(f"compiled leaf: numba import + compile or cache load {time.perf_counter() - t0:.2f} s "
           "(once per process; not in the times below)")
-    print(f"leaf sizes: pure {system._LEAF}, compiled {system._LEAF_COMPILED}, "
+    print(f"leaf sizes: pure {simulation.LEAF_SIZE}, compiled {simulation.LEAF_SIZE_COMPILED}, "
           f"before {simulator_before.LEAF}")
     rows = []
     for n in sizes:
@@ -109,8 +123,8 @@ def side_by_side(sizes):
         fns = {"before": lambda: simulate(model, u, v, "reference"),
                "pure": lambda: simulate(model, u, v, "pure"),
                "compiled": lambda: simulate(model, u, v, "compiled"),
-               "floor": merges(model, u, v, system._LEAF_COMPILED),
-               "floor_pure": merges(model, u, v, system._LEAF)}
+               "floor": merges(model, u, v, simulation.LEAF_SIZE_COMPILED),
+               "floor_pure": merges(model, u, v, simulation.LEAF_SIZE)}
         repeats = 3 if n >= 10**6 else 5
         la0 = load()
         med = timed(fns, repeats)
@@ -126,7 +140,7 @@ def side_by_side(sizes):
     print(f"\nOPENBLAS_NUM_THREADS={threads}; medians of x interleaved repeats in this run; "
           "per-step once at 1e5, 3x at 1e4.\n")
     print("| N | x | load | before [s] | pure [s] | compiled [s] | floor (leaf "
-          f"{system._LEAF_COMPILED}) [s] | floor (leaf {system._LEAF}) [s] | per-step [s] "
+          f"{simulation.LEAF_SIZE_COMPILED}) [s] | floor (leaf {simulation.LEAF_SIZE}) [s] | per-step [s] "
           "| before/pure | before/compiled | compiled/floor | pure/floor | per-step/compiled "
           "| max diff pure-before | max diff compiled-pure |")
     print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")

@@ -1,8 +1,9 @@
 """The simulator's recursion before issue 15, kept for ``bench_simulator.py``'s "before" column.
 
-A frozen copy of ``fohw.model.system._recursion`` at fe05e02: leaves of 128 in pure Python, each
-merge a full zero-padded linear convolution with the weights' spectrum computed every time. It is
-not part of the package; ``simulate_before`` runs it in place of the current recursion.
+A frozen copy of the simulator's recursion (``fohw.model.simulation.recursion``) at fe05e02:
+leaves of 128 in pure Python, each merge a full zero-padded linear convolution with the weights'
+spectrum computed every time. It is not part of the package; ``simulate_before`` runs it in place
+of the current recursion.
 """
 
 import math
@@ -11,14 +12,14 @@ from unittest import mock
 import numpy as np
 
 from fohw.exceptions import SimulationDivergedError
-from fohw.model import system
+from fohw.model import simulation
 from fohw.model.gl import causal_convolve, gl_weights
 
 LEAF = 128
 
 
 def recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
-    """``fohw.model.system._recursion`` as it was before issue 15 (the benchmark's "before").
+    """``fohw.model.simulation.recursion`` as it was before issue 15 (the benchmark's "before").
 
     ``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
 
@@ -47,7 +48,7 @@ def recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=
     betas = {nu: gl_weights(nu, n) for nu in nus if nu != 0.0}
     memory = [(a, r, betas[nu]) for a, (r, nu) in enumerate(acc) if nu != 0.0]
     memoryless = [(a, r) for a, (r, nu) in enumerate(acc) if nu == 0.0]
-    zfun = system._output_terms(g_basis, Q)
+    zfun = simulation.output_terms(g_basis, Q)
     w = w.tolist()
     n_fixed = 0 if y_fixed is None else y_fixed.shape[0]
     fixed = [] if y_fixed is None else y_fixed.tolist()
@@ -108,12 +109,12 @@ def _as_recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, 
                   kernel=None, leaf_size=None):
     n = w.shape[0]
     if method == "auto":
-        method = "fast" if n > system.FAST_SIMULATION_THRESHOLD else "direct"
+        method = "fast" if n > simulation.FAST_SIMULATION_THRESHOLD else "direct"
     return recursion(Q, A, out_terms, g_basis, w, threshold, LEAF if method == "fast" else n,
                      h, y_fixed)
 
 
 def simulate_before(run):
     """``run()`` with the simulator's recursion replaced by the one before issue 15."""
-    with mock.patch.object(system, "_recursion", _as_recursion):
+    with mock.patch.object(simulation, "recursion", _as_recursion):
         return run()

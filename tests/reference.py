@@ -1,7 +1,8 @@
 """Literal reference implementations for the tests: the equations written out, no fohw code.
 
 Double loops over samples and lags, GL weights from ``scipy.special.binom``; slow and obviously
-right, so that fohw's fast paths can be checked against them at every sample.
+right, so that fohw's fast paths can be checked against them at every sample. At the end, the
+test harnesses that drive fohw's own engine on paths the package itself never takes.
 """
 
 import numpy as np
@@ -122,3 +123,31 @@ def simulate_general(model, u, v, history=None):
         y.append(yk)
         gy.append(gbar(yk))
     return np.array(y[n_hist:]) + y0
+
+
+# ---- harnesses that drive fohw's own simulation engine (not independent references) ----------
+
+def simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="auto"):
+    """The paper's commensurate model in block form through the engine, by ``method``.
+
+    ``method`` is ``"auto"``, ``"direct"`` (one leaf, O(N^2)) or ``"fast"`` (divide and conquer):
+    the tests compare the two paths of :func:`fohw.model.simulation.recursion` on the same
+    forcing. ``Q, A`` are the fed-back signals and their coefficients, ``pb`` the input blocks.
+    """
+    from fohw.model.simulation import forcing, recursion
+
+    out_terms = [(i, alpha) for i in range(1, A.shape[1] + 1)]
+    in_terms = [(i, alpha) for i in range(1, pb.shape[1] + 1)]
+    w = forcing(pb, in_terms, None, out_terms, f_basis, g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
+    return recursion(Q, A, out_terms, g_basis, w, threshold, method)
+
+
+def simulate_any_order(structure, theta, orders, u):
+    """Free run of any theta at any finite orders: the engine's predictor, without the [0, 2] check.
+
+    For test data the model class cannot express (a fractional *sum*, order < 0): ``orders``
+    are the free orders' values in order; no offset, past levels at rest, no noise.
+    """
+    from fohw.model.simulation import simulate_predictor
+
+    return simulate_predictor(structure, theta, orders, u)

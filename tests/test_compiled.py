@@ -16,7 +16,7 @@ import pytest
 from models import MODELS
 
 import fohw
-from fohw.model import _compiled, sensitivity, system
+from fohw.model import _compiled, sensitivity, simulation
 from fohw.model._online import HalfMerge, divide_and_conquer
 
 # The comparisons need numba and the compiled leaf switched on (not FOHW_NO_NUMBA=1); the test
@@ -38,9 +38,9 @@ STRUCTURES = dict(MODELS, **{
 @pytest.fixture
 def small_leaves(monkeypatch):
     """Divide and conquer from 100 samples on, with the same small leaves for both leaves."""
-    monkeypatch.setattr(system, "FAST_SIMULATION_THRESHOLD", 100)
-    monkeypatch.setattr(system, "_LEAF", 48)
-    monkeypatch.setattr(system, "_LEAF_COMPILED", 48)
+    monkeypatch.setattr(simulation, "FAST_SIMULATION_THRESHOLD", 100)
+    monkeypatch.setattr(simulation, "LEAF_SIZE", 48)
+    monkeypatch.setattr(simulation, "LEAF_SIZE_COMPILED", 48)
     assert _compiled.load() is not None
 
 
@@ -82,8 +82,9 @@ def test_compiled_leaf_general_theta_and_history(small_leaves, monkeypatch):
     u = rng.uniform(-1, 1, 1200)
     for na, g in ((2, 3), (4, 2)):       # n_g > na: Q = qa; n_g < na: Q = I
         th = np.r_[0.1 * rng.standard_normal(na * g), theta[-4:]]
-        compiled, pure = both(lambda th=th, na=na, g=g: fohw.simulate_theta(
-            th, 0.6, u, na=na, nb=2, f_basis=2, g_basis=g), monkeypatch)
+        compiled, pure = both(lambda th=th, na=na, g=g: fohw.simulate(
+            fohw.Structure.make(na=na, nb=2, f_basis=2, g_basis=g), u, params=np.r_[th, 0.6]),
+            monkeypatch)
         np.testing.assert_array_equal(compiled, pure)
     # A measured history (the first outputs are fixed, not computed).
     model = STRUCTURES["past"]()
@@ -118,13 +119,13 @@ def test_compiled_leaf_reports_the_same_divergence(threshold, cause, small_leave
 def test_default_leaves_are_equal(monkeypatch):
     # The default leaf sizes of the two simulator leaves are equal, so with the default settings
     # numba changes no simulated sample (above the divide-and-conquer threshold too).
-    assert system._LEAF == system._LEAF_COMPILED
+    assert simulation.LEAF_SIZE == simulation.LEAF_SIZE_COMPILED
     m = fohw.datasets.paper_model()
     rng = np.random.default_rng(0)
     n = 20_000
     u = rng.uniform(-np.sqrt(3), np.sqrt(3), n)
     v = 0.1 * rng.standard_normal(n)
-    assert n > system.FAST_SIMULATION_THRESHOLD and _compiled.load() is not None
+    assert n > simulation.FAST_SIMULATION_THRESHOLD and _compiled.load() is not None
     compiled, pure = both(lambda: fohw.simulate(m, u, noise=v), monkeypatch)
     np.testing.assert_array_equal(compiled, pure)
 
@@ -136,8 +137,8 @@ def test_pure_path_when_switched_off(monkeypatch):
     w = np.ones(600)
     out_terms = [(1, 0.6), (2, 0.6)]
     with pytest.raises(RuntimeError, match="not available"):
-        system._recursion(m.q[:, None], m.a[None, :], out_terms, m.g_basis, w, 1e8, "fast",
-                          kernel="compiled")
+        simulation.recursion(m.q[:, None], m.a[None, :], out_terms, m.g_basis, w, 1e8, "fast",
+                             kernel="compiled")
     # a non-polynomial output basis never gets the compiled leaf
     monkeypatch.setattr(_compiled, "ENABLED", True)
     assert _compiled.leaf_for(fohw.as_basis([np.sin]), 10**9) is None
@@ -193,7 +194,7 @@ def test_a_compile_error_falls_back_to_the_pure_leaf_with_one_warning(monkeypatc
 
 @needs_numba
 def test_environment_variable_turns_the_compiled_leaf_off():
-    code = ("import fohw.model._compiled as c, fohw.model.system as s, numpy as np, fohw;"
+    code = ("import fohw.model._compiled as c, numpy as np, fohw;"
             "m = fohw.datasets.paper_model();"
             "fohw.simulate(m, np.zeros(300_000));"          # above LOAD_AFTER
             "print(c.available(), c._state['kernel'] is None)")
@@ -245,8 +246,8 @@ SENSITIVITY_STRUCTURES = dict(STRUCTURES, **{
 @pytest.fixture
 def small_sensitivity_leaves(small_leaves, monkeypatch):
     """The simulator's small leaves, and leaves of 48 for both sensitivity leaves."""
-    monkeypatch.setattr(sensitivity, "_LEAF", 48)
-    monkeypatch.setattr(sensitivity, "_LEAF_COMPILED", 48)
+    monkeypatch.setattr(sensitivity, "LEAF_SIZE", 48)
+    monkeypatch.setattr(sensitivity, "LEAF_SIZE_COMPILED", 48)
 
 
 def both_feedback(fn, monkeypatch):
@@ -369,7 +370,7 @@ def test_output_error_and_crb_are_the_same_with_either_sensitivity_leaf(
 def test_sensitivity_default_leaves_are_equal(monkeypatch):
     # The default leaf sizes of the two sensitivity leaves are equal, so with the default
     # settings numba changes no number of the sensitivity (nor of the simulator's, above).
-    assert sensitivity._LEAF == sensitivity._LEAF_COMPILED
+    assert sensitivity.LEAF_SIZE == sensitivity.LEAF_SIZE_COMPILED
     m = fohw.datasets.paper_model()
     u = np.random.default_rng(0).uniform(-1, 1, 3000)
     _, E, lags, betas, coefs = sensitivity._feedback_problem(m.structure, m.linear,

@@ -43,18 +43,14 @@ def test_simulation_continues_from_a_measured_history(name):
 
 
 @pytest.mark.parametrize("name", sorted(set(MODELS) - {"paper"}))
-def test_fast_simulator_equals_direct_for_general_models(name):
-    from fohw.model import system
+def test_fast_simulator_equals_direct_for_general_models(name, monkeypatch):
+    from fohw.model import simulation
 
     model = MODELS[name]()
     u = np.random.default_rng(1).uniform(-1, 1, 700) + model.operating_point[0]
     direct = fohw.simulate(model, u)
-    old = system.FAST_SIMULATION_THRESHOLD
-    try:
-        system.FAST_SIMULATION_THRESHOLD = 100      # force divide and conquer at N = 700
-        fast = fohw.simulate(model, u)
-    finally:
-        system.FAST_SIMULATION_THRESHOLD = old
+    monkeypatch.setattr(simulation, "FAST_SIMULATION_THRESHOLD", 100)   # divide and conquer
+    fast = fohw.simulate(model, u)
     np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-11)
 
 

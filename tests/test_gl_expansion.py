@@ -23,7 +23,7 @@ from fohw.estimators.hybrid import (
     run_alternation,
 )
 from fohw.exceptions import ParameterError
-from fohw.model.gl import _weights
+from fohw.model.gl import gl_weights_unchecked
 from fohw.model.gl_expansion import ExpandedWindows, GLExpansion, StreamedWindows
 from fohw.model.regressors import WindowKernel
 
@@ -59,7 +59,7 @@ def test_weights_and_derivative_equal_exact_values_within_the_bound(lo, hi, alph
     # (2j + 1) roundings of relative size u, the Chebyshev interpolant amplifies node errors by
     # its Lebesgue constant (<= 2/pi log(deg + 1) + 1), and evaluating sum_m c_m T_m adds at most
     # 2 (deg + 1)^2 u of the largest node weight (derivative: one more factor deg^2 2/(hi - lo)).
-    scale = np.max(np.abs([_weights(a, n) for a in ex.nodes()]), axis=0)
+    scale = np.max(np.abs([gl_weights_unchecked(a, n) for a in ex.nodes()]), axis=0)
     lebesgue = 2 / np.pi * np.log(deg + 1) + 1
     allowance = (lebesgue * (2 * j + 1) + 2 * (deg + 1) ** 2) * U * scale
     err = np.abs(ex.weights(float(alpha)) - beta)
@@ -127,9 +127,9 @@ def test_windows_equal_literal_sums_at_every_sample(max_bytes):
                                    atol=atol * max(1.0, float(np.abs(ref_dsum[a]))))
         fd = windows.rows(k, ex.basis_pair(float(a) * 0.999, delta_alpha=1e-3))
         direct = WindowKernel(lags).rows(b.signals, k, 4, [
-            _weights(float(a) * 0.999, max(k, 1)),
-            (_weights(float(a) * 0.999 + 1e-3, max(k, 1))
-             - _weights(float(a) * 0.999, max(k, 1))) / 1e-3])
+            gl_weights_unchecked(float(a) * 0.999, max(k, 1)),
+            (gl_weights_unchecked(float(a) * 0.999 + 1e-3, max(k, 1))
+             - gl_weights_unchecked(float(a) * 0.999, max(k, 1))) / 1e-3])
         np.testing.assert_allclose(fd[0], direct[0], rtol=0, atol=atol)
         # both sides difference weights that agree to about 1e-16 * sum|beta| (<= 2e-16 for
         # alpha <= 1); over the step 1e-3 that is <= 2e-13 * max|x|, inside atol (measured 0.24)

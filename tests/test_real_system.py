@@ -46,25 +46,25 @@ def test_robot_arm_corrupted_file(robot_arm_path, tmp_path):
         fohw.datasets.robot_arm(bad, verify=False)
 
 
-def test_simulate_theta_nests_the_model_and_reports_divergence():
+def test_simulating_theta_nests_the_model_and_reports_divergence():
     m = fohw.datasets.paper_model()
     u = np.random.default_rng(0).uniform(-1, 1, 500)
-    np.testing.assert_allclose(
-        fohw.simulate_theta(m.theta, m.alpha, u, na=2, nb=2, f_basis=2, g_basis=3),
-        fohw.simulate(m, u), rtol=0, atol=1e-13)
+    s = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=3)
+    np.testing.assert_allclose(fohw.simulate(s, u, params=np.r_[m.theta, m.alpha]),
+                               fohw.simulate(m, u), rtol=0, atol=1e-13)
     unstable = m.theta.copy()
     unstable[:2] = [3.0, 2.0]
     with pytest.raises(fohw.SimulationDivergedError):
-        fohw.simulate_theta(unstable, 0.6, u, na=2, nb=2, f_basis=2, g_basis=3)
+        fohw.simulate(s, u, params=np.r_[unstable, 0.6])
 
 
-def test_simulate_theta_matches_a_non_kronecker_reference():
+def test_simulating_theta_matches_a_non_kronecker_reference():
     # A theta that is not q (x) a: its simulation must still satisfy y = Phi theta + v.
     rng = np.random.default_rng(2)
     theta = np.array([0.1, 0.2, -0.05, 0.04, 0.03, -0.02, -0.4, -0.2, 0.1, -0.3])
     u = rng.uniform(-1, 1, 800)
     v = 0.05 * rng.standard_normal(800)
-    y = fohw.simulate_theta(theta, 0.7, u, noise=v, **STRUCT)
+    y = fohw.simulate(fohw.Structure.make(**STRUCT), u, params=np.r_[theta, 0.7], noise=v)
     Phi = fohw.information_matrix(u, y, 0.7, **STRUCT)
     assert np.max(np.abs(y - Phi @ theta - v)) < 1e-12
 

@@ -59,7 +59,8 @@ def test_information_matrix_rejects_bad_input(kwargs, exc, match):
 
 
 def test_basis_returning_nonfinite_is_named():
-    with pytest.raises(fohw.ParameterError, match=r"'log' returned nan at index 0 of `u` "
-                                                  r"\(where `u` = -1.0\): it returned a non-finite"):
+    with pytest.raises(fohw.ParameterError,
+                       match=r"'log' returned nan at index 0 of `u` \(where `u` = -1.0\): "
+                             "it returned a non-finite"):
         fohw.information_matrix(np.r_[-1.0, np.ones(9)], np.ones(10), 0.5, na=1, nb=1,
                                 f_basis=[np.log], g_basis=1)

@@ -137,7 +137,11 @@ def test_bound_advice_can_be_followed():
     # fohw 0.1 advised "widen the bounds" at alpha = 0, which no bound allows.
     # Data of a fractional *sum* (order -0.3): the best order in [0, 1] is on the bound 0.
     u = np.random.default_rng(0).uniform(-1, 1, 800)
-    y = fohw.simulate_theta([0.3, 1.0], -0.3, u, na=1, nb=1, f_basis=1, g_basis=1)
+    # (fohw.simulate takes orders in [0, 2] only: the engine runs it without that check.)
+    from reference import simulate_any_order
+
+    s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1)
+    y = simulate_any_order(s, [0.3, 1.0], [-0.3], u)
     res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="varpro")
     assert res.alpha_at_bound and res.alpha == 0.0
     assert "lower bound 0" in res.message and "widen" not in res.message

@@ -162,7 +162,7 @@ def test_output_basis_nan_is_reported_as_such():
     lin = np.zeros(struct.n_linear)
     lin[4] = 1.0                                   # p1 b1: theta = [q (x) a, p (x) b]
     with pytest.raises(fohw.SimulationDivergedError) as exc:
-        fohw.simulate_parameters(struct, lin, [0.5], -3.0 * np.ones(20))
+        fohw.simulate(struct, -3.0 * np.ones(20), params=np.r_[lin, 0.5])
     assert exc.value.cause == "output_basis" and exc.value.sample == 1
     assert "output basis g" in str(exc.value)
 

@@ -132,7 +132,7 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
 
 @pytest.mark.parametrize("n", [1, 127, 128, 129, 256, 257, 1000, 5000])
 def test_fast_simulator_equals_direct_recursion(n):
-    from fohw.model.system import _simulate_blocks
+    from reference import simulate_blocks
 
     rng = np.random.default_rng(n)
     m = paper_model()
@@ -140,13 +140,15 @@ def test_fast_simulator_equals_direct_recursion(n):
     v = 0.1 * rng.standard_normal(n)
     args = (m.q[:, None], m.a[None, :], np.outer(m.p, m.b), m.alpha, m.f_basis, m.g_basis, u, v,
             1e8)
-    direct = _simulate_blocks(*args, method="direct")
-    fast = _simulate_blocks(*args, method="fast")
+    direct = simulate_blocks(*args, method="direct")
+    fast = simulate_blocks(*args, method="fast")
     np.testing.assert_allclose(fast, direct, rtol=0, atol=1e-12)
 
 
 def test_fast_simulator_general_blocks_and_divergence():
-    from fohw.model.system import FAST_SIMULATION_THRESHOLD, _simulate_blocks
+    from reference import simulate_blocks
+
+    from fohw.model.simulation import FAST_SIMULATION_THRESHOLD
 
     rng = np.random.default_rng(0)
     n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path
@@ -156,8 +158,8 @@ def test_fast_simulator_general_blocks_and_divergence():
     u = rng.uniform(-1, 1, n)
     v = 0.05 * rng.standard_normal(n)
     Q = np.eye(2)
-    auto = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8)
-    direct = _simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
+    auto = simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8)
+    direct = simulate_blocks(Q, qa, pb, 1.3, f, g, u, v, 1e8, method="direct")
     np.testing.assert_allclose(auto, direct, rtol=0, atol=1e-12)
     # The same divergence report on both paths.
     m = paper_model()
@@ -165,7 +167,76 @@ def test_fast_simulator_general_blocks_and_divergence():
     errs = []
     for method in ("direct", "fast"):
         with pytest.raises(fohw.SimulationDivergedError) as info:
-            _simulate_blocks(m.q[:, None], m.a[None, :], np.outer(m.p, m.b), 0.6, m.f_basis,
-                             m.g_basis, big, np.zeros(3000), 1e8, method=method)
+            simulate_blocks(m.q[:, None], m.a[None, :], np.outer(m.p, m.b), 0.6, m.f_basis,
+                            m.g_basis, big, np.zeros(3000), 1e8, method=method)
         errs.append(info.value.sample)
     assert errs[0] == errs[1]
+
+
+# ---- one simulator for a model, a result and a structure's parameters --------------------------
+
+def test_one_simulator_for_every_kind():
+    m = fohw.datasets.paper_model()
+    u = np.random.default_rng(4).uniform(-1, 1, 400)
+    s = m.structure
+    by_vector = fohw.simulate(s, u, params=np.r_[m.linear, m.nonlinear])
+    by_name = fohw.simulate(s, u, params=dict(zip(s.linear_names + s.nonlinear_names,
+                                                  np.r_[m.linear, m.nonlinear])))
+    np.testing.assert_array_equal(by_vector, by_name)
+    np.testing.assert_allclose(by_vector, fohw.simulate(m, u), rtol=0, atol=1e-13)
+    # A result is its fitted predictor: fohw.simulate(result) is result.simulate, bit for bit.
+    d = fohw.datasets.paper_example(500, random_state=0)
+    r = fohw.identify(d.u, d.y, method="varpro", na=2, nb=2, f_basis=2, g_basis=3)
+    np.testing.assert_array_equal(fohw.simulate(r, d.u), r.simulate(d.u))
+    np.testing.assert_array_equal(
+        fohw.simulate(r, d.u), fohw.simulate(r.structure, d.u, params=np.r_[r.linear, r.nonlinear],
+                                             operating_point=r.operating_point))
+
+    class Estimate:                 # anything with structure, linear and nonlinear
+        structure, linear, nonlinear = r.structure, r.linear, r.nonlinear
+
+    np.testing.assert_array_equal(fohw.simulate(Estimate(), d.u), r.simulate(d.u))
+
+
+def test_operating_point_and_noise_with_a_structure():
+    m = fohw.HammersteinWiener([0.3], [1.0], [1.0], [1.0], 0.5, operating_point=(2.0, -1.0))
+    u = 2.0 + np.random.default_rng(5).uniform(-1, 1, 200)
+    params = np.r_[m.linear, m.nonlinear]
+    got = fohw.simulate(m.structure, u, params=params, operating_point=(2.0, -1.0),
+                        noise_std=0.1, random_state=3)
+    want = fohw.simulate(m, u, noise_std=0.1, random_state=3)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("order", [-0.3, 2.5])
+def test_one_order_rule_on_every_path(order):
+    # Every path takes orders in the closed interval [0, 2] and names the argument.
+    s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1)
+    u = np.zeros(10)
+    with pytest.raises(fohw.ParameterError, match=r"`params\['alpha'\]` must be in \[0, 2\]"):
+        fohw.simulate(s, u, params=[0.3, 1.0, order])
+    with pytest.raises(fohw.ParameterError, match=r"`alpha` must be in \[0, 2\]"):
+        fohw.HammersteinWiener([0.3], [1.0], [1.0], [1.0], order)
+    for bound in (0.0, 2.0):
+        assert np.all(np.isfinite(fohw.simulate(s, u, params=[0.3, 1.0, bound])))
+
+
+@pytest.mark.parametrize("call, exc, match", [
+    (lambda s, u: fohw.simulate(s, u), fohw.ParameterError, "needs its parameter values"),
+    (lambda s, u: fohw.simulate(s, u, params={"a1": 0.3, "b1": 1.0}), fohw.ParameterError,
+     r"missing \['alpha'\]"),
+    (lambda s, u: fohw.simulate(s, u, params=[0.3, 1.0]), fohw.DimensionError,
+     "`params` must have 3 entries"),
+    (lambda s, u: fohw.simulate(paper_model(), u, operating_point=(0, 0)), fohw.ParameterError,
+     "`operating_point` is for a Structure"),
+    (lambda s, u: fohw.simulate(s.layout, u), fohw.ParameterError,
+     "`model` must be a HammersteinWiener, an identification result or a Structure"),
+])
+def test_simulate_rejects_what_does_not_fit_the_kind(call, exc, match):
+    s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1)
+    with pytest.raises(exc, match=match):
+        call(s, np.zeros(10))
+
+
+def test_the_other_simulators_are_gone():
+    assert not hasattr(fohw, "simulate_theta") and not hasattr(fohw, "simulate_parameters")

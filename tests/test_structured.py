@@ -7,7 +7,6 @@ import reference
 
 import fohw
 from fohw.model.sensitivity import simulation_jacobian
-from fohw.model.system import simulate_parameters
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -84,10 +83,9 @@ def test_simulation_jacobian_matches_finite_differences(case):
         n = 300
     u = rng.uniform(-1, 1, n)
     s = model.structure
-    nl = s.n_linear
     y, S = simulation_jacobian(s, model.linear, model.nonlinear, u)
     np.testing.assert_allclose(y, fohw.simulate(model, u), rtol=0, atol=1e-12)
-    fd = central_difference(lambda x: simulate_parameters(s, x[:nl], x[nl:], u),
+    fd = central_difference(lambda x: fohw.simulate(s, u, params=x),
                             np.r_[model.linear, model.nonlinear])
     np.testing.assert_allclose(S, fd, rtol=0, atol=1e-7 * np.abs(S).max())
 
@@ -297,9 +295,8 @@ def test_output_error_standard_errors_are_those_of_the_free_run_sensitivity():
     y = fohw.simulate(model, u) + 0.1 * rng.standard_normal(400)
     r = fohw.identify(u, y, method="output_error", **STRUCT)
     s = r.structure
-    S = central_difference(lambda x: simulate_parameters(s, x[:10], x[10:], u),
-                           np.r_[r.linear, r.nonlinear])
-    resid = y - simulate_parameters(s, r.linear, r.nonlinear, u)
+    S = central_difference(lambda x: fohw.simulate(s, u, params=x), np.r_[r.linear, r.nonlinear])
+    resid = y - fohw.simulate(s, u, params=np.r_[r.linear, r.nonlinear])
     cov = resid @ resid / (400 - 11) * np.linalg.inv(S.T @ S)
     np.testing.assert_allclose(np.sqrt(np.diag(r.covariance)), np.sqrt(np.diag(cov)), rtol=1e-5)
 

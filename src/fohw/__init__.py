@@ -44,8 +44,9 @@ from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
+from .model.simulation import simulate
 from .model.structure import Structure
-from .model.system import HammersteinWiener, simulate, simulate_parameters, simulate_theta
+from .model.system import HammersteinWiener
 from .record import Benchmark, Record
 from .results import IdentificationResult, Status
 
@@ -121,6 +122,4 @@ __all__ = [
     "save_result",
     "polynomial_basis",
     "simulate",
-    "simulate_theta",
-    "simulate_parameters",
 ]

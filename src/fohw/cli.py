@@ -513,7 +513,7 @@ def _simulate(args):
 
     import numpy as np
 
-    from .model.system import _noise, simulate
+    from .model.simulation import equation_noise, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
@@ -523,7 +523,7 @@ def _simulate(args):
         for category in _fohw_warnings():
             warnings.simplefilter("always", category)
         if kind == "result":        # the predictor that was fitted: theta itself, as identify's
-            noise = _noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
+            noise = equation_noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
             y = loaded.simulate(u, noise=noise)
         else:
             y = simulate(loaded, u, noise_std=args.noise_std, random_state=args.seed)

@@ -15,7 +15,8 @@ import numpy as np
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
 from .io.text import parse_number
-from .model.system import HammersteinWiener, simulate
+from .model.simulation import simulate
+from .model.system import HammersteinWiener
 from .record import Benchmark, Record
 
 __all__ = ["SimulatedData", "MeasuredData", "paper_model", "paper_example", "load_daisy",

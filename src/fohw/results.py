@@ -23,8 +23,9 @@ from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
+from .model.simulation import simulate
 from .model.structure import Structure
-from .model.system import HammersteinWiener, simulate_parameters
+from .model.system import HammersteinWiener
 from .presentation import ResultPresentation
 
 __all__ = ["IdentificationResult", "Status", "recover_model", "DETAIL_KEYS"]
@@ -565,7 +566,8 @@ class IdentificationResult(ResultPresentation):
             Measured data just before ``u`` (e.g. the estimation record, to simulate the
             validation record that follows it): the GL memory starts from them.
         **kwargs
-            ``noise``, ``divergence_threshold`` (:func:`fohw.simulate`).
+            ``noise``, ``noise_std``, ``random_state``, ``divergence_threshold``
+            (:func:`fohw.simulate`).
 
         Raises
         ------
@@ -588,9 +590,8 @@ class IdentificationResult(ResultPresentation):
                     f"[{lo:.4g}, {hi:.4g}] the model was estimated on (by more than "
                     f"{RANGE_TOLERANCE:.0%} of its span); the basis functions extrapolate "
                     "there, so check the simulation before trusting it."), stacklevel=2)
-        return simulate_parameters(self.structure, self.linear, self.nonlinear, u,
-                                   operating_point=self.operating_point, history=history,
-                                   **kwargs)
+        return simulate(self.structure, u, params=np.r_[self.linear, self.nonlinear],
+                        operating_point=self.operating_point, history=history, **kwargs)
 
     def validate(self, u, y, **kwargs):
         """Free-run simulation and one-step prediction on a record: :func:`fohw.compare`."""

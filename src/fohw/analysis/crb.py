@@ -41,7 +41,8 @@ from .._validation import check_array, check_int, check_random_state, check_scal
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
-from ..model.system import HammersteinWiener, simulate
+from ..model.simulation import simulate
+from ..model.system import HammersteinWiener
 
 __all__ = ["crb", "CRBResult"]
 

@@ -308,7 +308,7 @@ def expanded_windows(builder, bounds, P, sensitivity, delta_alpha):
     """
     hi = bounds.hi + (delta_alpha if sensitivity == "finite_difference" else 0.0)
     expansion = GLExpansion(bounds.lo, hi, builder.n_samples)
-    windows = ExpandedWindows(builder.signals, builder._lags, expansion, P)
+    windows = ExpandedWindows(builder.signals, builder.lags, expansion, P)
     vectors = np.empty((2, expansion.degree + 1))
 
     def window(k, alpha):

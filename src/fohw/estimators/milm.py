@@ -15,7 +15,7 @@ import numpy as np
 
 from .._validation import check_scalar
 from ..exceptions import ParameterError
-from ..model.gl import _weights, gl_weights_derivative
+from ..model.gl import gl_weights_derivative, gl_weights_unchecked
 
 __all__ = ["milm_step", "milm_pass", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
@@ -114,8 +114,8 @@ def sensitivity_weights(alpha, n, *, sensitivity="finite_difference", delta_alph
     if sensitivity == "exact":
         return gl_weights_derivative(alpha, n)
     if beta is None:
-        beta = _weights(alpha, n)
-    return (_weights(alpha + delta_alpha, n) - beta) / delta_alpha
+        beta = gl_weights_unchecked(alpha, n)
+    return (gl_weights_unchecked(alpha + delta_alpha, n) - beta) / delta_alpha
 
 
 def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference",

@@ -32,7 +32,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from ..model.sensitivity import simulation_jacobian
-from ..model.system import simulate_parameters
+from ..model.simulation import simulate_predictor
 from ..results import IdentificationResult, Status
 from ._common import (
     bound_note,
@@ -125,8 +125,8 @@ class SimulationResidual:
         """Free run at ``x``; :class:`SimulationDivergedError` beyond ``guard``."""
         self.n_simulations += 1
         n = self.structure.n_linear
-        return simulate_parameters(self.structure, x[:n], x[n:], self.u,
-                                   divergence_threshold=self.guard)
+        return simulate_predictor(self.structure, x[:n], x[n:], self.u,
+                                  divergence_threshold=self.guard)
 
     def residual(self, x):
         """``(y - ysim(x))[n_init:]``, or the constant penalty if the run escapes."""

@@ -129,7 +129,7 @@ class Profile:
 
     def _evaluate(self, params):
         builder = self.builder
-        columns = builder._columns(builder._params(params))
+        columns = builder.columns(builder.check_params(params))
         r = _linalg.triangular(row_blocks(columns, (builder.y,)), columns.n_columns + 1)
         return (columns, *_linalg.lstsq_triangular(r, builder.n_samples))
 
@@ -160,13 +160,13 @@ class Profile:
         """
         builder = self.builder
         columns, linear, _, fac = self.solve(params)
-        params = builder._params(params)
+        params = builder.check_params(params)
         resid = builder.y - columns.matvec(linear)
         k, n = fac.rank, columns.n_columns
         r_k = fac.r[:k, :k]
         v, z = [], []
         for m in range(params.shape[0]):
-            derivative = builder._columns(params, which=m)
+            derivative = builder.columns(params, which=m)
             v.append(derivative.matvec(linear))
             w = (derivative.rmatvec(resid) / fac.scale)[fac.perm[:k]]
             z.append(scipy.linalg.solve_triangular(r_k, w, trans="T", check_finite=False))
@@ -188,9 +188,9 @@ class Profile:
         computes it from the QR of the whole.
         """
         builder = self.builder
-        params = builder._params(params)
-        columns = builder._columns(params)
-        v = [builder._columns(params, which=m).matvec(linear) for m in range(params.shape[0])]
+        params = builder.check_params(params)
+        columns = builder.columns(params)
+        v = [builder.columns(params, which=m).matvec(linear) for m in range(params.shape[0])]
         d = columns.n_columns + len(v)
         r = _linalg.triangular(row_blocks(columns, v), d)
         s2 = rss / (builder.n_samples - d)
@@ -200,6 +200,6 @@ class Profile:
 
 def rank_factor(builder, params):
     """The rank-revealing factor of ``Phi(params)`` (rank, dependent columns), by blocks."""
-    columns = builder._columns(builder._params(params))
+    columns = builder.columns(builder.check_params(params))
     r = _linalg.triangular(row_blocks(columns), columns.n_columns)
     return _linalg.factor_triangular(r, builder.n_samples)

@@ -2,6 +2,6 @@
 
 GL weights and differences (:mod:`~fohw.model.gl`), basis functions of the static
 nonlinearities (:mod:`~fohw.model.basis`), the parameter layout (:mod:`~fohw.model.params`),
-the model and its simulator (:mod:`~fohw.model.system`) and the information matrix
-(:mod:`~fohw.model.regressors`). Nothing in here estimates anything.
+the model (:mod:`~fohw.model.system`), its simulator (:mod:`~fohw.model.simulation`) and the
+information matrix (:mod:`~fohw.model.regressors`). Nothing in here estimates anything.
 """

@@ -1,6 +1,6 @@
 """The simulator's and its sensitivity's leaves compiled with numba (extra ``fohw[fast]``; Eqs. 14, 16).
 
-:func:`fohw.model.system._recursion` runs each leaf of its divide and conquer sample by sample:
+:func:`fohw.model.simulation.recursion` runs each leaf of its divide and conquer sample by sample:
 ``y[k]`` from the forcing and the accumulated GL memory, the output signals ``z_r(y[k])``, then
 the leaf's own past added to the accumulators by one dot product each. :func:`_leaf` is that
 loop for a polynomial output basis, doing the same floating-point operations in the same order

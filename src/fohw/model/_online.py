@@ -5,7 +5,7 @@ A feedback recursion whose sample ``k`` needs ``D[t] = sum_{m <= t} beta[t - m] 
 divide and conquer: :func:`divide_and_conquer` finishes the first half of ``[lo, hi)``, lets
 :class:`HalfMerge` add the contribution of ``z[lo:mid]`` to ``D[mid:hi]`` by FFT, then finishes
 the second half. Leaves of at most ``leaf_size`` samples add their own past directly. The cost
-is ``O(N log^2 N)``. :func:`fohw.model.system._recursion` (the simulator) and
+is ``O(N log^2 N)``. :func:`fohw.model.simulation.recursion` (the simulator) and
 :func:`fohw.model.sensitivity._solve_feedback` (its derivative) share this skeleton.
 """
 

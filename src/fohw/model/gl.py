@@ -18,7 +18,8 @@ import scipy.fft
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError
 
-__all__ = ["gl_weights", "gl_weights_derivative", "gl_difference"]
+__all__ = ["gl_weights", "gl_weights_unchecked", "gl_weights_derivative", "gl_difference",
+           "past_transient"]
 
 # Below these sizes the direct O(N * L) sum beats the FFT (see benchmarks/bench_gl.py).
 _DIRECT_MAX_MEMORY = 48
@@ -56,11 +57,11 @@ def gl_weights(alpha, n):
     >>> fohw.gl_weights(1.0, 4)
     array([ 1., -1.,  0.,  0.])
     """
-    return _weights(check_scalar(alpha, "alpha"), check_int(n, "n", minimum=1))
+    return gl_weights_unchecked(check_scalar(alpha, "alpha"), check_int(n, "n", minimum=1))
 
 
-def _weights(alpha, n):
-    """:func:`gl_weights` without validation (for per-sample loops)."""
+def gl_weights_unchecked(alpha, n):
+    """:func:`gl_weights` without validation, for per-sample loops (a float ``alpha``, ``n >= 1``)."""
     beta = np.empty(n)
     beta[0] = 1.0
     j = np.arange(1.0, n)
@@ -120,6 +121,46 @@ def gl_weights_derivative(alpha, n):
     return dbeta
 
 
+
+def past_transient(nu, lag, n, h=1.0, *, derivative=False):
+    """The effect of a past level on a term: ``h**-nu (S_inf(nu) - S_{k-lag}(nu))``, ``k < n``.
+
+    A basis signal that rested at level ``L`` for all ``t < 0`` adds ``L`` times this to the
+    term ``(Delta_h^nu s)[k - lag]`` (:class:`fohw.Structure`, notes): ``S_t`` are the partial
+    sums of the GL weights (``S_t = 0`` for ``t < 0``), ``S_inf(0) = 1`` and ``S_inf(nu) = 0``
+    for ``nu > 0``. The simulator and the information matrix both use it.
+
+    Parameters
+    ----------
+    nu : float
+        The term's order.
+    lag : int
+        The term's lag, ``>= 0``.
+    n : int
+        Number of samples.
+    h : float, optional
+        Sampling time (Eq. 4). Default 1.
+    derivative : bool, optional
+        Return the derivative with respect to ``nu`` instead.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    s_inf = 1.0 if nu == 0.0 else 0.0
+    w = gl_weights(nu, n - lag) if n > lag else np.zeros(0)
+    partial = np.cumsum(w)
+    out = np.full(n, s_inf)
+    out[lag:] -= partial
+    if derivative:
+        dpartial = np.cumsum(gl_weights_derivative(nu, n - lag)) if n > lag else np.zeros(0)
+        dout = np.zeros(n)
+        dout[lag:] = -dpartial
+        if h != 1.0:
+            dout = (dout - np.log(h) * out) * h**-nu
+        return dout
+    return out if h == 1.0 else out * h**-nu
+
 def _use_direct(n, m):
     return m <= _DIRECT_MAX_MEMORY or n <= _DIRECT_MAX_LENGTH
 
@@ -158,14 +199,15 @@ class CausalConvolution:
         self.direct = _use_direct(self.n, self.memory)
         self._spectrum = None
 
-    def _nfft(self):
+    def nfft(self):
+        """The FFT size of the transformed signals (at least ``N + memory - 1``)."""
         return scipy.fft.next_fast_len(self.n + self.memory - 1, real=True)
 
     def __call__(self, weights, *, weights_spectrum=None):
         """Convolve with ``weights`` (at most ``memory`` of them); shape of ``x``."""
         if self.direct:
             return _direct(self.x, weights)
-        nfft = self._nfft()
+        nfft = self.nfft()
         if self._spectrum is None:
             self._spectrum = scipy.fft.rfft(self.x, n=nfft, axis=-1)
         if weights_spectrum is None:
@@ -258,7 +300,7 @@ def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
     else:
         m = min(check_int(memory, "memory", minimum=1), n)
     xt = np.moveaxis(x, axis, -1)
-    out = causal_convolve(xt, _weights(alpha, m))
+    out = causal_convolve(xt, gl_weights_unchecked(alpha, m))
     if h != 1.0:
         out *= h ** (-alpha)
     return np.moveaxis(out, -1, axis)

@@ -49,7 +49,7 @@ import scipy.fft
 
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
-from .gl import _weights
+from .gl import gl_weights_unchecked
 
 __all__ = ["GLExpansion", "ExpandedWindows", "StreamedWindows"]
 
@@ -158,7 +158,7 @@ class GLExpansion:
         """``c[m, j]``, shape ``(degree + 1, n_weights)``: ``beta_j = sum_m c[m, j] T_m(tau)``."""
         if self._coefficients is None:
             n = self.degree
-            values = np.array([_weights(a, self.n_weights) for a in self.nodes()])
+            values = np.array([gl_weights_unchecked(a, self.n_weights) for a in self.nodes()])
             c = scipy.fft.dct(values, type=1, axis=0, overwrite_x=True) / n
             c[0] *= 0.5
             c[n] *= 0.5
@@ -372,7 +372,7 @@ class StreamedWindows:
         n = max(n, 2 * have)
         deg = self.expansion.degree
         nodes = self.expansion.nodes()
-        values = np.array([_weights(a, n) for a in nodes])
+        values = np.array([gl_weights_unchecked(a, n) for a in nodes])
         k = np.arange(deg + 1)
         c = np.zeros((deg + 1, n))
         for m in range(deg + 1):

@@ -20,7 +20,7 @@ import scipy.fft
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative
+from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative, past_transient
 from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
@@ -64,7 +64,7 @@ class WindowKernel:
 _BATCHED_BYTES = 16 * 2**20
 
 
-class _Columns:
+class LaggedColumns:
     """The columns of an information matrix (or of a derivative), without the ``N x n`` array.
 
     Column ``c`` is ``source[k - lag]`` (zero for ``k < lag``; no source: zero), plus
@@ -193,10 +193,10 @@ class RegressorBuilder:
         # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
         self.signals = np.vstack([self.g_basis.evaluate(y, "y"), self.f_basis.evaluate(u, "u")])
         self._n_g = len(self.g_basis)
-        self._lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
+        self.lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
         self._convolution = CausalConvolution(self.signals)
         self._row_convolutions = None
-        self._window_kernel = WindowKernel(self._lags)
+        self._window_kernel = WindowKernel(self.lags)
 
     # ---- the paper's commensurate model ---------------------------------------------------------
     def differences(self, alpha, *, derivative=False):
@@ -231,7 +231,7 @@ class RegressorBuilder:
             return self._convolution(weights)
         if self._row_convolutions is None:
             self._row_convolutions = [CausalConvolution(x) for x in self.signals]
-        spectrum = scipy.fft.rfft(weights, n=self._row_convolutions[0]._nfft())
+        spectrum = scipy.fft.rfft(weights, n=self._row_convolutions[0].nfft())
         out = np.empty(self.signals.shape)
         for row, conv in zip(out, self._row_convolutions):
             row[:] = conv(weights, weights_spectrum=spectrum)
@@ -266,14 +266,18 @@ class RegressorBuilder:
         n = self.n_samples
         phi = np.zeros((n, self.layout.n_params))
         col = 0
-        for row, lags in zip(differences, self._lags):
+        for row, lags in zip(differences, self.lags):
             for i in range(1, lags + 1):
                 phi[i:, col] = row[: n - i]
                 col += 1
         return phi
 
     # ---- any structure --------------------------------------------------------------------------
-    def _params(self, params):
+    def check_params(self, params):
+        """The nonlinear parameters as a finite vector of :attr:`Structure.n_nonlinear` entries.
+
+        One number is accepted when there is one nonlinear parameter.
+        """
         params = np.atleast_1d(np.asarray(params, dtype=np.float64))
         k = self.structure.n_nonlinear
         if params.ndim != 1 or params.shape[0] != k:
@@ -283,7 +287,8 @@ class RegressorBuilder:
             raise ParameterError(f"the nonlinear parameters must be finite; got {params}.")
         return params
 
-    def _term_orders(self, params):
+    def term_orders(self, params):
+        """``(output orders, input orders, (u_past, y_past))`` of checked nonlinear parameters."""
         values, past = self.structure.split_nonlinear(params)
         out, inp = self.structure.orders.values(values)
         return out, inp, past
@@ -305,32 +310,16 @@ class RegressorBuilder:
             out.append((hi - lo) / (2 * step))
         return np.r_[out[0], out[1]]
 
-    def _transient(self, nu, lag, derivative=False):
-        """``h**-nu (S_inf(nu) - S_{k-lag}(nu))`` (or its nu-derivative), ``k = 0..N-1``."""
-        n, h = self.n_samples, self.structure.dt
-        s_inf = 1.0 if nu == 0.0 else 0.0
-        w = gl_weights(nu, n - lag) if n > lag else np.zeros(0)
-        partial = np.cumsum(w)
-        out = np.full(n, s_inf)
-        out[lag:] -= partial
-        if derivative:
-            dpartial = np.cumsum(gl_weights_derivative(nu, n - lag))
-            dout = np.zeros(n)
-            dout[lag:] = -dpartial
-            if h != 1.0:
-                dout = (dout - np.log(h) * out) * h**-nu
-            return dout
-        return out if h == 1.0 else out * h**-nu
+    def columns(self, params, which=None):
+        """:class:`LaggedColumns` of ``Phi(params)``, or with ``which = m`` of ``dPhi/dparams[m]``.
 
-    def _columns(self, params, which=None):
-        """:class:`_Columns` of ``Phi(params)``, or with ``which = m`` of ``dPhi/dparams[m]``.
-
-        ``params`` must be validated (:meth:`_params`). The differences are computed once
+        ``params`` must be validated (:meth:`check_params`). The differences are computed once
         (one inverse FFT of the stacked basis signals per distinct order); the columns are
         lagged views of them, so nothing of size ``N x n_linear`` is allocated here.
         """
         struct = self.structure
-        out_nu, in_nu, past = self._term_orders(params)
+        n, h = self.n_samples, struct.dt
+        out_nu, in_nu, past = self.term_orders(params)
         n_free = len(struct.orders.free)
         d_order = None if which is None or which >= n_free else struct.orders.free[which]
         d_past = None if which is None or which < n_free else which - n_free   # 0: u, 1: y
@@ -352,24 +341,24 @@ class RegressorBuilder:
                     i = term.lag
                     if which is None:
                         extra = (None if levels is None or levels[s] == 0.0 else
-                                 (levels[s], self._transient(nu, i)))
+                                 (levels[s], past_transient(nu, i, n, h)))
                         specs.append((diffs(nu, False)[s], i, extra, 0.0))
                     elif d_order is not None and term.order == d_order:
                         extra = (None if levels is None or levels[s] == 0.0 else
-                                 (levels[s], self._transient(nu, i, derivative=True)))
+                                 (levels[s], past_transient(nu, i, n, h, derivative=True)))
                         specs.append((diffs(nu, True)[s], i, extra, 0.0))
                     elif d_past == past_index:
-                        specs.append((None, i, (slopes[s], self._transient(nu, i)), 0.0))
+                        specs.append((None, i, (slopes[s], past_transient(nu, i, n, h)), 0.0))
                     else:
                         specs.append((None, i, None, 0.0))
         if struct.offset:
             specs.append((None, 0, None, 1.0 if which is None else 0.0))
-        return _Columns(self.n_samples, specs)
+        return LaggedColumns(self.n_samples, specs)
 
     def _build(self, params, which=None):
         """``Phi(params)``, or with ``which = m`` its derivative with respect to ``params[m]``."""
         n = self.n_samples
-        return self._columns(params, which).fill(0, n, np.zeros((n, self.structure.n_linear)))
+        return self.columns(params, which).fill(0, n, np.zeros((n, self.structure.n_linear)))
 
     def matrix(self, params):
         """Information matrix, shape ``(N, n_linear)``: rows ``phi[k]`` at ``params``.
@@ -379,11 +368,11 @@ class RegressorBuilder:
         if self.structure.is_paper_model:
             return self.lag(self.differences(np.asarray(params, dtype=float).item()
                                              if np.ndim(params) else params))
-        return self._build(self._params(params))
+        return self._build(self.check_params(params))
 
     def matrix_derivatives(self, params):
         """``[dPhi/dparams[0], …]``: one ``(N, n_linear)`` array per nonlinear parameter."""
-        params = self._params(params)
+        params = self.check_params(params)
         if self.structure.is_paper_model:
             return [self.lag(self.differences(params[0], derivative=True))]
         return [self._build(params, which=m) for m in range(params.shape[0])]
@@ -413,12 +402,12 @@ class RegressorBuilder:
         if linear.shape[0] != self.structure.n_linear:
             raise DimensionError(f"`linear` must have {self.structure.n_linear} entries "
                                  f"({self.structure.linear_names}); got {linear.shape[0]}.")
-        params = self._params(params)
+        params = self.check_params(params)
         n = linear.shape[0]
         G = np.empty((self.n_samples, n + params.shape[0]))
-        self._columns(params).fill(0, self.n_samples, G[:, :n])
+        self.columns(params).fill(0, self.n_samples, G[:, :n])
         for m in range(params.shape[0]):
-            G[:, n + m] = self._columns(params, which=m).matvec(linear)
+            G[:, n + m] = self.columns(params, which=m).matvec(linear)
         return G
 
 def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, offset=False,

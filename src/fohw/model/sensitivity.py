@@ -34,8 +34,8 @@ from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
 from .gl import gl_weights
 from .regressors import RegressorBuilder
+from .simulation import simulate_predictor
 from .structure import Structure
-from .system import simulate_parameters
 
 __all__ = ["simulation_jacobian", "basis_derivative"]
 
@@ -43,8 +43,8 @@ __all__ = ["simulation_jacobian", "basis_derivative"]
 #: (``benchmarks/bench_output_error.py --leaves``: 128 is the fastest pure leaf at 10**5 and
 #: within the spread of the fastest compiled one, 128-256, at 10**4-10**6). Equal sizes make
 #: the two leaves give identical numbers, so numba changes no sensitivity.
-_LEAF = 128
-_LEAF_COMPILED = 128
+LEAF_SIZE = 128
+LEAF_SIZE_COMPILED = 128
 
 
 def basis_derivative(basis, x):
@@ -93,7 +93,7 @@ def simulation_jacobian(structure, linear, params, u):
     Notes
     -----
     The recursion in the module notes (the derivative of Eq. 16 through the output feedback).
-    It equals central finite differences of :func:`fohw.simulate_parameters` to their
+    It equals central finite differences of :func:`fohw.simulate` to their
     truncation error (``tests/test_structured.py``).
 
     Examples
@@ -118,12 +118,12 @@ def _feedback_problem(structure, linear, params, u):
     linear = check_array(linear, "linear")
     params = np.atleast_1d(np.asarray(params, dtype=np.float64))
     u = check_array(u, "u")
-    y = simulate_parameters(structure, linear, params, u)
+    y = simulate_predictor(structure, linear, params, u)
     builder = RegressorBuilder(u, y, structure=structure)
     E = builder.jacobian(linear, params)
     layout = structure.layout
     qa, _ = layout.blocks(linear[:layout.n_params])
-    out_nu, _, _ = builder._term_orders(params)
+    out_nu, _, _ = builder.term_orders(params)
     dg = basis_derivative(structure.g_basis, y)             # (n_g, N)
     h = structure.dt
     lags, betas, coefs = [], [], []
@@ -152,7 +152,7 @@ def _solve_feedback(E, lags, betas, coefs, *, kernel="auto", leaf_size=None):
     numba is installed and loaded) or else the pure-Python one; ``"pure"``; ``"compiled"`` (an
     error if it is not available). Both do the same operations in the same order, so at equal
     leaf sizes they give identical numbers. ``leaf_size`` overrides the leaf size
-    (:data:`_LEAF` for the pure leaf, :data:`_LEAF_COMPILED` for the compiled one).
+    (:data:`LEAF_SIZE` for the pure leaf, :data:`LEAF_SIZE_COMPILED` for the compiled one).
     """
     n, d = E.shape
     T = len(lags)
@@ -162,7 +162,7 @@ def _solve_feedback(E, lags, betas, coefs, *, kernel="auto", leaf_size=None):
         if compiled is None and kernel == "compiled":
             raise RuntimeError("the compiled leaf is not available (numba missing or disabled).")
     if leaf_size is None:
-        leaf_size = _LEAF_COMPILED if compiled is not None else _LEAF
+        leaf_size = LEAF_SIZE_COMPILED if compiled is not None else LEAF_SIZE
     S = E.copy()
     Z = np.zeros((T, n, d))
     D = np.zeros((T, n, d))
