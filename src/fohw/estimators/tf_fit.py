@@ -31,7 +31,7 @@ import scipy.optimize
 from ..exceptions import ConvergenceWarning, DimensionError, ParameterError
 from ..model.fotf import FractionalTF, delay_samples, operator_weights
 from ..model.gl import gl_weights, gl_weights_derivative
-from ..model.series_division import causal_product, series_reciprocal
+from ..model.series_division import causal_product, series_divide, series_reciprocal
 
 __all__ = ["fit_fractional_tf", "fractional_tf_crb", "FractionalTFFit", "TFParametrisation"]
 
@@ -214,11 +214,11 @@ def _simulate_quiet(par, theta, ud, h, jacobian):
     c = operator_weights(a, alpha, h, n)
     if c[0] == 0.0 or not np.isfinite(c[0]):
         return None, None
-    r = series_reciprocal(c, n)
     d = operator_weights(b, beta, h, n)
-    yhat = causal_product(r, causal_product(d, ud, n), n)
+    yhat = series_divide(causal_product(d, ud, n), c)
     if not jacobian:
         return yhat, None
+    r = series_reciprocal(c, n)
     nfft = scipy.fft.next_fast_len(3 * n - 2, real=True)
     rr = scipy.fft.rfft(r, nfft)
     uu = rr * scipy.fft.rfft(ud, nfft)
