@@ -36,7 +36,8 @@ import json, sys, time
 import numpy as np
 import fotf
 out = {}
-systems = {"1/(s^0.5+1)": ((1.0,), (0.0,), (1.0, 1.0), (0.5, 0.0)), "1/(s+1)": ((1.0,), (0.0,), (1.0, 1.0), (1.0, 0.0))}
+systems = {"1/(s^0.5+1)": ((1.0,), (0.0,), (1.0, 1.0), (0.5, 0.0)),
+           "1/(s+1)": ((1.0,), (0.0,), (1.0, 1.0), (1.0, 0.0))}
 sizes = json.loads(sys.argv[1])
 for name, (b, nb, a, na) in systems.items():
     G = fotf.FOTF(num=b, nnum=nb, den=a, nden=na)

@@ -12,8 +12,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "tests"))
-import fohw  # noqa: E402
 from tf_reference import SYSTEMS  # noqa: E402
+
+import fohw  # noqa: E402
 
 
 def convergence_table():
@@ -42,7 +43,8 @@ def identify(outdir):
     cases = {
         "1/(2 s^0.6 + 1)": (fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0]),
                             dict(num_orders=[0.0], den_orders=[0.5, 0.0])),
-        "1.5/(0.8 s^1.4 + 1.2 s^0.45 + 1)": (fohw.FractionalTF([1.5], [0.0], [0.8, 1.2, 1.0], [1.4, 0.45, 0.0]),
+        "1.5/(0.8 s^1.4 + 1.2 s^0.45 + 1)": (fohw.FractionalTF([1.5], [0.0], [0.8, 1.2, 1.0],
+                                                               [1.4, 0.45, 0.0]),
                                              dict(num_orders=[0.0], den_orders=[1.0, 0.6, 0.0],
                                                   bounds={"a0": (0, np.inf), "a1": (0, np.inf)})),
     }
@@ -70,8 +72,9 @@ def main():
     refined = G.oustaloup((1e-2, 1e2), 4, "refined")
     w = np.logspace(-4, 4, 400)
     from fohw.analysis.frequency import bode_plot
-    fig, _ = bode_plot(w, {"1/(s^0.5+1)": G.frequency_response(w), "Oustaloup N=4": approx.frequency_response(w),
-                           "refined N=4": refined.frequency_response(w)}, band=(1e-2, 1e2),
+    curves = {"1/(s^0.5+1)": G.frequency_response(w), "Oustaloup N=4": approx.frequency_response(w),
+              "refined N=4": refined.frequency_response(w)}
+    fig, _ = bode_plot(w, curves, band=(1e-2, 1e2),
                        title="Oustaloup approximations in [0.01, 100] rad/s")
     fig.savefig(outdir / "tf_oustaloup.png", dpi=90)
     for a in (approx, refined):
