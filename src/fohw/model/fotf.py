@@ -182,7 +182,7 @@ class FractionalTF:
     Simulation: the GL discretisation of ``sum_i a_i D^{alpha_i} y = sum_j b_j D^{beta_j} u`` with
     the current sample on both sides, ``sum_k c[k] y[n-k] = sum_k d[k] u[n-k]`` where ``c`` and
     ``d`` are the combined weights :func:`operator_weights`. The recursion is solved as a power
-    series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log N)``. The
+    series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log^2 N)``. The
     method is first order in ``dt`` (measured in ``docs/transfer_functions.md``). Sample
     alignment: see the module docstring.
 
@@ -294,7 +294,7 @@ class FractionalTF:
         -----
         Solves ``sum_{k'<=k} c[k'] y[k-k'] = sum_{k'<=k} d[k'] u[k-k'-n_delay]`` (GL weights of
         denominator and numerator, :func:`operator_weights`) by power-series division in
-        ``O(N log N)``; every sample equals the implicit recursion
+        ``O(N log^2 N)``; every sample equals the implicit recursion
         ``y[k] = (f[k] - sum_{j>=1} c[j] y[k-j]) / c[0]`` to rounding error.
 
         Examples

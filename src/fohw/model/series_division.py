@@ -1,4 +1,4 @@
-"""Causal convolution and power-series division: the O(N log N) kernel of the transfer-function simulator.
+"""Causal convolution and power-series division: the O(N log^2 N) kernel of the transfer-function simulator.
 
 A linear, time-invariant recursion with full memory, ``sum_{j=0}^{k} c[j] y[k-j] = f[k]`` for
 ``k = 0, 1, …``, is the truncated power-series identity ``C(x) Y(x) = F(x) mod x^N``, so
