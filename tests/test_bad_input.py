@@ -70,6 +70,12 @@ def _nan_result():
 
 # (where, what is wrong, call, exception, text the message must contain)
 API = [
+    ("fit_fractional_tf", "u and y differ in length",
+     lambda t: fohw.fit_fractional_tf(np.ones(50), np.ones(49), dt=0.1, num_orders=[0.0],
+                                      den_orders=[0.5, 0.0]),
+     fohw.DimensionError, "`u` and `y` must have the same length"),
+    ("FractionalTF", "a zero leading denominator coefficient",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [0.0, 1.0], [0.5, 0.0]), fohw.ParameterError, "`den`"),
     ("gl_difference", "alpha is NaN", lambda t: fohw.gl_difference(np.ones(5), np.nan),
      fohw.ParameterError, "`alpha` must be finite"),
     ("gl_difference", "x holds NaN", lambda t: fohw.gl_difference([1.0, np.nan], 0.5),

@@ -23,6 +23,7 @@ from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
 from .estimators.structured import StructuredOptions
+from .estimators.tf_fit import FractionalTFFit, fit_fractional_tf
 from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
@@ -40,6 +41,7 @@ from .exceptions import (
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.basis import Basis, as_basis, polynomial_basis
+from .model.fotf import FractionalTF
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.orders import Orders
 from .model.params import ThetaLayout
@@ -122,4 +124,7 @@ __all__ = [
     "save_result",
     "polynomial_basis",
     "simulate",
+    "FractionalTF",
+    "FractionalTFFit",
+    "fit_fractional_tf",
 ]

@@ -1,0 +1,808 @@
+"""Fractional transfer functions ``G(s) = sum_j b_j s^{beta_j} / sum_i a_i s^{alpha_i} e^{-s tau}``.
+
+The continuous-time model class of FOMCON's ``fotf`` objects, simulated by the Grünwald–Letnikov
+(GL) discretisation of its differential equation ``sum_i a_i D^{alpha_i} y = sum_j b_j D^{beta_j}
+u(t - tau)`` (paper Eqs. 1–5 for the GL difference; this class is *not* the paper's lagged model,
+see SPEC Sec. 3 and ``docs/transfer_functions.md``).
+
+Sample alignment (the convention every method follows): ``t_k = k dt``; ``y[k]`` approximates
+``y(t_k)``; each GL difference uses the current sample (implicit, backward-difference rule), so
+``y[k]`` depends on ``u[0..k]`` and ``u[k]`` stands for the input on ``(t_{k-1}, t_k]``. Signals are
+zero before ``k = 0``. At ``alpha = 1`` this is the backward Euler rule: an integer-order ``G``
+simulates exactly as ``scipy.signal.cont2discrete(..., method="backward_diff")`` followed by
+``scipy.signal.dlsim``. The unit step ``H(t)`` (0 for ``t <= 0``, 1 for ``t > 0``) is therefore
+``u = [0, 1, 1, …]`` and the unit impulse ``u = [0, 1/dt, 0, …]``.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
+from .frequency_response import gl_operator_response, operator_response
+from .gl import gl_weights
+from .series_division import causal_product, series_divide
+
+__all__ = ["FractionalTF", "operator_weights", "delay_samples"]
+
+# Orders closer than this are one term (their coefficients are summed).
+ORDER_TOL = 1e-12
+# A delay counts as a multiple of dt when delay/dt is within this of an integer.
+DELAY_TOL = 1e-9
+
+
+def operator_weights(coefs, orders, h, n):
+    """GL weights of ``sum_i coefs[i] D^{orders[i]}``: ``sum_i coefs[i] h^-orders[i] beta^(orders[i])``.
+
+    Parameters
+    ----------
+    coefs, orders : array_like, shape (m,)
+        Coefficients and orders (any real orders; negative ones are fractional sums).
+    h : float
+        Sampling time.
+    n : int
+        Number of weights.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        ``(sum_i coefs[i] D^{orders[i]} x)[k] = sum_{j=0}^{k} w[j] x[k-j]``.
+
+    Examples
+    --------
+    >>> from fohw.model.fotf import operator_weights
+    >>> operator_weights([1.0, 1.0], [1.0, 0.0], 0.5, 3)     # D + 1 with h = 0.5
+    array([ 3., -2.,  0.])
+    """
+    out = np.zeros(int(n))
+    for c, a in zip(np.atleast_1d(coefs), np.atleast_1d(orders)):
+        out += (float(c) * float(h) ** (-float(a))) * gl_weights(float(a), int(n))
+    return out
+
+
+def delay_samples(delay, h):
+    """``delay / h`` as an int, or a :class:`~fohw.exceptions.ParameterError` if not a multiple.
+
+    Parameters
+    ----------
+    delay : float
+        Input delay, ``>= 0``.
+    h : float
+        Sampling time.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from fohw.model.fotf import delay_samples
+    >>> delay_samples(0.3, 0.1)
+    3
+    """
+    ratio = float(delay) / float(h)
+    k = int(round(ratio))
+    if abs(ratio - k) > DELAY_TOL * max(1.0, abs(ratio)):
+        raise ParameterError(f"`delay` must be a multiple of the sampling time for the GL simulation; "
+                             f"got delay = {delay!r} and dt = {h!r} (ratio {ratio:.6g}).")
+    return k
+
+
+def _check_positive(value, name, allow_none=True):
+    if value is None and allow_none:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.number)):
+        raise ParameterError(f"`{name}` must be a positive real number; got {value!r}.")
+    value = float(value)
+    if not np.isfinite(value) or value <= 0.0:
+        raise ParameterError(f"`{name}` must be positive and finite; got {value!r}.")
+    return value
+
+
+def _vector(x, name):
+    try:
+        arr = np.atleast_1d(np.asarray(x, dtype=np.float64))
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be a sequence of real numbers; got {x!r}.") from None
+    if arr.ndim != 1 or arr.size == 0:
+        raise DimensionError(f"`{name}` must be a non-empty 1-D sequence; got shape {arr.shape}.")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+        raise ParameterError(f"`{name}` must contain only finite values; got {arr[bad]!r} at index {bad}.")
+    return arr.copy()
+
+
+def _merge(coefs, orders):
+    """Sum the coefficients of equal orders; sort by decreasing order."""
+    idx = np.argsort(-orders, kind="stable")
+    coefs, orders = coefs[idx], orders[idx]
+    out_c, out_o = [], []
+    for c, o in zip(coefs, orders):
+        if out_o and abs(out_o[-1] - o) <= ORDER_TOL * max(1.0, abs(o)):
+            out_c[-1] += c
+        else:
+            out_c.append(float(c))
+            out_o.append(float(o))
+    return np.array(out_c), np.array(out_o)
+
+
+def _drop_zeros(coefs, orders):
+    keep = coefs != 0.0
+    if not np.any(keep):
+        return np.array([0.0]), np.array([0.0])
+    return coefs[keep], orders[keep]
+
+
+def _term_text(c, o):
+    if o == 0:
+        return f"{c:g}"
+    power = "s" if o == 1 else f"s^{o:g}"
+    if c == 1:
+        return power
+    if c == -1:
+        return "-" + power
+    return f"{c:g} {power}"
+
+
+def _poly_text(coefs, orders):
+    text = " + ".join(_term_text(c, o) for c, o in zip(coefs, orders))
+    return text.replace("+ -", "- ")
+
+
+class FractionalTF:
+    """A fractional transfer function ``G(s) = sum_j b_j s^{beta_j} / sum_i a_i s^{alpha_i} e^{-s delay}``.
+
+    Parameters
+    ----------
+    num, num_orders : array_like, shape (m,)
+        Numerator coefficients ``b_j`` and their orders ``beta_j``. Orders may be negative (a
+        fractional integral such as the Warburg term ``sigma s^{-1/2}``).
+    den, den_orders : array_like, shape (n,)
+        Denominator coefficients ``a_i`` and orders ``alpha_i >= 0`` (a negative denominator
+        order is the same model with numerator and denominator multiplied by ``s^{-alpha}``: write
+        it that way). The coefficient of the highest denominator order must be non-zero.
+    dt : float, optional
+        Sampling time used by :meth:`simulate` (and :meth:`step`, :meth:`impulse`) when they are
+        not given one.
+    delay : float, optional
+        Input delay ``tau >= 0``; the simulation needs it to be a multiple of the sampling time.
+
+    Attributes
+    ----------
+    num, num_orders, den, den_orders : ndarray
+        The terms after merging equal orders and dropping zero coefficients, sorted by
+        decreasing order (read-only copies).
+    dt, delay : float or None, float
+
+    Notes
+    -----
+    Simulation: the GL discretisation of ``sum_i a_i D^{alpha_i} y = sum_j b_j D^{beta_j} u`` with
+    the current sample on both sides, ``sum_k c[k] y[n-k] = sum_k d[k] u[n-k]`` where ``c`` and
+    ``d`` are the combined weights :func:`operator_weights`. The recursion is solved as a power
+    series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log^2 N)``. The
+    method is first order in ``dt`` (measured in ``docs/transfer_functions.md``). Sample
+    alignment: see the module docstring.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import fohw
+    >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0], dt=0.01)   # 1 / (s^0.5 + 1)
+    >>> print(G)
+    1 / (s^0.5 + 1)
+    >>> G.dcgain, G.is_stable()
+    (1.0, True)
+    >>> y = G.step(np.array([0.0, 1.0, 2.0]))
+    >>> np.round(y, 3)            # exact: 1 - E_0.5(-t^0.5) = 0, 0.573, 0.664
+    array([0.   , 0.572, 0.663])
+    """
+
+    def __init__(self, num, num_orders, den, den_orders, *, dt=None, delay=0.0):
+        b = _vector(num, "num")
+        beta = _vector(num_orders, "num_orders")
+        a = _vector(den, "den")
+        alpha = _vector(den_orders, "den_orders")
+        if b.shape != beta.shape:
+            raise DimensionError(f"`num` and `num_orders` must have the same length; got {b.size} "
+                                 f"and {beta.size}.")
+        if a.shape != alpha.shape:
+            raise DimensionError(f"`den` and `den_orders` must have the same length; got {a.size} "
+                                 f"and {alpha.size}.")
+        if np.any(alpha < 0):
+            bad = float(alpha[np.argmin(alpha)])
+            raise ParameterError(f"`den_orders` must be non-negative; got {bad!r}. Multiply numerator "
+                                 "and denominator by s^(-that order) to write the same model.")
+        a, alpha = _merge(a, alpha)
+        if a[0] == 0.0:
+            raise ParameterError(f"`den`: the leading coefficient (of s^{alpha[0]:g}, the highest "
+                                 "denominator order) is zero; drop that term.")
+        self._den, self._den_orders = _drop_zeros(a, alpha)
+        self._num, self._num_orders = _drop_zeros(*_merge(b, beta))
+        self._dt = _check_positive(dt, "dt")
+        if isinstance(delay, (bool, np.bool_)) or not isinstance(delay, (numbers.Real, np.number)):
+            raise ParameterError(f"`delay` must be a real number; got {delay!r}.")
+        delay = float(delay)
+        if not np.isfinite(delay) or delay < 0:
+            raise ParameterError(f"`delay` must be finite and non-negative; got {delay!r}.")
+        if self._dt is not None:
+            delay_samples(delay, self._dt)
+        self._delay = delay
+        for arr in (self._num, self._num_orders, self._den, self._den_orders):
+            arr.setflags(write=False)
+
+    # ------------------------------------------------------------------ attributes
+    num = property(lambda self: self._num, doc="Numerator coefficients (decreasing order).")
+    num_orders = property(lambda self: self._num_orders, doc="Numerator orders (decreasing).")
+    den = property(lambda self: self._den, doc="Denominator coefficients (decreasing order).")
+    den_orders = property(lambda self: self._den_orders, doc="Denominator orders (decreasing).")
+    dt = property(lambda self: self._dt, doc="Default sampling time, or None.")
+    delay = property(lambda self: self._delay, doc="Input delay.")
+
+    def __repr__(self):
+        def fmt(x):
+            return "[" + ", ".join(repr(float(v)) for v in x) + "]"
+        return (f"FractionalTF({fmt(self._num)}, {fmt(self._num_orders)}, {fmt(self._den)}, "
+                f"{fmt(self._den_orders)}, dt={self._dt!r}, delay={self._delay!r})")
+
+    def __str__(self):
+        num = _poly_text(self._num, self._num_orders)
+        den = _poly_text(self._den, self._den_orders)
+        num = f"({num})" if len(self._num) > 1 else num
+        den = f"({den})" if len(self._den) > 1 else den
+        text = num if (len(self._den) == 1 and self._den[0] == 1 and self._den_orders[0] == 0) \
+            else f"{num} / {den}"
+        if self._delay:
+            text += f" · exp(-{self._delay:g} s)"
+        return text
+
+    # ------------------------------------------------------------------ time domain
+    def _resolve_dt(self, dt):
+        dt = _check_positive(dt, "dt")
+        if dt is None:
+            dt = self._dt
+        if dt is None:
+            raise ParameterError("`dt` is needed: pass dt=... here or to FractionalTF(...).")
+        return dt
+
+    def simulate(self, u, dt=None):
+        """Output for the input samples ``u`` (zero initial conditions), by the GL discretisation.
+
+        Parameters
+        ----------
+        u : array_like, shape (N,)
+            Input samples ``u[k]``, standing for the input on ``(t_{k-1}, t_k]``.
+        dt : float, optional
+            Sampling time (default: the model's ``dt``).
+
+        Returns
+        -------
+        y : ndarray, shape (N,)
+            ``y[k]`` approximates ``y(t_k)``, ``t_k = k dt``.
+
+        Raises
+        ------
+        ParameterError
+            No sampling time; a delay that is not a multiple of ``dt``; ``u`` not finite; the
+            implicit step is singular (``sum_i a_i dt^{-alpha_i} = 0``).
+        SimulationDivergedError
+            The output overflowed (an unstable model on a long record).
+
+        Notes
+        -----
+        Solves ``sum_{k'<=k} c[k'] y[k-k'] = sum_{k'<=k} d[k'] u[k-k'-n_delay]`` (GL weights of
+        denominator and numerator, :func:`operator_weights`) by power-series division in
+        ``O(N log^2 N)``; every sample equals the implicit recursion
+        ``y[k] = (f[k] - sum_{j>=1} c[j] y[k-j]) / c[0]`` to rounding error.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.0, 0.0])     # 1 / (s + 1)
+        >>> G.simulate([1.0, 1.0, 1.0], dt=1.0)                             # backward Euler
+        array([0.5  , 0.75 , 0.875])
+        """
+        h = self._resolve_dt(dt)
+        try:
+            u = np.asarray(u, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ParameterError(f"`u` must be an array of real numbers; got {type(u).__name__}.") from None
+        if u.ndim != 1 or u.size == 0:
+            raise DimensionError(f"`u` must be a non-empty 1-D array; got shape {u.shape}.")
+        if not np.all(np.isfinite(u)):
+            bad = int(np.flatnonzero(~np.isfinite(u))[0])
+            raise ParameterError(f"`u` must contain only finite values; got {u[bad]!r} at index {bad}.")
+        n = u.size
+        shift = delay_samples(self._delay, h)
+        ud = np.zeros(n)
+        if shift < n:
+            ud[shift:] = u[:n - shift]
+        c = operator_weights(self._den, self._den_orders, h, n)
+        if c[0] == 0.0:
+            raise ParameterError(f"the implicit GL step is singular for dt = {h!r}: sum_i a_i dt^(-alpha_i)"
+                                 " = 0 (`den`); choose another dt.")
+        with np.errstate(over="ignore", invalid="ignore"):
+            if np.all(self._num_orders == 0.0):             # a constant numerator: no convolution
+                y = series_divide(float(np.sum(self._num)) * ud, c)
+            else:
+                d = operator_weights(self._num, self._num_orders, h, n)
+                y = series_divide(causal_product(d, ud, n), c)
+        if not np.all(np.isfinite(y)):
+            k = int(np.flatnonzero(~np.isfinite(y))[0])
+            raise SimulationDivergedError(k, float(y[k]), np.inf)
+        return y
+
+    def _grid(self, t, dt):
+        try:
+            t = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise ParameterError(f"`t` must be an array of times; got {type(t).__name__}.") from None
+        if t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(t < 0):
+            raise ParameterError(f"`t` must be a non-empty 1-D array of finite times >= 0; got {t!r}.")
+        dt = _check_positive(dt, "dt")
+        h = dt if dt is not None else self._dt
+        if h is None:
+            if t.size < 2 or t[0] != 0.0:
+                raise ParameterError("`t` must start at 0 with at least two equally spaced times when "
+                                     "no dt is given (pass dt=... or FractionalTF(..., dt=...)).")
+            h = float(t[1] - t[0])
+            _check_positive(h, "t[1] - t[0]")
+        k = np.rint(t / h)
+        if np.any(np.abs(t / h - k) > 1e-9 * np.maximum(1.0, k)):
+            raise ParameterError(f"`t` must lie on the sampling grid k * dt with dt = {h!r}.")
+        return h, k.astype(np.int64)
+
+    def step(self, t, dt=None):
+        """Unit-step response at the times ``t`` (on the sampling grid ``k dt``).
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times ``>= 0``, multiples of the sampling time.
+        dt : float, optional
+            Sampling time (default: the model's ``dt``, else ``t[1] - t[0]`` of an equally
+            spaced ``t`` starting at 0).
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            The response to ``H(t)`` (0 for ``t <= 0``, 1 after): the simulation of
+            ``u = [0, 1, 1, …]`` read at ``t / dt``; ``0`` (to rounding) at ``t = 0``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0], [0.5])       # s^-0.5: 2 sqrt(t / pi)
+        >>> np.round(G.step([0.0, 1.0], dt=0.001), 4), round(2 / np.pi ** 0.5, 4)
+        (array([0.    , 1.1282]), 1.1284)
+        """
+        h, k = self._grid(t, dt)
+        u = np.ones(int(k.max()) + 1)
+        u[0] = 0.0
+        y = self.simulate(u, h)
+        y[0] = 0.0                          # f[0] = 0 exactly; the FFT leaves ~1e-17
+        return y[k]
+
+    def impulse(self, t, dt=None):
+        """Unit-impulse response at the times ``t``: the simulation of ``u = [0, 1/dt, 0, …]``.
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times ``>= 0``, multiples of the sampling time.
+        dt : float, optional
+            As in :meth:`step`.
+
+        Returns
+        -------
+        ndarray, shape of ``t``
+            The first difference of :meth:`step` divided by ``dt``; ``0`` at ``t = 0``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.0, 0.0])    # exp(-t)
+        >>> np.round(G.impulse([1.0, 2.0], dt=0.001), 3), np.round(np.exp([-1.0, -2.0]), 3)
+        (array([0.368, 0.135]), array([0.368, 0.135]))
+        """
+        h, k = self._grid(t, dt)
+        u = np.zeros(int(k.max()) + 1)
+        if u.size > 1:
+            u[1] = 1.0 / h
+        y = self.simulate(u, h)
+        y[0] = 0.0                          # f[0] = 0 exactly; the FFT leaves ~1e-17
+        return y[k]
+
+    # ------------------------------------------------------------------ frequency domain
+    def frequency_response(self, omega):
+        """``G(j omega)``, exact (principal branch ``(j omega)^alpha = omega^alpha e^{j alpha pi/2}``).
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies (rad per time unit); negative ones give the complex conjugate.
+
+        Returns
+        -------
+        ndarray of complex, shape of ``omega``
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.0, 0.0])
+        >>> G.frequency_response([1.0])
+        array([0.5-0.5j])
+        """
+        omega = np.asarray(omega, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = operator_response(self._num, self._num_orders, omega) \
+                / operator_response(self._den, self._den_orders, omega)
+        if self._delay:
+            g = g * np.exp(-1j * omega * self._delay)
+        return g
+
+    def discrete_frequency_response(self, omega, dt=None):
+        """Frequency response of the GL-discretised system that :meth:`simulate` runs.
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies, ``|omega| dt < 2 pi``.
+        dt : float, optional
+            Sampling time (default: the model's ``dt``).
+
+        Returns
+        -------
+        ndarray of complex
+            ``sum_j b_j s_h^{beta_j} / sum_i a_i s_h^{alpha_i} e^{-j omega delay}`` with
+            ``s_h = (1 - e^{-j omega dt}) / dt``; tends to :meth:`frequency_response` as
+            ``dt -> 0``.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
+        >>> abs(G.discrete_frequency_response([1.0], dt=1e-4) - G.frequency_response([1.0]))[0] < 1e-4
+        np.True_
+        """
+        h = self._resolve_dt(dt)
+        shift = delay_samples(self._delay, h)
+        omega = np.asarray(omega, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = gl_operator_response(self._num, self._num_orders, omega, h) \
+                / gl_operator_response(self._den, self._den_orders, omega, h)
+        return g * np.exp(-1j * omega * h * shift) if shift else g
+
+    def default_frequencies(self, n=400):
+        """A logarithmic grid two decades beyond the corner frequencies where terms balance.
+
+        Parameters
+        ----------
+        n : int, optional
+            Number of frequencies.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+
+        Examples
+        --------
+        >>> import fohw
+        >>> w = fohw.FractionalTF([1.0], [0.0], [10.0, 1.0], [1.0, 0.0]).default_frequencies(5)
+        >>> float(w[0]), float(w[-1])
+        (0.001, 10.0)
+        """
+        corners = []
+        for c, o in ((self._num, self._num_orders), (self._den, self._den_orders)):
+            for i in range(len(c)):
+                for j in range(i):
+                    if c[i] != 0 and c[j] != 0 and o[i] != o[j]:
+                        corners.append((abs(c[i]) / abs(c[j])) ** (1.0 / (o[j] - o[i])))
+        lo, hi = (min(corners), max(corners)) if corners else (1.0, 1.0)
+        return np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, int(n))
+
+    @property
+    def dcgain(self):
+        """Static gain ``lim_{s -> 0} G(s)``: ``b_0 / a_0`` of the lowest orders, 0 or ±inf.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fohw.FractionalTF([2.0], [0.0], [1.0, 4.0], [0.7, 0.0]).dcgain
+        0.5
+        """
+        b_lo, beta_lo = self._num[-1], self._num_orders[-1]
+        a_lo, alpha_lo = self._den[-1], self._den_orders[-1]
+        if b_lo == 0.0:
+            return 0.0
+        if abs(beta_lo - alpha_lo) <= ORDER_TOL:
+            return float(b_lo / a_lo)
+        return 0.0 if beta_lo > alpha_lo else float(np.copysign(np.inf, b_lo / a_lo))
+
+    def commensurate_order(self, max_denominator=100):
+        """Commensurate base ``q`` of the denominator orders, or ``None`` (see :func:`commensurate_base`).
+
+        Parameters
+        ----------
+        max_denominator : int, optional
+            Largest denominator of the rational approximations of the orders.
+
+        Returns
+        -------
+        float or None
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fohw.FractionalTF([1.0], [0.0], [1.0, 2.0, 1.0], [1.2, 0.8, 0.0]).commensurate_order()
+        0.4
+        """
+        return commensurate_base(self._den_orders, max_denominator=max_denominator)
+
+    def poles(self, max_denominator=100):
+        """Poles on the principal Riemann sheet (commensurate denominators only).
+
+        Parameters
+        ----------
+        max_denominator : int, optional
+            For :meth:`commensurate_order`.
+
+        Returns
+        -------
+        ndarray of complex
+            ``s = lambda^{1/q}`` for the roots ``lambda`` of the polynomial in ``s^q`` with
+            ``|arg lambda| < q pi`` (the others lie on other sheets and do not show in the response).
+
+        Raises
+        ------
+        ParameterError
+            The denominator orders are not commensurate (use :meth:`is_stable`).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fohw.FractionalTF([1.0], [0.0], [1.0, 3.0, 2.0], [2.0, 1.0, 0.0]).poles()
+        array([-2.+0.j, -1.+0.j])
+        """
+        q = self.commensurate_order(max_denominator)
+        if q is None:
+            raise ParameterError(f"`den_orders` {self._den_orders.tolist()} are not commensurate "
+                                 f"(no base 1/d with d <= {max_denominator}): the poles are not roots of a "
+                                 "polynomial; is_stable() uses the argument principle instead.")
+        roots, _ = matignon_roots(self._den, self._den_orders, q)
+        keep = np.abs(np.angle(roots)) <= q * np.pi * (1.0 + 1e-12)    # q = 1: the negative axis
+        roots = roots[keep]
+        s = np.abs(roots) ** (1.0 / q) * np.exp(1j * np.angle(roots) / q)
+        return np.sort_complex(s)
+
+    def is_stable(self, method="auto", max_denominator=100):
+        """Whether every pole lies in the open left half of the principal sheet.
+
+        Parameters
+        ----------
+        method : {"auto", "matignon", "argument"}, optional
+            ``"matignon"``: the roots ``lambda`` of the polynomial in ``s^q`` satisfy
+            ``|arg lambda| > q pi / 2`` (commensurate orders only); ``"argument"``: the argument
+            principle counts no zero of the denominator in ``Re s >= 0``
+            (:func:`fohw.model.fotf_stability.rhp_zero_count`); ``"auto"``: Matignon when the
+            orders are commensurate, the argument principle otherwise.
+        max_denominator : int, optional
+            For :meth:`commensurate_order`.
+
+        Returns
+        -------
+        bool
+            ``False`` also for a pole at ``s = 0`` (``G ~ s^{-nu}``, an integrator). This is the
+            pole condition; an improper ``G`` (numerator order above the denominator's) passes it
+            though its response to a bounded input need not stay bounded.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fohw.FractionalTF([1.0], [0.0], [1.0, -1.0], [0.5, 0.0]).is_stable()     # s^0.5 - 1
+        False
+        >>> fohw.FractionalTF([1.0], [0.0], [1.0, 0.5], [2 ** 0.5, 0.0]).is_stable()
+        True
+        """
+        if method not in ("auto", "matignon", "argument"):
+            raise ParameterError(f"`method` must be 'auto', 'matignon' or 'argument'; got {method!r}.")
+        lowest = self._den_orders[-1]
+        if self._num[0] != 0.0 and self._num_orders[-1] < lowest - ORDER_TOL:
+            return False                              # G ~ s^(beta - alpha) with beta < alpha at 0
+        den, orders = self._den, self._den_orders - lowest
+        if orders.size == 1:
+            return True
+        q = commensurate_base(orders, max_denominator=max_denominator)
+        if method == "matignon" or (method == "auto" and q is not None):
+            if q is None:
+                raise ParameterError("`method`='matignon' needs commensurate `den_orders`; got "
+                                     f"{self._den_orders.tolist()}.")
+            return matignon_roots(den, orders, q)[1]
+        return rhp_zero_count(den, orders) == 0
+
+    # ------------------------------------------------------------------ arithmetic
+    def _join(self, other, what):
+        if not isinstance(other, FractionalTF):
+            other = FractionalTF([float(other)], [0.0], [1.0], [0.0])
+        if self._dt is not None and other.dt is not None and self._dt != other.dt:
+            raise ParameterError(f"{what}: the sampling times differ ({self._dt!r} and {other.dt!r}).")
+        dt = self._dt if self._dt is not None else other.dt
+        return other, dt
+
+    @staticmethod
+    def _from_terms(num, num_orders, den, den_orders, dt, delay):
+        shift = min(0.0, float(np.min(den_orders)))          # keep den orders >= 0
+        return FractionalTF(num, np.asarray(num_orders) - shift, den, np.asarray(den_orders) - shift,
+                            dt=dt, delay=delay)
+
+    @staticmethod
+    def _product(c1, o1, c2, o2):
+        return np.outer(c1, c2).ravel(), np.add.outer(o1, o2).ravel()
+
+    def __mul__(self, other):
+        """Series connection ``G1 G2`` (delays add)."""
+        if not isinstance(other, (FractionalTF, numbers.Real, np.number)):
+            return NotImplemented
+        other, dt = self._join(other, "series connection")
+        num, num_orders = self._product(self._num, self._num_orders, other.num, other.num_orders)
+        den, den_orders = self._product(self._den, self._den_orders, other.den, other.den_orders)
+        return self._from_terms(num, num_orders, den, den_orders, dt, self._delay + other.delay)
+
+    __rmul__ = __mul__
+
+    def __add__(self, other):
+        """Parallel connection ``G1 + G2`` (equal delays only: otherwise the sum leaves the class)."""
+        if not isinstance(other, (FractionalTF, numbers.Real, np.number)):
+            return NotImplemented
+        other, dt = self._join(other, "parallel connection")
+        if other.delay != self._delay:
+            raise ParameterError(f"parallel connection: the delays differ ({self._delay!r} and "
+                                 f"{other.delay!r}); the sum is not a fractional transfer function.")
+        n1, o1 = self._product(self._num, self._num_orders, other.den, other.den_orders)
+        n2, o2 = self._product(other.num, other.num_orders, self._den, self._den_orders)
+        den, den_orders = self._product(self._den, self._den_orders, other.den, other.den_orders)
+        return self._from_terms(np.concatenate([n1, n2]), np.concatenate([o1, o2]), den, den_orders,
+                                dt, self._delay)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return FractionalTF(-self._num, self._num_orders, self._den, self._den_orders,
+                            dt=self._dt, delay=self._delay)
+
+    def __sub__(self, other):
+        if not isinstance(other, (FractionalTF, numbers.Real, np.number)):
+            return NotImplemented
+        return self + (-other)
+
+    def __rsub__(self, other):
+        return (-self) + other
+
+    def feedback(self, other=1.0, sign=-1):
+        """Closed loop ``G / (1 - sign G H)`` (negative feedback by default).
+
+        Parameters
+        ----------
+        other : FractionalTF or float, optional
+            The feedback path ``H`` (default 1: unity feedback).
+        sign : {-1, 1}, optional
+            ``-1`` for negative feedback.
+
+        Returns
+        -------
+        FractionalTF
+
+        Raises
+        ------
+        ParameterError
+            A delay in the loop (``exp(-s tau)`` in the denominator leaves the class).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0], [0.5])          # s^-0.5
+        >>> print(G.feedback())
+        1 / (s^0.5 + 1)
+        """
+        if sign not in (-1, 1):
+            raise ParameterError(f"`sign` must be -1 or 1; got {sign!r}.")
+        other, dt = self._join(other, "feedback")
+        if self._delay or other.delay:
+            raise ParameterError("feedback: a delay inside the loop puts exp(-s tau) in the "
+                                 f"denominator (delays {self._delay!r}, {other.delay!r}); not in this "
+                                 "class.")
+        num, num_orders = self._product(self._num, self._num_orders, other.den, other.den_orders)
+        d1, o1 = self._product(self._den, self._den_orders, other.den, other.den_orders)
+        d2, o2 = self._product(self._num, self._num_orders, other.num, other.num_orders)
+        return self._from_terms(num, num_orders, np.concatenate([d1, -sign * d2]),
+                                np.concatenate([o1, o2]), dt, 0.0)
+
+    # ------------------------------------------------------------------ figures and export
+    def bode(self, omega=None, *, others=None, title=None):
+        """Bode diagram; returns ``(fig, axes)`` without showing it.
+
+        Parameters
+        ----------
+        omega : array_like, optional
+            Frequencies (default :meth:`default_frequencies`).
+        others : dict of str to FractionalTF, optional
+            Further models drawn on the same axes (e.g. an estimate beside the truth).
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        fig, axes
+            See :func:`fohw.analysis.frequency.bode_plot`.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fig, axes = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
+        >>> axes[0].get_ylabel()
+        'magnitude [dB]'
+        """
+        from ..analysis.frequency import bode_plot
+
+        omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
+        curves = {str(self): self.frequency_response(omega)}
+        for label, model in (others or {}).items():
+            curves[label] = model.frequency_response(omega)
+        return bode_plot(omega, curves, title=title)
+
+    def nyquist(self, omega=None, *, title=None):
+        """Nyquist diagram; returns ``(fig, ax)`` without showing it.
+
+        Parameters
+        ----------
+        omega : array_like, optional
+            Positive frequencies (default :meth:`default_frequencies`).
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        fig, ax
+            See :func:`fohw.analysis.frequency.nyquist_plot`.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fig, ax = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
+        """
+        from ..analysis.frequency import nyquist_plot
+
+        omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
+        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title)
+
+    def oustaloup(self, band=(1e-3, 1e3), order=5, method="oustaloup"):
+        """Integer-order approximation in a frequency band (FOMCON ``oustapp``).
+
+        Parameters
+        ----------
+        band : (float, float), optional
+            ``(omega_b, omega_h)``.
+        order : int, optional
+            ``N``: each fractional power gets ``2N + 1`` zeros and poles.
+        method : {"oustaloup", "refined"}, optional
+            Oustaloup's filter or Xue's refined filter.
+
+        Returns
+        -------
+        fohw.model.oustaloup.OustaloupApproximation
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
+        >>> approx = G.oustaloup((1e-3, 1e3), order=5)
+        >>> round(approx.max_relative_error(band=(1e-1, 1e1)), 4)      # a decade inside the band
+        0.0036
+        """
+        from .oustaloup import oustaloup_approximation
+
+        return oustaloup_approximation(self, band=band, order=order, method=method)
