@@ -50,7 +50,7 @@ def run(kind, opts, data):
             res = fohw.identify(data.u, data.y, method="hybrid",
                                 innovation_length=opts.pop("innovation_length", 5), **STRUCT,
                                 **opts)
-        theta, alpha, n_iter, conv, J = res.theta, res.alpha, res.n_iter, res.converged, res.J
+        theta, alpha, n_iter, conv, J = res.theta, res.alpha, res.nit, res.converged, res.J
     delta = np.linalg.norm(theta - data.model.theta) / np.linalg.norm(data.model.theta)
     return dict(delta=delta, alpha=alpha, J=J, n_iter=n_iter, converged=conv,
                 seconds=time.perf_counter() - t0)

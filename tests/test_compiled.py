@@ -362,7 +362,7 @@ def test_output_error_and_crb_are_the_same_with_either_sensitivity_leaf(
     np.testing.assert_array_equal(r_c.theta, r_p.theta)
     np.testing.assert_array_equal(r_c.alpha, r_p.alpha)
     np.testing.assert_array_equal(r_c.covariance, r_p.covariance)
-    assert r_c.n_iter == r_p.n_iter and r_c.nfev == r_p.nfev
+    assert r_c.nit == r_p.nit and r_c.nfev == r_p.nfev
     np.testing.assert_array_equal(b_c.covariance, b_p.covariance)
 
 

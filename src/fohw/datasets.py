@@ -19,7 +19,7 @@ from .model.simulation import simulate
 from .model.system import HammersteinWiener
 from .record import Benchmark, Record
 
-__all__ = ["SimulatedData", "MeasuredData", "paper_model", "paper_example", "load_daisy",
+__all__ = ["SimulatedData", "paper_model", "paper_example", "load_daisy",
            "robot_arm", "cascaded_tanks"]
 
 
@@ -214,9 +214,6 @@ CASCADED_TANKS_SOURCE = ("M. Schoukens, P. Mattsson, T. Wigren, J.-P. Noel, 'Cas
                          "Nonlinear System Identification Benchmarks, Brussels, 2016; M. "
                          "Schoukens, J.-P. Noel, 'Three benchmarks addressing open challenges "
                          "in nonlinear system identification', IFAC World Congress, 2017.")
-
-#: Kept for code written against fohw 0.x: the loaders return :class:`fohw.Record`.
-MeasuredData = Record
 
 
 def _sha256(path):

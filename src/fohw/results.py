@@ -390,11 +390,6 @@ class IdentificationResult(ResultPresentation):
         return self.status == Status.CONVERGED
 
     @property
-    def n_iter(self) -> int:
-        """Alias of :attr:`nit` (the name of fohw 0.1)."""
-        return self.nit
-
-    @property
     def parameter_names(self) -> tuple[str, ...]:
         """Names of the entries of :attr:`theta`."""
         return self.layout.names
