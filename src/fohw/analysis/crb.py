@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._linalg import inverse_gram_triangular, triangular
+from .._types import ArrayLike, RandomStateLike
 from .._validation import check_array, check_int, check_random_state, check_scalar
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
@@ -117,8 +118,9 @@ PARAMETRISATIONS = ("theta", "structured")
 NOISE_MODELS = ("equation", "output")
 
 
-def crb(model, u, noise_variance, *, parametrisation="theta", noise="equation",
-        n_realizations=None, random_state=None):
+def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
+        parametrisation: str = "theta", noise: str = "equation", n_realizations: int | None = None,
+        random_state: RandomStateLike = None) -> CRBResult:
     """Cramér–Rao bound of a model's parameters for an input and a noise level.
 
     Parameters

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Union
 
 import numpy as np
 
@@ -18,6 +19,11 @@ from .._validation import check_array, check_int
 from ..exceptions import DimensionError, ParameterError
 
 __all__ = ["Basis", "polynomial_basis", "as_basis"]
+
+
+#: A basis of a static nonlinearity as the public API accepts it: a :class:`Basis`, an int (a
+#: polynomial degree) or a sequence of callables.
+BasisLike = Union["Basis", int, Sequence[Callable[[np.ndarray], np.ndarray]]]
 
 
 class _Power:
@@ -211,7 +217,7 @@ class Basis:
 MAX_POLYNOMIAL_DEGREE = 100
 
 
-def polynomial_basis(degree):
+def polynomial_basis(degree: int) -> Basis:
     """Monomials ``x, x**2, ..., x**degree``.
 
     Parameters
@@ -239,7 +245,7 @@ def polynomial_basis(degree):
                  names=tuple("x" if n == 1 else f"x^{n}" for n in range(1, degree + 1)))
 
 
-def as_basis(spec, name: str = "basis") -> Basis:
+def as_basis(spec: BasisLike, name: str = "basis") -> Basis:
     """Turn what a user passed as a basis into a :class:`Basis`.
 
     Parameters

@@ -34,11 +34,12 @@ from __future__ import annotations
 import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Union
 
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 
-__all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE"]
+__all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE", "OrdersLike"]
 
 #: The orders a term may have (fixed or free): ``[0, 2]``.
 ORDER_RANGE = (0.0, 2.0)
@@ -344,3 +345,9 @@ class Orders:
         def fmt(terms):
             return "[" + ", ".join(f"({t.lag}, {t.label()})" for t in terms) + "]"
         return f"Orders(a={fmt(self.output)}, b={fmt(self.input)})"
+
+
+#: A class of orders as the public API accepts it: a preset name (``"commensurate"``,
+#: ``"mixed"``, ``"per_lag"``), a fixed order, an :class:`Orders`, or a mapping
+#: ``{"a": [...], "b": [...]}`` of per-lag orders.
+OrdersLike = Union[str, float, Orders, Mapping[str, Sequence]]

@@ -17,10 +17,11 @@ Every order is checked against one rule, the closed interval
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._types import ArrayLike, PairLike, RandomStateLike
 from .._validation import check_array, check_random_state, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
@@ -45,8 +46,12 @@ LEAF_SIZE = 256
 LEAF_SIZE_COMPILED = 256
 
 
-def simulate(model, u, *, params=None, operating_point=None, noise=None, noise_std=0.0,
-             random_state=None, divergence_threshold=None, history=None):
+def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
+             params: ArrayLike | Mapping[str, float] | None = None,
+             operating_point: PairLike | None = None, noise: ArrayLike | None = None,
+             noise_std: float = 0.0, random_state: RandomStateLike = None,
+             divergence_threshold: float | None = None,
+             history: tuple[ArrayLike, ArrayLike] | None = None) -> np.ndarray:
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
     Parameters

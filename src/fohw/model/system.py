@@ -16,10 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._types import ArrayLike, PairLike
 from .._validation import check_alpha, check_array, check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .basis import Basis, as_basis, polynomial_basis
-from .orders import ORDER_RANGE, Orders
+from .basis import Basis, BasisLike, as_basis, polynomial_basis
+from .orders import ORDER_RANGE, Orders, OrdersLike
 from .structure import Structure
 
 __all__ = ["HammersteinWiener", "ALPHA_BOUNDS", "check_pair"]
@@ -91,8 +92,11 @@ class HammersteinWiener:
     (('a1_0', 'a1_alpha', 'b1_0', 'b1_alpha'), {'alpha': 0.4})
     """
 
-    def __init__(self, a, b, p, q, alpha=None, f_basis=None, g_basis=None, *, orders=None,
-                 dt=1.0, offset=0.0, past=(0.0, 0.0), operating_point=(0.0, 0.0)):
+    def __init__(self, a: ArrayLike, b: ArrayLike, p: ArrayLike, q: ArrayLike,
+                 alpha: float | ArrayLike | None = None, f_basis: BasisLike | None = None,
+                 g_basis: BasisLike | None = None, *, orders: OrdersLike | None = None,
+                 dt: float = 1.0, offset: float = 0.0, past: PairLike = (0.0, 0.0),
+                 operating_point: PairLike = (0.0, 0.0)):
         a = check_array(a, "a")
         b = check_array(b, "b")
         p = check_array(p, "p")
@@ -192,8 +196,10 @@ class HammersteinWiener:
         return y0 + (self.offset + b0 * fbar) / denom
 
     @classmethod
-    def from_theta(cls, theta, alpha, *, na, nb, f_basis, g_basis, orders=None, dt=1.0,
-                   offset=0.0, past=(0.0, 0.0), operating_point=(0.0, 0.0)):
+    def from_theta(cls, theta: ArrayLike, alpha: float | ArrayLike | None, *, na: int, nb: int,
+                   f_basis: BasisLike, g_basis: BasisLike, orders: OrdersLike | None = None,
+                   dt: float = 1.0, offset: float = 0.0, past: PairLike = (0.0, 0.0),
+                   operating_point: PairLike = (0.0, 0.0)) -> HammersteinWiener:
         """Build a model from a parameter vector by Eqs. (39)–(40).
 
         Parameters
