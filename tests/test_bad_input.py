@@ -331,6 +331,50 @@ API = [
     ("metrics.fit_percent", "n_init leaves no samples",
      lambda t: fohw.analysis.metrics.fit_percent(Y, Y, n_init=49),
      fohw.DimensionError, "`n_init` must leave at least 2 samples"),
+    # issue 26 (26lr)
+    ("lr_test", "`restricted` not a result", lambda t: fohw.lr_test("x", _lr_fit("commensurate")),
+     fohw.ParameterError, "`restricted` must be an IdentificationResult"),
+    ("lr_test", "`full` from a recursive method",
+     lambda t: fohw.lr_test(_lr_fit(0), _hybrid()),
+     fohw.ParameterError, "`full` was fitted by method 'hybrid', which is not a least-squares"),
+    ("lr_test", "not nested: other lags",
+     lambda t: fohw.lr_test(_lr_fit(0, na=2), _lr_fit("commensurate")),
+     fohw.ParameterError, "is not `full`"),
+    ("lr_test", "the pair swapped", lambda t: fohw.lr_test(_lr_fit("commensurate"), _lr_fit(0)),
+     fohw.ParameterError, "`restricted` must be the integer class"),
+    ("lr_test", "other methods",
+     lambda t: fohw.lr_test(_lr_fit(0, method="structured"), _lr_fit("commensurate")),
+     fohw.ParameterError, "`restricted` and `full` must be fitted by the same method"),
+    ("lr_test", "other records",
+     lambda t: fohw.lr_test(_lr_fit(0, n=40), _lr_fit("commensurate")),
+     fohw.ParameterError, "were not fitted to the same record: n_samples 40 and 50"),
+    ("lr_test", "full's orders bounded away from 0",
+     lambda t: fohw.lr_test(_lr_fit(0), _lr_fit("commensurate", alpha_bounds=(0.2, 1))),
+     fohw.ParameterError, "is bounded below by 0.2, so orders 0 are not in its class"),
+    ("lr_test", "unknown `reference`",
+     lambda t: fohw.lr_test(_lr_fit(0), _lr_fit("commensurate"), reference="chi2"),
+     fohw.ParameterError, "`reference` must be one of"),
+    ("lr_test", "the mixture for the mixed class (alpha unidentified)",
+     lambda t: fohw.lr_test(_lr_fit(0), _lr_fit("mixed"), reference="mixture"),
+     fohw.ParameterError, "are not identified under the null"),
+    ("lr_test", "bootstrap without the record",
+     lambda t: fohw.lr_test(_lr_fit(0), _lr_fit("commensurate"), reference="bootstrap"),
+     fohw.ParameterError, "pass `u` and `y`"),
+    ("lr_test", "`u`, `y` of another record",
+     lambda t: fohw.lr_test(_lr_fit(0), _lr_fit("commensurate"), u=U, y=U**2),
+     fohw.ParameterError, "`u` and `y` are not the record `restricted` was fitted to"),
+    ("profile_interval", "unknown order name",
+     lambda t: fohw.profile_interval(_lr_fit("commensurate"), "beta", u=U, y=U**3),
+     fohw.ParameterError, "`name` must be one of the free orders ['alpha']; got 'beta'"),
+    ("profile_interval", "`level` 1.5",
+     lambda t: fohw.profile_interval(_lr_fit("commensurate"), "alpha", 1.5, u=U, y=U**3),
+     fohw.ParameterError, "`level`"),
+    ("IdentificationResult.order_interval", "without the record",
+     lambda t: _lr_fit("commensurate").order_interval("alpha"),
+     fohw.ParameterError, "pass `u` and `y` (fohw's results keep no data)"),
+    ("IdentificationResult.order_interval", "a fit with every order fixed",
+     lambda t: _lr_fit(0).order_interval("alpha", u=U, y=U**3),
+     fohw.ParameterError, "`name` must be one of the free orders []"),
 ]
 
 CLI = [
@@ -398,6 +442,12 @@ CLI = [
      lambda t: ["simulate", "--model", _model_file(t), "--input", _bad_file(t, "1\n2\n"),
                 "--column", "5"], "--column: column 5 does not exist"),
 ]
+
+
+def _lr_fit(orders, n=50, method="varpro", **kw):
+    """A fit of U -> U**3 (the first ``n`` samples) for the lr_test rows."""
+    kw = {**dict(na=1, nb=1, f_basis=1, g_basis=1), **kw}
+    return fohw.identify(U[:n], U[:n] ** 3, orders=orders, method=method, **kw)
 
 
 def _hybrid():

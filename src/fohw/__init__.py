@@ -9,7 +9,9 @@ matrix, and the paper's estimators.
 from . import datasets
 from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
+from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
+from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
 from .estimators.hybrid import (
@@ -127,4 +129,8 @@ __all__ = [
     "FractionalTF",
     "FractionalTFFit",
     "fit_fractional_tf",
+    "LRTest",
+    "lr_test",
+    "ProfileInterval",
+    "profile_interval",
 ]

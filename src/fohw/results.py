@@ -594,6 +594,19 @@ class IdentificationResult(ResultPresentation):
 
         return compare(self, u, y, **kwargs)
 
+    def order_interval(self, name, level=0.95, *, u=None, y=None):
+        """Profile-likelihood interval ``(low, high)`` of free order ``name``.
+
+        The result keeps no data: pass the record it was fitted to as ``u``, ``y``. See
+        :func:`fohw.profile_interval` (one-sided at a bound), which it calls.
+        """
+        return tuple(REFITS["profile_interval"](self, name, level, u=u, y=y))
+
+
+#: Analyses that refit, registered by their modules (``fohw.analysis.profile_interval``): they
+#: import the estimators, which import this module, so it cannot import them (no circles).
+REFITS = {}
+
 
 def _rebuild(cls, values):
     return cls(**values)

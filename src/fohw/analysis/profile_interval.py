@@ -1,0 +1,261 @@
+"""Profile-likelihood intervals of the free orders, and refits of a result's model class.
+
+For a free order ``nu`` of a fit, the profile criterion is the least residual sum of squares
+with ``nu`` held at a value and every other parameter refitted, ``RSS(nu)``; with Gaussian
+noise of unknown variance (profiled out) the likelihood-ratio statistic is
+
+``LR(nu) = n log(RSS(nu) / RSS(nu_hat))``
+
+(``n`` the samples of the criterion), and the interval of level ``1 - a`` is the set where
+``LR(nu) <= chi2_1 quantile(1 - a)`` (Wilks). For ``"varpro"`` and ``"structured"`` the
+criterion is the one-step (equation-error) RSS, ``N J``; for ``"output_error"`` the free-run
+RSS. ``RSS(nu)`` is a public :func:`fohw.identify` call with that order fixed (for ``"varpro"``
+it is exactly the separable least-squares solution at fixed orders), and an
+``"output_error"`` refit starts from the full fit's other parameters. The interval's ends are
+found by a coarse grid over the order's bounds and Brent's method between the grid points
+that bracket the quantile; an end whose criterion never reaches the quantile is the bound
+itself (a one-sided interval). The result objects keep no data, so ``u`` and ``y`` (the
+record the fit was made on, checked against the fit's ``J``) are passed again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize
+import scipy.stats
+
+from .._validation import check_array, check_int, check_same_length, check_scalar
+from ..estimators.identify import identify
+from ..exceptions import ParameterError
+from ..model.orders import Orders
+from ..results import REFITS, IdentificationResult
+
+__all__ = ["ProfileInterval", "profile_interval", "refit", "orders_with", "criterion",
+           "check_data", "LIKELIHOOD_METHODS"]
+
+#: Methods whose estimate is a least-squares (Gaussian likelihood) optimum.
+LIKELIHOOD_METHODS = ("varpro", "structured", "output_error")
+
+
+def check_result(result, name):
+    """``result`` must be an IdentificationResult of a least-squares method."""
+    if not isinstance(result, IdentificationResult):
+        raise ParameterError(f"`{name}` must be an IdentificationResult (from fohw.identify); "
+                             f"got {type(result).__name__}.")
+    if result.method not in LIKELIHOOD_METHODS:
+        raise ParameterError(f"`{name}` was fitted by method {result.method!r}, which is not a "
+                             f"least-squares optimum; likelihood-ratio tests and profile "
+                             f"intervals need one of {LIKELIHOOD_METHODS}.")
+    return result
+
+
+def criterion(result):
+    """``(rss, n)``: the fit's residual sum of squares and the samples it covers.
+
+    The one-step RSS ``N J`` for ``"varpro"`` and ``"structured"``; the free-run RSS
+    (``details["simulation_sse"]``) over ``N - n_init`` samples for ``"output_error"``.
+    """
+    if result.method == "output_error":
+        n = result.n_samples - int(result.options.get("n_init", 0))
+        return float(result.details["simulation_sse"]), n
+    return float(result.J) * result.n_samples, result.n_samples
+
+
+def check_data(result, u, y, name):
+    """``u``, ``y`` as arrays, checked to be the record ``result`` was fitted to.
+
+    The check recomputes the one-step criterion ``J`` of ``result`` on ``u, y``: a different
+    record (or another operating point) gives another ``J``.
+    """
+    if u is None or y is None:
+        raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
+                             "(fohw's results keep no data).")
+    u = check_array(u, "u")
+    y = check_array(y, "y")
+    check_same_length(u, y, "u", "y")
+    if u.shape[0] != result.n_samples:
+        raise ParameterError(f"`u` and `y` have {u.shape[0]} samples, but `{name}` was fitted to "
+                             f"{result.n_samples}: pass the record it was fitted to.")
+    J = float(np.mean((y - result.predict(u, y)) ** 2))
+    if not np.isclose(J, result.J, rtol=1e-6, atol=1e-300):
+        raise ParameterError(f"`u` and `y` are not the record `{name}` was fitted to: its mean "
+                             f"squared one-step error on them is {J:.6g}, not its J = "
+                             f"{result.J:.6g}.")
+    return u, y
+
+
+def orders_with(orders, fixed):
+    """``orders`` with the free orders in ``fixed`` (``{name: value}``) replaced by numbers."""
+    def branch(terms):
+        return [(t.lag, fixed.get(t.order, t.order) if t.free else t.order) for t in terms]
+    return Orders(branch(orders.output), branch(orders.input))
+
+
+def refit(result, u, y, *, orders=None, start=None):
+    """Fit ``result``'s model class again on ``u, y`` (its method, options, bounds).
+
+    Optionally with other ``orders`` and, for ``"output_error"``, a ``start`` pair
+    ``(linear, nonlinear)``.
+    """
+    s = result.structure
+    orders = s.orders if orders is None else orders
+    options = dict(result.options)
+    bounds = options.pop("alpha_bounds", (0.0, 1.0))
+    if isinstance(bounds, dict):
+        bounds = {k: v for k, v in bounds.items() if k in orders.free}
+        if not bounds:
+            bounds = (0.0, 1.0)
+    if result.method == "output_error":
+        options["start"] = start
+    return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
+                    method=result.method, orders=orders, offset=s.offset,
+                    operating_point=result.operating_point, past=s.past, dt=s.dt,
+                    alpha_bounds=bounds, options=options)
+
+
+def order_bounds(result, name):
+    """``(low, high)`` of free order ``name`` in the fit's ``alpha_bounds``."""
+    bounds = result.options.get("alpha_bounds", (0.0, 1.0))
+    if isinstance(bounds, dict):
+        bounds = bounds[name]
+    return float(bounds[0]), float(bounds[1])
+
+
+@dataclass(frozen=True)
+class ProfileInterval:
+    """A profile-likelihood interval of one free order.
+
+    Attributes
+    ----------
+    name : str
+    estimate : float
+    low, high : float
+        The interval; an end equal to the order's bound when the criterion never reaches the
+        quantile on that side (``one_sided`` says which).
+    level : float
+    grid, statistic : ndarray
+        The order values where the class was refitted and ``n log(RSS(nu) / RSS_hat)`` there.
+    one_sided : str
+        ``""``, ``"low"`` (the lower end is the bound), ``"high"`` or ``"both"``.
+    """
+
+    name: str
+    estimate: float
+    low: float
+    high: float
+    level: float
+    grid: np.ndarray
+    statistic: np.ndarray
+    one_sided: str
+
+    def __iter__(self):
+        return iter((self.low, self.high))
+
+
+def _fixed_value_ok(orders, name, value):
+    """Whether fixing ``name`` at ``value`` leaves distinct terms (the mixed class at 0 does not)."""
+    try:
+        orders_with(orders, {name: value})
+    except ParameterError:
+        return False
+    return True
+
+
+def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xtol=1e-4):
+    """The profile-likelihood interval of free order ``name`` of ``result``.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A ``"varpro"``, ``"structured"`` or ``"output_error"`` fit with free order ``name``.
+    name : str
+        One of ``result.orders``.
+    level : float
+        Coverage, in (0, 1).
+    u, y : array_like
+        The record ``result`` was fitted to (checked through its ``J``).
+    n_grid : int
+        Points of the coarse grid over the order's bounds (at least 3).
+    xtol : float
+        Absolute tolerance of the ends (Brent).
+
+    Returns
+    -------
+    ProfileInterval
+        Unpacks as ``(low, high)``.
+
+    Raises
+    ------
+    ParameterError
+        Not a least-squares fit, an unknown order name, ``level`` outside (0, 1), or ``u, y``
+        missing or not the fit's record.
+
+    Notes
+    -----
+    Wilks: ``n log(RSS(nu) / RSS_hat)`` is asymptotically chi2 with 1 degree of freedom at the
+    true order when that is inside its bounds. At a bound the interval is one-sided there.
+    In the mixed class an order fixed at exactly 0 duplicates the order-0 terms, so the grid
+    starts at ``1e-3`` of the bound width above 0 (the log-memory limit: see
+    :func:`fohw.lr_test`).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> data = fohw.datasets.paper_example(500, random_state=0)
+    >>> res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> low, high = fohw.profile_interval(res, "alpha", u=data.u, y=data.y)
+    >>> bool(low < res.alpha < high)
+    True
+    """
+    result = check_result(result, "result")
+    if not isinstance(name, str) or name not in result.orders:
+        raise ParameterError(f"`name` must be one of the free orders {list(result.orders)}; "
+                             f"got {name!r}.")
+    level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
+                         upper_inclusive=False)
+    n_grid = check_int(n_grid, "n_grid", minimum=3)
+    xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
+    u, y = check_data(result, u, y, "result")
+    rss_hat, n = criterion(result)
+    quantile = float(scipy.stats.chi2.ppf(level, 1))
+    est = float(result.orders[name])
+    lo, hi = order_bounds(result, name)
+    orders = result.structure.orders
+    names = result.structure.nonlinear_names
+    others = np.array([v for k, v in zip(names, result.nonlinear) if k != name])
+
+    def stat(value):
+        fixed = orders_with(orders, {name: float(value)})
+        start = (result.linear, others) if result.method == "output_error" else None
+        fit = refit(result, u, y, orders=fixed, start=start)
+        return max(n * np.log(criterion(fit)[0] / rss_hat), 0.0)
+
+    eps = 1e-3 * (hi - lo)
+    lo_ok = lo if _fixed_value_ok(orders, name, lo) else lo + eps
+    hi_ok = hi if _fixed_value_ok(orders, name, hi) else hi - eps
+    grid = np.unique(np.r_[np.linspace(lo_ok, hi_ok, n_grid), np.clip(est, lo_ok, hi_ok)])
+    values = np.array([stat(v) for v in grid])
+    k = int(np.argmin(np.abs(grid - np.clip(est, lo_ok, hi_ok))))
+
+    def end(side):
+        idx = range(k - 1, -1, -1) if side < 0 else range(k + 1, grid.size)
+        inner = k
+        for j in idx:
+            if values[j] > quantile:
+                a, b = grid[inner], grid[j]
+                return scipy.optimize.brentq(lambda v: stat(v) - quantile, min(a, b),
+                                             max(a, b), xtol=xtol), False
+            inner = j
+        return (lo if side < 0 else hi), True
+
+    low, low_open = end(-1)
+    high, high_open = end(+1)
+    one_sided = {(False, False): "", (True, False): "low", (False, True): "high",
+                 (True, True): "both"}[(low_open, high_open)]
+    return ProfileInterval(name=name, estimate=est, low=float(low), high=float(high),
+                           level=level, grid=grid, statistic=values, one_sided=one_sided)
+
+
+REFITS["profile_interval"] = profile_interval      # IdentificationResult.order_interval calls it
