@@ -19,9 +19,10 @@
 Usage errors, bad input and operating-system errors (permissions, a folder given as a file)
 print one line ``fohw: error: …`` and exit with status 2; Ctrl-C prints one line and exits with
 status 130. Output paths (``--save``, ``--plot``, ``--csv``, ``--output``, ``--outdir``) are
-checked before the run. Results, models, tables and outputs (``--save``, ``--csv``,
-``--output``) are written atomically: a failed or interrupted save leaves an existing file as it
-was (figures and the files of ``reproduce`` are written directly).
+checked before the run. Results, models, tables, outputs and figures (``--save``, ``--csv``,
+``--output``, ``--plot``, the figures of ``reproduce``) are written atomically: a failed or
+interrupted save, or a full disk, leaves an existing file as it was (the tables of
+``reproduce`` are written directly).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import os
 import sys
 
 from . import __version__
+from .io.files import save_figure
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -412,7 +414,7 @@ def _identify(args):
                              "above); no figure written.")
         axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
                           "one-step prediction", fontsize=10)
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0
 
 
@@ -490,7 +492,7 @@ def _select(args):
         sel.to_csv(args.csv)
     if args.plot:
         fig, _ = sel.plot()
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0
 
 
