@@ -7,6 +7,7 @@ and a test checks that the page is current.
 """
 
 import io
+import os
 import sys
 from contextlib import redirect_stderr
 from pathlib import Path
@@ -375,6 +376,34 @@ API = [
     ("IdentificationResult.order_interval", "a fit with every order fixed",
      lambda t: _lr_fit(0).order_interval("alpha", u=U, y=U**3),
      fohw.ParameterError, "`name` must be one of the free orders []"),
+    # issue 28 (28a)
+    ("read_record", "#2 a last line without its line end (a file cut mid-number)",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n1,2\n3,0.12", "r.csv")),
+     fohw.DataFileError, "the last line has no line end, so it may have been cut"),
+    ("read_record", "#6 neither a path nor a file object",
+     lambda t: fohw.read_record(3), fohw.ParameterError,
+     "`path` must be a file path (str, bytes or os.PathLike) or a file object with read()"),
+    ("read_record", "#12 `dt` naming a signal column",
+     lambda t: fohw.read_record(_bad_file(t, "u,y,Ts\n1,2,4\n3,4,\n", "r.csv"), dt="u"),
+     fohw.ParameterError, "`dt` = 'u' names a signal column"),
+    ("read_record", "#12 a header naming a column twice (u,u,y)",
+     lambda t: fohw.read_record(_bad_file(t, "u,u,y\n1,2,3\n4,5,6\n", "r.csv")),
+     fohw.DataFileError, "the header on line 1 names 'u' twice (columns 0 and 1)"),
+    ("read_record", "#19 an extra field on line 11",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n" + "1,2\n" * 9 + "1,2,3\n", "r.csv")),
+     fohw.DataFileError, "line 11 has 3 field(s) but the header on line 1 has 2: an extra field"),
+    ("read_record", "#19 a thousands separator (0.5,1,234.5) on line 6",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n" + "1,2\n" * 4 + "0.5,1,234.5\n", "r.csv")),
+     fohw.DataFileError, "line 6 has 3 field(s)"),
+    ("read_record", "#19 a short row on line 4",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n1,2\n3,4\n5\n6,7\n", "r.csv")),
+     fohw.DataFileError, "line 4 has 1 field(s) but the header on line 1 has 2: a missing field"),
+    ("read_record", "#20 a header-less comma file with decimal=','",
+     lambda t: fohw.read_record(_bad_file(t, "0.5,1.25\n0.25,0.5\n", "r.csv"), decimal=","),
+     fohw.DataFileError, "line 1: '0.5,1.25' holds numbers separated by commas"),
+    ("read_record", "#20 a 'u,y' header above ';' data",
+     lambda t: fohw.read_record(_bad_file(t, "u,y\n1;2\n3;4\n", "r.csv")),
+     fohw.DataFileError, "line 2 is separated by ';' but the header on line 1 by ','"),
 ]
 
 CLI = [
@@ -441,6 +470,41 @@ CLI = [
     ("fohw simulate", "a missing --column (was reported as --columns)",
      lambda t: ["simulate", "--model", _model_file(t), "--input", _bad_file(t, "1\n2\n"),
                 "--column", "5"], "--column: column 5 does not exist"),
+    # issue 28 (28a)
+    ("fohw identify", "#13 --save an existing FIFO (it was replaced by a regular file)",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--save",
+                os.mkfifo(t / "f.json") or str(t / "f.json")],
+     "exists and is not a regular file (a FIFO); fohw does not replace it"),
+    ("fohw select", "#13 --top -1 (it printed every row but the last)",
+     lambda t: ["select", "x.dat", "--na", "1", "--top", "-1"],
+     "argument --top: expected an integer >= 1; got -1"),
+    ("fohw select", "#13 --top 0", lambda t: ["select", "x.dat", "--na", "1", "--top", "0"],
+     "argument --top: expected an integer >= 1; got 0"),
+    ("fohw select", "#15 --orders fancy (every row failed, status 0)",
+     lambda t: ["select", "x.dat", "--na", "1", "--orders", "fancy"],
+     "argument --orders: each entry is one of commensurate, per_lag, mixed or a number"),
+    ("fohw select", "#15 --na 0", lambda t: ["select", "x.dat", "--na", "0"],
+     "argument --na: expected comma-separated integers >= 1; got '0'"),
+    ("fohw select", "#15 --na 1000 (every candidate fails: status 2, not 0)",
+     lambda t: ["select", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1000", "-q"],
+     "no model selected: the only candidate failed (fit: DimensionError"),
+    ("fohw select", "#15 --method hybrid --orders mixed",
+     lambda t: ["select", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--method",
+                "hybrid", "--orders", "mixed", "-q"],
+     "no model selected: the only candidate failed (fit: ParameterError: method 'hybrid'"),
+    ("fohw identify", "#21 --save /proc/fit.json (checked before the run)",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--save",
+                "/proc/fit.json"], "no file can be created in the folder '/proc'"),
+    ("fohw identify", "#21 --save a dangling symbolic link",
+     lambda t: ["identify", "/nonexistent.dat", "--na", "1", "--nb", "1", "--save",
+                (t / "l.json").symlink_to(t / "no" / "x.json") or str(t / "l.json")],
+     "is a symbolic link to"),
+    ("fohw simulate", "#21 --output /proc/y.txt",
+     lambda t: ["simulate", "--model", _model_file(t), "--input", _bad_file(t, "1\n2\n"),
+                "--output", "/proc/y.txt"], "--output '/proc/y.txt': no file can be created"),
+    ("fohw identify", "@NAME that does not ship with fohw",
+     lambda t: ["identify", "@tanks", "--na", "1", "--nb", "1"],
+     "no record of that name ships with fohw; use one of @cascaded_tanks, @robot_arm"),
 ]
 
 
@@ -496,9 +560,10 @@ def markdown():
              "prints one line `fohw: error: …` and exits with status 2, operating-system errors "
              "(permissions, a folder given as a file) included; Ctrl-C prints one line and "
              "exits with status 130. Output paths are checked before a run starts, and results, "
-             "models, tables and outputs are written atomically, so a failed or interrupted save "
-             "leaves an existing file byte for byte (`tests/test_reliability.py`; figures are "
-             "written directly). Rows marked #N are the cases of issue 14.",
+             "models, tables, outputs and figures are written atomically, so a failed or "
+             "interrupted save leaves an existing file byte for byte "
+             "(`tests/test_reliability.py`). Rows marked #N are the cases of issue 14 (and, "
+             "after the comment `issue 28` in the tables, of issue 28).",
              "",
              "This page is generated from `tests/test_bad_input.py`, which checks every row.", "",
              "## Python API", "", "| entry point | bad input | exception | message contains |",

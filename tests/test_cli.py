@@ -112,3 +112,193 @@ def test_custom_basis_needs_the_basis_on_load(tmp_path):
     with pytest.raises(fohw.ParameterError, match="has functions"):
         fohw.load_model(tmp_path / "m.json", f_basis=[np.sin, np.tanh])
     assert fohw.load_model(tmp_path / "m.json", f_basis=m.f_basis) == m
+
+
+# --- issue 28 (28a) -------------------------------------------------------------------------
+
+def _run(args, **kwargs):
+    return subprocess.run([sys.executable, "-m", "fohw", *map(str, args)], capture_output=True,
+                          text=True, **kwargs)
+
+
+def _interrupt_while_importing(command, delays=(0.25, 0.1, 0.5)):
+    """Send SIGINT to ``command`` while it is still importing; return (status, stderr)."""
+    import os
+    import signal
+    import time
+
+    for delay in delays:
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+        proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, env=env)
+        time.sleep(delay)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+        if proc.returncode != 0:                 # interrupted (fohw --version exits 0)
+            return proc.returncode, err
+    pytest.skip("the process finished before it could be interrupted")
+
+
+@pytest.mark.parametrize("how", ["-m", "script"])
+def test_ctrl_c_while_importing_is_one_line_and_130(tmp_path, how):
+    """Case 7: a Ctrl-C in the first second (while fohw imports) printed a 14-44-line
+    KeyboardInterrupt traceback and ended with status -2."""
+    if how == "-m":
+        command = [sys.executable, "-m", "fohw", "--version"]
+    else:                              # what pip's console script `fohw` does
+        script = tmp_path / "fohw"
+        script.write_text("import sys\nfrom fohw.cli import main\nsys.exit(main())\n")
+        command = [sys.executable, str(script), "--version"]
+    status, err = _interrupt_while_importing(command)
+    assert status == 130, err
+    assert err.count("\n") == 1 and err.startswith("fohw: interrupted"), err
+    assert "Traceback" not in err
+
+
+def test_the_startup_guard_is_for_the_command_only():
+    from fohw._startup import is_fohw_command
+
+    assert is_fohw_command(["python", "-m", "fohw", "select"], "-m")
+    assert is_fohw_command(["python", "-X", "importtime", "-mfohw"], "-m")
+    assert is_fohw_command(["python", "/venv/bin/fohw", "identify"], "/venv/bin/fohw")
+    assert not is_fohw_command(["python", "script.py"], "script.py")
+    assert not is_fohw_command(["python", "-c", "import fohw"], "-c")
+    assert not is_fohw_command(["python", "-m", "pytest"], "-m")
+    import signal
+
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler     # here: untouched
+
+
+@pytest.fixture(scope="module")
+def tanks(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tanks") / "tanks.csv"
+    assert main(["data", "cascaded_tanks", "--out", str(path)]) == 0
+    return path
+
+
+def test_select_takes_a_fixed_fractional_order(tanks, capsys):
+    """Case 8: `--orders 0.5` was passed as the string '0.5' and every candidate failed."""
+    assert main(["select", str(tanks), "--columns", "uEst,yEst", "--na", "1", "--orders",
+                 "0.5,1,commensurate", "--operating-point", "mean", "--offset", "-q"]) == 0
+    out = capsys.readouterr().out
+    for label in ("orders=0.5 ", "orders=1 ", "orders=commensurate "):
+        row = next(line for line in out.splitlines() if label in line)
+        assert "got '" not in row and "| failed |" not in row, row
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--na", "1000"], "no model selected: the only candidate failed (fit: DimensionError"),
+    (["--na", "1", "--method", "hybrid", "--orders", "mixed"],
+     "no model selected: the only candidate failed (fit: ParameterError: method 'hybrid'"),
+    (["--na", "1,2", "--method", "hybrid", "--orders", "mixed,per_lag"],
+     "no model selected: all 4 candidates failed (the first: fit: ParameterError"),
+])
+def test_a_selection_that_selected_nothing_exits_non_zero(tanks, tmp_path, capsys, args,
+                                                          message):
+    """Case 15: such a selection printed a table of failed rows and exited 0."""
+    save = tmp_path / "best.json"
+    status = main(["select", str(tanks), "--columns", "uEst,yEst", *args, "--save", str(save)])
+    captured = capsys.readouterr()
+    assert status == 2
+    assert "| failed |" in captured.out                       # the reasons, on stdout
+    assert captured.err.splitlines()[-1].startswith(f"fohw: error: {message}"), captured.err
+    assert not save.exists()
+
+
+def test_an_identify_that_failed_exits_non_zero(tanks, capsys, monkeypatch):
+    """Case 15: an identify fit whose status is FAILED is not a success for a script."""
+    import dataclasses
+
+    real = fohw.identify
+
+    def failing(*args, **kwargs):
+        return dataclasses.replace(real(*args, **kwargs), status=fohw.Status.FAILED,
+                                   message="the optimiser failed.")
+
+    monkeypatch.setattr(fohw, "identify", failing)
+    status = main(["identify", str(tanks), "--columns", "uEst,yEst", "--na", "1", "--nb", "1",
+                   "--operating-point", "mean", "-q"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.splitlines()[-1].startswith("fohw: error: the fit FAILED"), err
+
+
+def test_stage_messages_go_to_stderr_when_it_is_not_a_terminal(tanks):
+    """Long runs printed nothing unless stderr was a terminal (40 s of silence on a first run):
+    stage messages now go to stderr in pipes too; stdout keeps the results; -q silences them."""
+    args = ["select", tanks, "--columns", "uEst,yEst", "--na", "1", "--orders", "0",
+            "--operating-point", "mean", "--offset"]
+    proc = _run(args)
+    assert proc.returncode == 0, proc.stderr
+    stages = [line for line in proc.stderr.splitlines() if not line.startswith(
+        ("fohw: warning:", "fohw: error:"))]
+    assert stages[0] == "fohw: fitting 1 candidate (varpro) on 1024 samples ..."
+    assert stages[-1].startswith("fohw: done in ") and stages[-1].endswith(" s")
+    assert "fohw: " not in proc.stdout.replace("fohw identification", "")
+    quiet = _run(args + ["--quiet"])
+    assert quiet.returncode == 0 and quiet.stdout.count("\n") == proc.stdout.count("\n")
+    assert not [line for line in quiet.stderr.splitlines() if line.startswith("fohw: ")
+                and not line.startswith("fohw: warning:")]
+
+
+def test_fohw_data_writes_the_shipped_records(tmp_path, capsys):
+    """The newcomer's first hour: the shipped records, reachable from the shell."""
+    assert main(["data"]) == 0
+    listing = capsys.readouterr().out
+    assert "cascaded_tanks" in listing and "robot_arm" in listing and "paper_example" in listing
+    for name in ("cascaded_tanks", "robot_arm"):
+        out = tmp_path / f"{name}.txt"
+        assert main(["data", name, "--out", str(out)]) == 0
+        with open(fohw.datasets.shipped_file(name), "rb") as fh:
+            assert out.read_bytes() == fh.read()
+    tanks = fohw.read_record(tmp_path / "cascaded_tanks.txt", u="uEst", y="yEst")
+    np.testing.assert_array_equal(tanks.y, fohw.datasets.cascaded_tanks().estimation.y)
+    assert main(["data", "paper_example", "--samples", "300", "--seed", "3", "--out",
+                 str(tmp_path / "p.csv")]) == 0
+    rec = fohw.read_record(tmp_path / "p.csv")
+    d = fohw.datasets.paper_example(300, random_state=3)
+    np.testing.assert_array_equal(rec.u, d.u)
+    np.testing.assert_array_equal(rec.y, d.y)
+    # @name reads the shipped file in place
+    assert main(["identify", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--nb",
+                 "1", "--operating-point", "mean", "--json", "-q"]) == 0
+    assert json.loads(capsys.readouterr().out)["n_samples"] == 1024
+    assert main(["identify", "@nothing", "--na", "1", "--nb", "1"]) == 2
+    assert "use one of @cascaded_tanks, @robot_arm" in capsys.readouterr().err
+
+
+def _getting_started_commands():
+    """The shell commands of docs/getting_started.md, in order (``fohw ...`` lines of its
+    code blocks; `fohw reproduce` takes --fast here)."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "getting_started.md").read_text()
+    commands, python = [], []
+    block = None
+    for line in text.splitlines():
+        if line.startswith("```"):
+            block = None if block is not None else line[3:].strip()
+            continue
+        if block == "python":
+            python.append(line)
+        elif block is not None and line.startswith("fohw "):
+            command = line.split("  #")[0].split()
+            if command[1] == "reproduce" and "--fast" not in command:
+                command.append("--fast")
+            commands.append(command)
+    return commands, "\n".join(python)
+
+
+def test_getting_started_runs_as_written(tmp_path, monkeypatch):
+    """Every `fohw` command and the Python block of docs/getting_started.md run, in a fresh
+    folder, in order (they used plant.dat / plant.csv, which existed nowhere)."""
+    commands, python = _getting_started_commands()
+    assert len(commands) >= 4 and any(c[1] == "data" for c in commands)
+    for command in commands:
+        proc = subprocess.run([sys.executable, "-m", "fohw", *command[1:]], cwd=tmp_path,
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, (command, proc.stderr)
+    monkeypatch.chdir(tmp_path)
+    proc = subprocess.run([sys.executable, "-c", python], cwd=tmp_path, capture_output=True,
+                          text=True)
+    assert proc.returncode == 0, proc.stderr

@@ -7,6 +7,7 @@ import pytest
 
 import fohw
 from fohw.cli import main
+from fohw.io import text as text_io
 from fohw.io.text import read_table
 
 TANKS = os.path.join(os.path.dirname(fohw.__file__), "data", "cascaded_tanks.csv")
@@ -158,3 +159,129 @@ def test_the_cli_takes_the_sampling_time_the_file_gives(tmp_path, capsys):
     assert main(args + ["--dt", "1", "--save", str(tmp_path / "b.json")]) == 0
     assert fohw.load_result(tmp_path / "b.json").structure.dt == 1.0
     capsys.readouterr()
+
+
+# --- issue 28 (28a) -------------------------------------------------------------------------
+
+def test_a_file_that_changes_while_it_is_read_is_refused(tmp_path, monkeypatch):
+    """Case 2: a file truncated (or grown) while it is read used to give fewer rows, silently."""
+    path = write(tmp_path, "u,y\n" + "".join(f"{k},{k + 1}\n" for k in range(100)))
+    real = text_io._read_lines
+
+    def truncate_midway(src, decimal):
+        table = real(src, decimal)
+        with open(path, "r+") as fh:              # someone cuts the file while fohw reads it
+            fh.truncate(200)
+        return table
+
+    monkeypatch.setattr(text_io, "_read_fast", lambda src, decimal: None)
+    monkeypatch.setattr(text_io, "_read_lines", truncate_midway)
+    with pytest.raises(fohw.DataFileError, match=r"d\.csv changed while it was read \(size "):
+        fohw.read_record(path)
+
+
+@pytest.mark.parametrize("tail", ["9,0.12", "9,"])
+def test_a_last_line_without_its_end_is_refused(tmp_path, tail):
+    """Case 2: a file cut mid-number (no line end on the last line) is not read as complete."""
+    path = write(tmp_path, "u,y\n1,2\n3,4\n" + tail)
+    with pytest.raises(fohw.DataFileError, match=r"d\.csv: the last line has no line end"):
+        fohw.read_record(path)
+
+
+def test_bytes_paths_and_file_objects_are_read(tmp_path):
+    """Case 6: bytes paths gave a raw TypeError; file objects named no argument."""
+    import io
+
+    text = "u,y\n1,2\n3,4\n5,6\n"
+    path = write(tmp_path, text)
+    expected = fohw.read_record(path)
+    for source in (os.fsencode(path), io.StringIO(text), io.BytesIO(text.encode())):
+        rec = fohw.read_record(source)
+        np.testing.assert_array_equal(rec.u, expected.u)
+        np.testing.assert_array_equal(rec.y, expected.y)
+    with open(path) as fh:
+        assert fohw.read_record(fh).name == "d.csv"
+    with open(path, "rb") as fh:
+        np.testing.assert_array_equal(fohw.read_record(fh, dt=2.0).y, expected.y)
+    rec = fohw.read_record(io.StringIO("t,u,y,Ts\n0,1,2,0.5\n1,3,4,\n"))
+    assert rec.dt == 0.5 and rec.input_name == "u"
+    with pytest.raises(fohw.ParameterError, match="`path` must be a file path .* got int"):
+        fohw.read_record(3)
+
+
+def test_dt_must_name_a_value_given_once(tmp_path):
+    """Case 12: dt="u" used to take the first input sample as the sampling time."""
+    path = write(tmp_path, "u,y,Ts\n1,2,0.5\n3,4,\n")
+    with pytest.raises(fohw.ParameterError, match="`dt` = 'u' names a signal column .* \\(Ts\\)"):
+        fohw.read_record(path, dt="u")
+    assert fohw.read_record(path, dt="Ts").dt == 0.5
+
+
+def test_a_header_naming_a_column_twice_is_refused(tmp_path):
+    """Case 12: `u,u,y` silently took the first u."""
+    with pytest.raises(fohw.DataFileError, match="header on line 1 names 'u' twice \\(columns 0 "
+                       "and 1\\)"):
+        fohw.read_record(write(tmp_path, "u,u,y\n1,2,3\n4,5,6\n"))
+
+
+@pytest.mark.parametrize("text, message", [
+    # case 19: each is blamed on its own line, with its own diagnosis
+    ("u,y\n" + "1,2\n" * 4 + "0.5,1,234.5\n" + "1,2\n" * 5,
+     "line 6 has 3 field\\(s\\) but the header on line 1 has 2: an extra field .*\\(1,234.5"),
+    ("u,y\n" + "1,2\n" * 9 + "1,2,3\n" + "1,2\n" * 3, "line 11 has 3 field\\(s\\) but the header"),
+    ("1,2\n" * 9 + "1,2,3\n", "line 10 has 3 field\\(s\\) but line 1 \\(the first data line\\) has 2"),
+    ("u,y\n" + "1,2\n" * 6 + "7\n" + "1,2\n" * 3, "line 8 has 1 field\\(s\\) but the header on "
+     "line 1 has 2: a missing field"),
+    ("u y\n" + "1 2\n" * 6 + "1 x\n", "line 8: 'x' is not a number \\(column 'y'\\)"),
+])
+def test_a_ragged_or_bad_row_is_blamed_on_its_own_line(tmp_path, text, message):
+    with pytest.raises(fohw.DataFileError, match=message):
+        read_table(write(tmp_path, text))
+
+
+def test_the_line_reader_streams_the_file(tmp_path):
+    """Case 19: the fallback reader holds numbers, not the file's lines (the old one kept every
+    line as bytes, then as lists of str): reading 200 000 rows with one comment in the data
+    allocates little more than the numbers."""
+    import tracemalloc
+
+    n = 200_000
+    path = tmp_path / "big.csv"
+    with open(path, "w") as fh:
+        fh.write("u,y\n")
+        fh.writelines(f"{k * 0.001!r},{k * 0.002!r}\n" for k in range(n // 2))
+        fh.write("# a comment inside the data\n")
+        fh.writelines(f"{k * 0.001!r},{k * 0.002!r}\n" for k in range(n // 2))
+    tracemalloc.start()
+    table = read_table(path)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert table.data.shape == (n, 2)
+    numbers = table.data.nbytes
+    assert peak < 4 * numbers + 2**20, (peak, numbers)      # the old reader: ~ 40 x the numbers
+
+
+@pytest.mark.parametrize("text", ['"u","y"\n"0.47","-0.02"\n"0.5","0.1"\n',
+                                  "'u';'y'\n'0.47';'-0.02'\n'0.5';'0.1'\n",
+                                  '"u","y"\n0.47,-0.02\n"0.5",0.1\n'])
+def test_quoted_fields_are_read(tmp_path, text):
+    """Case 20: every field quoted used to be "line 2 looks like a second header line"."""
+    rec = fohw.read_record(write(tmp_path, text))
+    np.testing.assert_array_equal(rec.u, [0.47, 0.5])
+    np.testing.assert_array_equal(rec.y, [-0.02, 0.1])
+
+
+def test_decimal_comma_on_a_headerless_comma_file_names_no_header(tmp_path):
+    """Case 20: a header-less comma CSV read with decimal=',' called its first line a header."""
+    path = write(tmp_path, "0.5,1.25\n0.25,0.5\n")
+    with pytest.raises(fohw.DataFileError) as info:
+        fohw.read_record(path, decimal=",")
+    assert "line 1: '0.5,1.25' holds numbers separated by commas" in str(info.value)
+    assert "header" not in str(info.value).split("d.csv")[1]
+
+
+def test_a_header_separated_otherwise_than_the_data_is_refused(tmp_path):
+    """Case 20: `u,y` above `;` data was "line 2 looks like a second header line"."""
+    with pytest.raises(fohw.DataFileError, match="line 2 is separated by ';' but the header on "
+                       "line 1 by ','"):
+        fohw.read_record(write(tmp_path, "u,y\n1;2\n3;4\n"))

@@ -6,7 +6,9 @@ the discrete fractional-order Hammerstein–Wiener model and its simulator, the 
 matrix, and the paper's estimators.
 """
 
-from . import datasets
+# _startup first ("_" sorts first): for the `fohw` command only, Ctrl-C while importing is one
+# line and status 130.
+from . import _startup, datasets  # noqa: F401
 from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test

@@ -12,16 +12,25 @@
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
   [--output FILE]`` — simulate a saved model (``fohw.save_model``), or the result of
   ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an input.
+* ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
+  ``robot_arm``) or a simulated one (``paper_example [--samples N] [--seed S]``) as a file to try
+  the commands on; without NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
+  DATA reads the shipped file directly.
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
   ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
   factor on r that is not in the paper; default 1, the paper as printed).
 
 Usage errors, bad input and operating-system errors (permissions, a folder given as a file)
-print one line ``fohw: error: …`` and exit with status 2; Ctrl-C prints one line and exits with
-status 130. Output paths (``--save``, ``--plot``, ``--csv``, ``--output``, ``--outdir``) are
-checked before the run. Results, models, tables and outputs (``--save``, ``--csv``,
-``--output``) are written atomically: a failed or interrupted save leaves an existing file as it
-was (figures and the files of ``reproduce`` are written directly).
+print one line ``fohw: error: …`` and exit with status 2, and so does a command that fitted or
+selected nothing (every ``select`` candidate failed, an ``identify`` fit that FAILED); Ctrl-C,
+also while fohw is still importing, prints one line and exits with status 130. Results go to
+stdout; short stage messages (``fohw: fitting 12 candidates …``, ``fohw: done in 40.2 s``) go to
+stderr, terminal or not (``--quiet`` turns them off; progress bars are for terminals only).
+Output paths (``--save``, ``--plot``, ``--csv``, ``--output``, ``--out``, ``--outdir``) are
+checked before the run. Results, models, tables, outputs and figures (``--save``, ``--csv``,
+``--output``, ``--plot``, the figures of ``reproduce``) are written atomically: a failed or
+interrupted save, or a full disk, leaves an existing file as it was (the tables of
+``reproduce`` are written directly).
 """
 
 from __future__ import annotations
@@ -32,6 +41,9 @@ import os
 import sys
 
 from . import __version__
+from .io.files import save_figure
+
+_DATA_NAMES = ("cascaded_tanks", "robot_arm", "paper_example")
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -57,6 +69,20 @@ def _progress(message):
     progress_bar(None, "fohw").write(message)
 
 
+def _stage(args, message):
+    """A short stage message on stderr, terminal or not (``--quiet`` turns it off).
+
+    Long runs (numba compiling on a first run, a selection over many candidates) used to be
+    silent unless stderr was a terminal; stdout stays for the results.
+    """
+    if not getattr(args, "quiet", False):
+        print(f"fohw: {message}", file=sys.stderr, flush=True)
+
+
+def _duration(seconds):
+    return f"{seconds:.1f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
+
+
 def read_table(path, decimal="."):
     """Read a numeric table with :func:`fohw.io.text.read_table`.
 
@@ -78,6 +104,7 @@ def read_table(path, decimal="."):
     from .io.text import read_table as parse
     from .io.text import sampling_time
 
+    path = _data_path(path)
     start = time.perf_counter()
     _progress(f"reading {path} ...")
     table = parse(path, decimal=decimal)
@@ -85,6 +112,18 @@ def read_table(path, decimal="."):
               f"{time.perf_counter() - start:.1f} s" + (f" ({'; '.join(table.skipped)})"
                                                          if table.skipped else ""))
     return table.data, table.names, sampling_time(table)
+
+
+def _data_path(path):
+    """``@cascaded_tanks`` / ``@robot_arm``: the file shipped with fohw; anything else as given."""
+    if isinstance(path, str) and path.startswith("@") and not os.path.exists(path):
+        from .datasets import SHIPPED, shipped_file
+
+        if path[1:] not in SHIPPED:
+            raise UsageError(f"{path!r}: no record of that name ships with fohw; use one of "
+                             f"{', '.join('@' + n for n in SHIPPED)} (see `fohw data`).")
+        return shipped_file(path[1:])
+    return path
 
 
 def _pick_columns(data, names, spec, count, path, flag="--columns"):
@@ -213,11 +252,39 @@ def _int_list(text):
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
             from None
+    if any(v < 1 for v in values):
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 1; got {text!r}")
     return values
 
 
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1; got {value}")
+    return value
+
+
 def _orders_list(text):
-    return [0 if v.strip() == "0" else v.strip() for v in text.split(",")]
+    """Classes of orders: the presets by name, a number as a fixed order (0, 0.5, 1, 2.5)."""
+    from .model.orders import PRESETS
+
+    out = []
+    for v in (v.strip() for v in text.split(",")):
+        if v in PRESETS:
+            out.append(v)
+            continue
+        try:
+            number = float(v)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"each entry is one of {', '.join(PRESETS)} or a number (a fixed order, e.g. 0 "
+                f"or 0.5); got {v!r}") from None
+        out.append(int(number) if number.is_integer() and "." not in v and "e" not in v.lower()
+                   else number)
+    return out
 
 
 def _validation_arg(text):
@@ -275,6 +342,8 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--plot", help="write a figure of the free-run simulation and the one-step "
                      "prediction (PNG) to this file")
     ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
+    ide.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr "
+                     "(errors and warnings still)")
 
     sel = sub.add_parser("select", help="choose a structure by free-run simulation on a "
                          "held-back part (fohw.select_structure)")
@@ -300,10 +369,11 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("--dt", type=float, default=None,
                      help="sampling time (default: the file's Ts, else 1)")
     sel.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
-    sel.add_argument("--top", type=int, default=10, help="rows to print (default 10)")
+    sel.add_argument("--top", type=_positive_int, default=10, help="rows to print (default 10)")
     sel.add_argument("--csv", help="write every row to this CSV file")
     sel.add_argument("--plot", help="write the scores (PNG) to this file")
     sel.add_argument("--save", help="save the refitted winner as JSON (fohw.load_result)")
+    sel.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr")
 
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
     sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model, or "
@@ -315,6 +385,15 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--noise-std", type=float, default=0.0)
     sim.add_argument("--seed", type=int, default=None)
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
+    sim.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr")
+
+    dat = sub.add_parser("data", help="write a record shipped with fohw (or a simulated one) "
+                         "to a file, to try the commands on; without NAME, list them")
+    dat.add_argument("name", nargs="?", choices=_DATA_NAMES, help="the record")
+    dat.add_argument("--out", help="the file to write (default: stdout)")
+    dat.add_argument("--samples", type=_positive_int, default=2000,
+                     help="paper_example: number of samples (default 2000)")
+    dat.add_argument("--seed", type=int, default=0, help="paper_example: seed (default 0)")
 
     rep = sub.add_parser("reproduce", help="reproduce the paper's tables and figures")
     rep.add_argument("what", choices=sorted(list(_REPRODUCE) + ["robot-arm", "accuracy",
@@ -358,6 +437,7 @@ def _identify(args):
     from . import identify
     from .analysis.validation import compare
     from .exceptions import FohwError
+    from .results import Status
 
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
@@ -371,7 +451,7 @@ def _identify(args):
             raise UsageError(f"option {name!r} given twice.")
         options[name] = value
     start = time.perf_counter()
-    _progress(f"identifying with {args.method} on {u.shape[0]} samples ...")
+    _stage(args, f"identifying with {args.method} on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
@@ -385,6 +465,7 @@ def _identify(args):
                 check = compare(res, u, y)
             except FohwError as exc:        # e.g. a constant output: no fit index
                 warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
+    _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
         print(f"fohw: warning: {message}", file=sys.stderr)
     if args.json:
@@ -401,6 +482,9 @@ def _identify(args):
     else:
         print(res.summary())
         print(_fit_text(check))
+    if res.status == Status.FAILED:
+        raise UsageError(f"the fit FAILED ({res.message.rstrip('.')}); nothing was saved or "
+                         "plotted (the estimates above are the optimiser's last point).")
     if args.save:
         from .io.jsonio import save_result
 
@@ -412,7 +496,7 @@ def _identify(args):
                              "above); no figure written.")
         axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
                           "one-step prediction", fontsize=10)
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0
 
 
@@ -441,6 +525,7 @@ def _fit_text(check):
 
 
 def _select(args):
+    import time
     import warnings
     from concurrent.futures import ProcessPoolExecutor
 
@@ -448,6 +533,8 @@ def _select(args):
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
+    if args.top < 1:
+        raise UsageError(f"--top must be >= 1; got {args.top}.")
     _check_file_out(args.save, "--save", [args.data])
     _check_file_out(args.csv, "--csv", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
@@ -460,6 +547,9 @@ def _select(args):
     candidates = expand_candidates(grid)
     if args.nb is None:                 # nb = na
         candidates = [dict(c, nb=c["na"]) for c in candidates]
+    start = time.perf_counter()
+    _stage(args, f"fitting {len(candidates)} candidate{'s' * (len(candidates) != 1)} "
+           f"({args.method}) on {u.shape[0]} samples ...")
     pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -472,12 +562,26 @@ def _select(args):
     finally:
         if pool is not None:
             pool.shutdown()
+    _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
         print(f"fohw: warning: {message}", file=sys.stderr)
     print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
     print(sel.to_markdown(top=args.top))
     if sel.best is None:
         print("no candidate simulated; see the reasons above.")
+        if args.csv:                    # the reasons, for the record
+            sel.to_csv(args.csv)
+        failed = [r for r in sel.rows if r["status"] != "ok"]
+        n = len(sel.rows)
+        what = ("the winner could not be refitted" if len(failed) < n else
+                "the only candidate failed" if n == 1 else f"all {n} candidates failed")
+        first = ""
+        if failed and failed[0].get("reason"):
+            reason = str(failed[0]["reason"]).rstrip(".")
+            first = f" ({'the first: ' if n > 1 else ''}{reason[:200]}" \
+                    f"{' ...' if len(reason) > 200 else ''})"
+        raise UsageError(f"no model selected: {what}{first}; every reason is in the table on "
+                         "stdout, and nothing was saved.")
     else:
         print(f"best: {sel.best_row['candidate']} (held-back fit {sel.best_row['fit']:.1f} %), "
               "refitted on all the data:")
@@ -490,7 +594,7 @@ def _select(args):
         sel.to_csv(args.csv)
     if args.plot:
         fig, _ = sel.plot()
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0
 
 
@@ -509,6 +613,7 @@ def _load_model_or_result(path):
 
 
 def _simulate(args):
+    import time
     import warnings
 
     import numpy as np
@@ -519,6 +624,8 @@ def _simulate(args):
     kind, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.input, _decimal(args))
     (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    start = time.perf_counter()
+    _stage(args, f"simulating {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():
             warnings.simplefilter("always", category)
@@ -527,6 +634,7 @@ def _simulate(args):
             y = loaded.simulate(u, noise=noise)
         else:
             y = simulate(loaded, u, noise_std=args.noise_std, random_state=args.seed)
+    _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)
     text = "\n".join(repr(float(v)) for v in y) + "\n"
@@ -537,6 +645,34 @@ def _simulate(args):
     else:
         sys.stdout.write(text)
     return int(not np.all(np.isfinite(y)))
+
+
+def _data(args):
+    """``fohw data``: list the records, or write one to ``--out`` (default stdout)."""
+    from .datasets import SHIPPED, paper_example, shipped_file
+
+    if args.name is None:
+        for name, (filename, _, what) in SHIPPED.items():
+            print(f"{name:15s} {filename}: {what}")
+        print(f"{'paper_example':15s} simulated (Section 6.1, Eq. 57): columns u, y; --samples N "
+              "(default 2000), --seed S")
+        print("write one with `fohw data NAME --out FILE`, or read it in place as @NAME "
+              "(e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
+        return 0
+    _check_file_out(args.out, "--out")
+    if args.name == "paper_example":
+        d = paper_example(args.samples, random_state=args.seed)
+        text = "u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(d.u, d.y))
+    else:
+        with open(shipped_file(args.name), encoding="utf-8") as fh:
+            text = fh.read()
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        from .io.files import write_text
+
+        write_text(text, args.out)
+    return 0
 
 
 def _reproduce(args):
@@ -570,6 +706,17 @@ def _reproduce(args):
 
 def main(argv=None) -> int:
     """Run the ``fohw`` command; return its exit status."""
+    from ._startup import release
+
+    try:
+        release()                   # Ctrl-C raises KeyboardInterrupt again (see fohw._startup)
+        return _run(argv)
+    except KeyboardInterrupt:        # Ctrl-C: files being saved are written atomically
+        print("fohw: interrupted; no file was left half-written.", file=sys.stderr)
+        return 130
+
+
+def _run(argv):
     from .exceptions import FohwError
 
     parser = build_parser()
@@ -578,7 +725,7 @@ def main(argv=None) -> int:
         parser.print_help()
         return 0
     handler = {"identify": _identify, "select": _select, "simulate": _simulate,
-               "reproduce": _reproduce}
+               "data": _data, "reproduce": _reproduce}
     try:
         return handler[args.command](args)
     except (UsageError, FohwError, FileNotFoundError) as exc:
@@ -593,9 +740,6 @@ def main(argv=None) -> int:
         where = f" ({exc.filename})" if exc.filename else ""
         print(f"fohw: error: {exc.strerror or exc}{where}.", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:        # Ctrl-C: files being saved are written atomically
-        print("fohw: interrupted; no file was left half-written.", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

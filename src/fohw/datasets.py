@@ -20,7 +20,7 @@ from .model.system import HammersteinWiener
 from .record import Benchmark, Record
 
 __all__ = ["SimulatedData", "paper_model", "paper_example", "load_daisy",
-           "robot_arm", "cascaded_tanks"]
+           "robot_arm", "cascaded_tanks", "SHIPPED", "shipped_file"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -214,6 +214,50 @@ CASCADED_TANKS_SOURCE = ("M. Schoukens, P. Mattsson, T. Wigren, J.-P. Noel, 'Cas
                          "Nonlinear System Identification Benchmarks, Brussels, 2016; M. "
                          "Schoukens, J.-P. Noel, 'Three benchmarks addressing open challenges "
                          "in nonlinear system identification', IFAC World Congress, 2017.")
+
+#: The record files shipped with fohw, by the name ``fohw data NAME`` and ``@NAME`` use:
+#: ``{name: (file name, sha256, what it holds)}``.
+SHIPPED = {
+    "cascaded_tanks": (CASCADED_TANKS_FILENAME, CASCADED_TANKS_SHA256,
+                       "the cascaded-tanks benchmark: columns uEst, uVal, yEst, yVal (volts) and "
+                       "Ts = 4 s given once; estimate on uEst,yEst, validate on uVal,yVal"),
+    "robot_arm": (ROBOT_ARM_FILENAME, ROBOT_ARM_SHA256,
+                  "the DaISy 96-009 flexible robot arm: two whitespace columns, reaction torque "
+                  "(input) and arm acceleration (output), 1024 samples"),
+}
+
+
+def shipped_file(name):
+    """Path of a record file shipped with fohw (``SHIPPED``), its checksum verified.
+
+    Parameters
+    ----------
+    name : {"cascaded_tanks", "robot_arm"}
+
+    Returns
+    -------
+    str
+        The path inside the installed package (read it, do not write to it).
+
+    Raises
+    ------
+    ParameterError
+        ``name`` is not one of ``SHIPPED``.
+    DataFileError
+        The installed file's checksum is wrong.
+
+    Examples
+    --------
+    >>> import fohw
+    >>> fohw.read_record(fohw.datasets.shipped_file("cascaded_tanks"), u="uEst", y="yEst").dt
+    4.0
+    """
+    if not isinstance(name, str) or name not in SHIPPED:
+        raise ParameterError(f"`name` must be one of {', '.join(SHIPPED)} (the records shipped "
+                             f"with fohw); got {name!r}.")
+    filename, sha256, _ = SHIPPED[name]
+    return _packaged(filename, sha256)
+
 
 
 def _sha256(path):

@@ -7,22 +7,33 @@ guess:
 * separators: semicolons, commas or whitespace, whichever the first line (header or data) uses;
   a trailing separator (an empty last field on every line) is ignored; decimal commas
   (``0,5``) on request (``decimal=","``);
-* a UTF-8 byte-order mark; blank lines; comment lines starting with ``#`` or ``%``;
+* a UTF-8 byte-order mark; blank lines; comment lines starting with ``#`` or ``%``; fields in
+  double or single quotes (``"u","y"`` / ``"0.47","-0.02"``);
 * a header line of names, only if **none** of its fields is a number (a first row such as
   ``0x10 1`` or ``0.5 0.3.1`` is an error at line 1, never a header that drops a sample);
 * a column given once: a value on the first data line and nothing below (the cascaded-tanks
   file gives ``Ts`` so); it is returned as a scalar, not as a signal;
-* anything else that is not a number, a missing value (``NA``, ``nan``, an empty field, ...)
-  or a second header line is an error naming the line and the column: fohw fills no gaps.
+* anything else that is not a number, a missing value (``NA``, ``nan``, an empty field, ...),
+  a row with more fields than the header or the first data line (an extra field, ``1,234.5``
+  in a comma file), a row with fewer, a second header line, a header that names a column twice,
+  or data separated otherwise than the header (``u,y`` above ``1;2``) is an error naming the
+  line (and the column): fohw fills no gaps.
+
+A file is read from a path (``str``, ``bytes`` or :class:`os.PathLike`) or from a file object
+(text or binary, e.g. :class:`io.StringIO`, an open file). A file on disk that changes while it
+is read (its size or modification time differ before and after), or whose last line has no line
+end (a file cut while it was written, or still being written), is refused: fohw does not use a
+record that may be incomplete.
 
 Clean files are parsed by :func:`numpy.loadtxt` (5 million rows in seconds); the rest, and every
-error, by a line-by-line reader.
+error, by a line-by-line reader that streams the file (it holds the numbers, never the lines).
 """
 
 from __future__ import annotations
 
 import io
 import os
+from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -94,14 +105,21 @@ def _delimiter(text, decimal):
 
 
 def _split(text, delimiter):
-    return [f.strip() for f in (text.split(delimiter) if delimiter else text.split())]
+    return [_unquote(f.strip()) for f in (text.split(delimiter) if delimiter else text.split())]
+
+
+def _unquote(field):
+    """A field without the double or single quotes around it (``"0.47"`` -> ``0.47``)."""
+    if len(field) >= 2 and field[0] == field[-1] and field[0] in "\"'":
+        return field[1:-1].strip()
+    return field
 
 
 def _header(fields, decimal):
     """The column names if no field of the line is a number (a header line), else None."""
     if any(parse_number(_decimal(f, decimal)) is not None for f in fields if f):
         return None
-    return [f.strip('"').strip("'") for f in fields]
+    return list(fields)
 
 
 def _comma_separated_header(text, delimiter, decimal):
@@ -114,6 +132,11 @@ def _comma_separated_header(text, delimiter, decimal):
 
 
 def _comma_header_error(path, lineno, text):
+    if all(parse_number(part.strip()) is not None for part in text.split(",")):
+        return DataFileError(f"{path}: line {lineno}: {text!r} holds numbers separated by commas, "
+                             "but decimal=',' makes commas decimal marks (1,5 = 1.5), so it "
+                             "cannot be read: read a comma-separated file with decimal='.', or "
+                             "separate the columns by ';' or whitespace.")
     return DataFileError(f"{path}: line {lineno}: the header {text!r} is separated by commas, "
                          "but decimal=',' makes commas decimal marks (1,5 = 1.5), so its rows "
                          "would be misread; with decimal commas separate the columns by ';' or "
@@ -128,12 +151,64 @@ def _decimal(field, decimal):
     return field.replace(",", ".") if decimal == "," else field
 
 
+class _Source:
+    """Where a table comes from: a file on disk, or the content of a file object.
+
+    ``name`` is what messages call it; :meth:`open` gives a fresh binary stream each time.
+    """
+
+    def __init__(self, obj):
+        self.path, self.content = None, None
+        if isinstance(obj, _Source):
+            self.path, self.content, self.name = obj.path, obj.content, obj.name
+            return
+        if isinstance(obj, (str, bytes, os.PathLike)):
+            path = os.fspath(obj)
+            self.path = self.name = os.fsdecode(path) if isinstance(path, bytes) else path
+            return
+        if callable(getattr(obj, "read", None)):
+            content = obj.read()
+            if isinstance(content, str):
+                content = content.encode("utf-8")
+            if not isinstance(content, bytes):
+                raise ParameterError(f"`path`: the file object's read() returned "
+                                     f"{type(content).__name__}, not text or bytes.")
+            self.content = content
+            name = getattr(obj, "name", None)
+            self.name = os.fsdecode(name) if isinstance(name, (str, bytes)) else \
+                f"<{type(obj).__name__}>"
+            return
+        raise ParameterError("`path` must be a file path (str, bytes or os.PathLike) or a file "
+                             "object with read() (an open file, io.StringIO, io.BytesIO); got "
+                             f"{type(obj).__name__}.")
+
+    def open(self):
+        return open(self.path, "rb") if self.path is not None else io.BytesIO(self.content)
+
+    def snapshot(self):
+        """``(size, modification time)`` of a file on disk (None for a file object's content)."""
+        if self.path is None:
+            return None
+        st = os.stat(self.path)
+        return st.st_size, st.st_mtime_ns
+
+    def last_byte(self):
+        with self.open() as fh:
+            fh.seek(0, io.SEEK_END)
+            if fh.tell() == 0:
+                return b""
+            fh.seek(-1, io.SEEK_END)
+            return fh.read(1)
+
+
 def read_table(path, *, decimal=".") -> Table:
     """Parse a numeric text table (see the module notes for what is accepted).
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str, bytes, os.PathLike or file object
+        The file, or an object with ``read()`` giving its text or bytes (an open file,
+        :class:`io.StringIO`).
     decimal : {".", ","}
         The decimal mark. With ``","`` (``0,5`` for one half) the columns must be separated by
         ``;`` or whitespace.
@@ -148,11 +223,15 @@ def read_table(path, *, decimal=".") -> Table:
     ------
     FileNotFoundError
         No such file.
+    ParameterError
+        ``path`` is neither a path nor a file object.
     DataFileError
         A directory, an unreadable file, text that is not UTF-8, a field that is not a number
         (with a hint when it looks like a decimal comma), a missing value (``NA``, empty, ...)
-        named by line and column, a second header line, a header separated by commas while
-        ``decimal=","``, a row with another number of fields, a non-finite value, or no data.
+        named by line and column, a row with more or fewer fields than the others, a second
+        header line, a header naming a column twice, a header separated by commas while
+        ``decimal=","``, a non-finite value, no data, or a file that changed while it was read
+        or whose last line has no line end (it may have been cut).
 
     Notes
     -----
@@ -162,26 +241,82 @@ def read_table(path, *, decimal=".") -> Table:
     and names (``tests/test_reliability.py``); only the line reader counts blank lines inside
     the data in ``Table.skipped``.
     """
-    path = os.fspath(path)
     if decimal not in (".", ","):
         raise ParameterError(f"`decimal` must be '.' or ','; got {decimal!r}.")
-    if os.path.isdir(path):
-        raise DataFileError(f"{path!r} is a directory, not a data file.")
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"data file not found: {path!r}")
+    src = _Source(path)
+    if src.path is not None:
+        if os.path.isdir(src.path):
+            raise DataFileError(f"{src.path!r} is a directory, not a data file.")
+        if not os.path.exists(src.path):
+            raise FileNotFoundError(f"data file not found: {src.path!r}")
     try:
-        table = _read_fast(path, decimal)
+        before = src.snapshot()
+        last = src.last_byte() if src.path is not None else b"\n"
+        if last not in (b"\n", b"\r", b""):
+            raise DataFileError(f"{src.name}: the last line has no line end, so it may have been "
+                                "cut (a file truncated, or still being written); fohw does not "
+                                "use a row that may be incomplete. If the file is complete, end "
+                                "its last line with a newline.")
+        table = _read_fast(src, decimal)
+        if table is None:
+            table = _read_lines(src, decimal)
+        after = src.snapshot()
     except OSError as exc:
-        raise DataFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
-    return table if table is not None else _read_lines(path, decimal)
+        raise DataFileError(f"{src.name}: cannot be read ({exc.strerror or exc}).") from None
+    if before != after:
+        raise DataFileError(f"{src.name} changed while it was read (size {before[0]} -> "
+                            f"{after[0]} bytes, modification time "
+                            f"{'changed' if before[1] != after[1] else 'unchanged'}); fohw does "
+                            "not use a record that may be incomplete: read it again once it is "
+                            "complete.")
+    return table
 
 
-def _head(path, decimal):
+def _lines(fh):
+    """``(line number, raw bytes)`` of a binary stream, one line at a time.
+
+    Lines end with ``\\n``, ``\\r\\n`` or ``\\r``.
+    """
+    lineno = 0
+    for chunk in fh:
+        for raw in chunk.splitlines() or [b""]:
+            lineno += 1
+            yield lineno, raw
+
+
+def _decode(src, lineno, raw):
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise DataFileError(f"{src.name}: line {lineno} is not UTF-8 text.") from None
+    return text.lstrip("\ufeff") if lineno == 1 else text           # a byte-order mark
+
+
+def _check_names(src, lineno, names):
+    seen = {}
+    for j, n in enumerate(names):
+        if n and n in seen:
+            raise DataFileError(f"{src.name}: the header on line {lineno} names {n!r} twice "
+                                f"(columns {seen[n]} and {j}); a column name must say which "
+                                "column it is: rename one.")
+        seen.setdefault(n, j)
+
+
+def _check_separator(src, lineno, text, delimiter, header_line, decimal):
+    """The first data line must be separated as the header is (``u,y`` above ``1;2`` is not)."""
+    found = _delimiter(text, decimal)
+    if delimiter in (";", ",") and found in (";", ",") and found != delimiter:
+        raise DataFileError(f"{src.name}: line {lineno} is separated by {found!r} but the header "
+                            f"on line {header_line} by {delimiter!r}; use one separator in the "
+                            "whole file.")
+
+
+def _head(src, decimal):
     """The separator, the header and its line number, from the first lines of the file."""
     delimiter, names, header_line = "unset", None, 0
-    with open(path, encoding="utf-8-sig") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            line = line.strip()
+    with src.open() as fh:
+        for lineno, raw in _lines(fh):
+            line = _decode(src, lineno, raw).strip()
             if not line or line[0] in "#%":
                 continue
             if delimiter == "unset":
@@ -192,27 +327,32 @@ def _head(path, decimal):
                     return None                  # the line reader names the error
                 names, header_line = header, lineno
                 continue
+            if "'" in line or '"' in line:
+                return None                      # quoted fields: the line reader
             return delimiter, names, header_line
     return None
 
 
-def _read_fast(path, decimal):
+def _read_fast(src, decimal):
     """numpy.loadtxt on a clean file; None when the file needs the line reader.
 
     The file is read from disk by loadtxt's compiled reader (never held as text, except with
-    decimal commas); a comment mark, a missing value, a ragged row, a value given once, text
-    that is not UTF-8 or anything else unusual makes loadtxt fail, and the line reader then
-    reads the file (and names the line of any error).
+    decimal commas or a file object); a comment mark, a missing value, a ragged row, a value
+    given once, quotes, text that is not UTF-8 or anything else unusual makes loadtxt fail, and
+    the line reader then reads the file (and names the line of any error).
     """
     try:
-        head = _head(path, decimal)
+        head = _head(src, decimal)
         if head is None:                         # no data line, or a header the line reader refuses
             return None
         delimiter, names, header_line = head
-        source = path
-        if decimal == ",":
-            with open(path, encoding="utf-8-sig") as fh:
-                source = io.StringIO(fh.read().replace(",", "."))
+        if names is not None and len(set(n for n in names if n)) < len([n for n in names if n]):
+            return None                          # a name twice: the line reader names it
+        source = src.path
+        if decimal == "," or src.path is None:
+            with src.open() as fh:
+                text = fh.read().decode("utf-8-sig")
+            source = io.StringIO(text.replace(",", ".") if decimal == "," else text)
         data = np.loadtxt(source, delimiter=delimiter, skiprows=header_line, ndmin=2,
                           dtype=np.float64, comments=None, encoding="utf-8-sig")
     except (ValueError, UnicodeDecodeError):
@@ -223,7 +363,7 @@ def _read_fast(path, decimal):
     skipped = [_header_note(header_line, names)] if names else []
     if header_line > 1:
         skipped.append(f"{header_line - 1} comment or blank line(s)")
-    return Table(data=data, names=names, scalars={}, path=path, skipped=skipped)
+    return Table(data=data, names=names, scalars={}, path=src.name, skipped=skipped)
 
 
 def _field_error(path, lineno, value, column, decimal):
@@ -241,87 +381,162 @@ def _field_error(path, lineno, value, column, decimal):
     return DataFileError(f"{path}: {where}{value!r} is not a number{col}.{hint}")
 
 
-def _read_lines(path, decimal):
-    """The line-by-line reader: any layout the module notes allow, and every error by line."""
-    with open(path, "rb") as fh:
-        raw_lines = fh.read().splitlines()
-    names, rows, linenos, delimiter, header_line = None, [], [], "unset", 0
-    n_comments = 0
-    for lineno, raw in enumerate(raw_lines, start=1):
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError:
-            raise DataFileError(f"{path}: line {lineno} is not UTF-8 text.") from None
-        if lineno == 1:
-            text = text.lstrip("\ufeff")                 # a byte-order mark
-        text = text.strip()
-        if not text or text[0] in "#%":
-            n_comments += 1
-            continue
-        if delimiter == "unset":
-            delimiter = _delimiter(text, decimal)
-        fields = _split(text, delimiter)
-        if not rows and _header(fields, decimal) is not None:
-            if names is None:
-                if _comma_separated_header(text, delimiter, decimal):
-                    raise _comma_header_error(path, lineno, text)
-                names, header_line = _header(fields, decimal), lineno
+def _count_error(path, lineno, n, width, where, delimiter, decimal):
+    """A row with another number of fields than the header or the first data line."""
+    more = n > width
+    hint = ""
+    if more and delimiter == "," and decimal == ".":
+        hint = (" A comma inside a number (1,234.5 or a decimal comma) splits it in two: write "
+                "1234.5, or separate the columns by ';' with decimal=',' (fohw: "
+                "--decimal-comma).")
+    return DataFileError(f"{path}: line {lineno} has {n} field(s) but {where} has {width}: "
+                         f"{'an extra field' if more else 'a missing field'} (a ragged row)."
+                         f"{hint}")
+
+
+def _read_lines(src, decimal):
+    """The line-by-line reader: any layout the module notes allow, and every error by line.
+
+    It streams the file and keeps the numbers (one array of floats per column), never the
+    lines, so a 5-million-row file with one bad line costs the numbers' memory, not the text's.
+    """
+    src = _Source(src)
+    names, header_line, delimiter, n_comments = None, 0, "unset", 0
+    width, first_line, first, cols = None, 0, [], []
+    where = ""
+    n_rows = 0
+    empty = {}             # column -> (line, fields on that line) of its first empty cell below row 0
+    later = set()          # columns with a value below the first data line
+    with src.open() as fh:
+        for lineno, raw in _lines(fh):
+            text = _decode(src, lineno, raw).strip()
+            if not text or text[0] in "#%":
+                n_comments += 1
                 continue
-            # a second line without numbers: decimal commas, or a second header
-            commas = [f for f in fields if parse_number(f.replace(",", ".")) is not None]
-            if commas and decimal == ".":
-                raise _field_error(path, lineno, commas[0], fields.index(commas[0]), decimal)
-            if not all(f.lower() in MISSING for f in fields):
-                raise DataFileError(f"{path}: line {lineno} looks like a second header line "
-                                    f"(no field is a number) after the header on line "
-                                    f"{header_line}; fohw reads one header line: start the "
-                                    "others with '#'.")
-        rows.append(fields)
-        linenos.append(lineno)
-    if not rows:
-        raise DataFileError(f"{path}: no data lines found.")
-    width = max(len(r) for r in rows)
-    if names is not None:
-        width = max(width, len(names))
-    # trailing separators: drop columns that are empty on every line (and unnamed)
-    cells = [r + [""] * (width - len(r)) for r in rows]
-    keep = [j for j in range(width)
-            if any(c[j] for c in cells) or (names is not None and j < len(names) and names[j])]
+            if delimiter == "unset":
+                delimiter = _delimiter(text, decimal)
+            fields = _split(text, delimiter)
+            if n_rows == 0 and _header(fields, decimal) is not None:
+                if names is None:
+                    if _comma_separated_header(text, delimiter, decimal):
+                        raise _comma_header_error(src.name, lineno, text)
+                    names, header_line = _header(fields, decimal), lineno
+                    _check_names(src, lineno, names)
+                    continue
+                _check_separator(src, lineno, text, delimiter, header_line, decimal)
+                # a second line without numbers: decimal commas, or a second header
+                commas = [f for f in fields if parse_number(f.replace(",", ".")) is not None]
+                if commas and decimal == ".":
+                    raise _field_error(src.name, lineno, commas[0], fields.index(commas[0]),
+                                       decimal)
+                if not all(f.lower() in MISSING for f in fields):
+                    raise DataFileError(f"{src.name}: line {lineno} looks like a second header "
+                                        f"line (no field is a number) after the header on line "
+                                        f"{header_line}; fohw reads one header line: start the "
+                                        "others with '#'.")
+            if n_rows == 0:
+                if names is not None:
+                    _check_separator(src, lineno, text, delimiter, header_line, decimal)
+                width = max(len(fields), len(names) if names is not None else 0)
+                where = (f"the header on line {header_line}" if names is not None
+                         and len(names) >= len(fields) else f"line {lineno} (the first data line)")
+                first_line = lineno
+                cols = [array("d") for _ in range(width)]
+            elif len(fields) > width:
+                _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal, where,
+                                width, delimiter,
+                                _count_error(src.name, lineno, len(fields), width, where,
+                                             delimiter, decimal))
+            for j in range(width):
+                cell = fields[j] if j < len(fields) else ""
+                if n_rows == 0:
+                    first.append(cell)
+                if not cell:
+                    if n_rows > 0 and j not in empty:
+                        empty[j] = (lineno, len(fields))
+                        if j in later:                  # a signal column: certain now
+                            _raise_earliest(src, names, empty, later, lineno + 1, first_line,
+                                            first, decimal, where, width, delimiter, None)
+                    cols[j].append(np.nan)
+                    continue
+                x = parse_number(_decimal(cell, decimal))
+                if x is None or not np.isfinite(x):
+                    label = (names[j] if names is not None and j < len(names) and names[j]
+                             else j)
+                    error = _field_error(src.name, lineno, cell, label, decimal) if x is None \
+                        else DataFileError(
+                            f"{src.name}: line {lineno} holds a non-finite value: {cell!r} "
+                            f"(column {label!r}); fohw does not fill gaps.")
+                    if n_rows == 0:
+                        raise error
+                    later.add(j)
+                    _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal,
+                                    where, width, delimiter, error)
+                if n_rows > 0:
+                    later.add(j)
+                cols[j].append(x)
+            n_rows += 1
+    if n_rows == 0:
+        raise DataFileError(f"{src.name}: no data lines found.")
+    error = _first_empty_error(src, names, empty, later, first_line, first, decimal, where,
+                               width, delimiter, n_rows)
+    if error is not None:
+        raise error[1]
     skipped = [_header_note(header_line, names)] if names else []
     if n_comments:
         skipped.append(f"{n_comments} comment or blank line(s)")
-    if len(keep) < width:
-        skipped.append("a trailing separator")
-    if names is not None:
-        names = names + [""] * (width - len(names))
+    padded = (names + [""] * (width - len(names))) if names is not None else None
     columns, col_names, scalars = [], [], {}
-    for j in keep:
-        name = names[j] if names is not None else None
-        label = name or j
-        values = [_decimal(c[j], decimal) for c in cells]
-        filled = [i for i, v in enumerate(values) if v]
-        if not filled:
-            raise DataFileError(f"{path}: column {label!r} has a name but no values.")
-        if filled == [0] and len(values) > 1:               # given once
-            value = parse_number(values[0])
-            if value is None:
-                raise _field_error(path, linenos[0], cells[0][j], label, decimal)
-            scalars[name if name else j] = value
+    for j in range(width):
+        name = padded[j] if padded is not None else None
+        if not first[j] and j not in later:                    # empty on every line
+            if name:
+                raise DataFileError(f"{src.name}: column {name!r} has a name but no values.")
             continue
-        col = []
-        for i, v in enumerate(values):
-            x = parse_number(v)
-            if x is None:                       # an empty field included
-                raise _field_error(path, linenos[i], cells[i][j], label, decimal)
-            if not np.isfinite(x):
-                raise DataFileError(f"{path}: line {linenos[i]} holds a non-finite value: "
-                                    f"{v!r} (column {label!r}); fohw does not fill gaps.")
-            col.append(x)
-        columns.append(col)
+        if j not in later and n_rows > 1:                        # given once
+            scalars[name if name else j] = cols[j][0]
+            continue
+        columns.append(np.frombuffer(cols[j], dtype=np.float64))
         col_names.append(name)
-    data = np.array(columns, dtype=np.float64).T if columns else np.empty((len(rows), 0))
+    if any(not first[j] and j not in later and not (padded and padded[j]) for j in range(width)):
+        skipped.append("a trailing separator")
+    data = np.column_stack(columns) if columns else np.empty((n_rows, 0))
     return Table(data=data, names=col_names if names is not None else None, scalars=scalars,
-                 path=path, skipped=skipped)
+                 path=src.name, skipped=skipped)
+
+
+def _first_empty_error(src, names, empty, later, first_line, first, decimal, where, width,
+                       delimiter, n_rows):
+    """``(line, error)`` of the earliest empty cell in a column that is a signal, or None.
+
+    A column is a signal when it has a value below the first data line (or the file has one
+    data line); a column filled on the first line only is a value given once, a column empty
+    everywhere a trailing separator (or an error if it has a name).
+    """
+    found = []
+    for j in range(width):
+        if j not in later and n_rows > 1:
+            continue
+        label = names[j] if names is not None and j < len(names) and names[j] else j
+        if not first[j]:
+            found.append((first_line, _field_error(src.name, first_line, "", label, decimal)))
+        elif j in empty:
+            line, n = empty[j]
+            error = _count_error(src.name, line, n, width, where, delimiter, decimal) \
+                if n <= j else _field_error(src.name, line, "", label, decimal)
+            found.append((line, error))
+    return min(found, key=lambda e: e[0]) if found else None
+
+
+def _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal, where, width,
+                    delimiter, error):
+    """Raise ``error`` (of line ``lineno``), or an earlier one already certain (if any)."""
+    earlier = _first_empty_error(src, names, empty, later, first_line, first, decimal, where,
+                                 width, delimiter, n_rows=2)
+    if earlier is not None and earlier[0] < lineno:
+        raise earlier[1]
+    if error is not None:
+        raise error
 
 
 def sampling_time(table):
@@ -353,15 +568,17 @@ def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", outp
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The file (see :mod:`fohw.io.text` for the accepted layout).
+    path : str, bytes, os.PathLike or file object
+        The file (see :mod:`fohw.io.text` for the accepted layout), or an object with
+        ``read()`` giving its text or bytes (an open file, :class:`io.StringIO`).
     u, y : int or str, optional
         The input and output columns, by number (from 0, counting signal columns) or header
         name. Default: the columns named ``u`` and ``y`` if the header has them, else columns 0
         and 1 when the file has exactly two signal columns; with more columns they must be given
         (fohw does not guess which is the input).
     dt : float or str, optional
-        The sampling time, or the name of a column that holds it (e.g. ``"Ts"``, given once).
+        The sampling time, or the name of a column that gives it once (e.g. ``"Ts"``: a value on
+        the first data line and nothing below); a signal column is refused.
         Default: a column given once named ``Ts``, ``dt``, ``sampling_time`` or ``sample_time``
         (any case) if there is one, else ``None`` (one sample is the time unit).
     name, input_unit, output_unit, time_unit, source : str, optional
@@ -407,7 +624,12 @@ def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", outp
         if key in table.scalars:
             dt = table.scalars[key]
         elif table.names and key in table.names:
-            dt = float(table.data[0, table.names.index(key)])
+            once = [k for k in table.scalars if isinstance(k, str)]
+            raise ParameterError(f"`dt` = {key!r} names a signal column of {table.path} (a value "
+                                 "on every line), not a sampling time given once; give `dt` as a "
+                                 "number or the name of a column given once" +
+                                 (f" ({', '.join(once)})." if once else
+                                  " (the file has none)."))
         else:
             raise ParameterError(f"`dt` = {key!r} is not a column of {table.path}.")
     elif dt is None:

@@ -20,6 +20,7 @@ import numpy as np
 import fohw
 from fohw._plotting import subplots
 from fohw.analysis.montecarlo import summarise
+from fohw.io.files import save_figure
 
 
 def cube(x):
@@ -165,7 +166,7 @@ def main(argv=None):
     axes[1].set_yticklabels([])
     fig.suptitle(f"Paper's example, N = {n_main}, {n_seeds} seeds")
     fig.tight_layout()
-    fig.savefig(args.outdir / "accuracy_methods.png", dpi=120)
+    save_figure(fig, args.outdir / "accuracy_methods.png", dpi=120)
 
     fig, ax = subplots(figsize=(6, 4))
     ax.loglog(sweep, [s_sum[(n,)]["rms"] for n in sweep], "o-", label="varpro, RMS delta")
@@ -177,7 +178,7 @@ def main(argv=None):
     ax.legend()
     ax.set_title("Error against record length")
     fig.tight_layout()
-    fig.savefig(args.outdir / "accuracy_vs_n.png", dpi=120)
+    save_figure(fig, args.outdir / "accuracy_vs_n.png", dpi=120)
     print(text)
     return 0
 

@@ -14,6 +14,7 @@ from .._parallel import TaskError, run_tasks
 from .._plotting import subplots
 from ..datasets import paper_example
 from ..exceptions import FohwError, ParameterError
+from ..io.files import save_figure
 from .common import csv_text, paper_table2
 from .table2 import identify_paper_structure
 
@@ -465,9 +466,9 @@ def main(argv=None, description=None):
     (outdir / "forgetting_map.csv").write_text(csv_text(
         [dict(r, error=r["error"].replace(",", ";").replace("\n", " ")) for r in rows], columns))
     fig, _ = plot_forgetting_map(summary)
-    fig.savefig(outdir / "forgetting_map.png", dpi=120)
+    save_figure(fig, outdir / "forgetting_map.png", dpi=120)
     fig, _ = plot_forgetting_best(summary, curves, curve_step=step)
-    fig.savefig(outdir / "forgetting_best.png", dpi=120)
+    save_figure(fig, outdir / "forgetting_best.png", dpi=120)
     print(text)
     for name in ("forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                  "forgetting_best.png"):

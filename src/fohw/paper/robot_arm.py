@@ -34,6 +34,7 @@ from fohw.analysis.batch import identify_quietly
 from fohw.analysis.metrics import bic, cross_correlation_test, error_range, fit_percent, whiteness_test
 from fohw.analysis.selection import expand_candidates
 from fohw.estimators.baselines import fit_linear_output_error
+from fohw.io.files import save_figure
 from fohw.paper.common import paper_table2
 
 N_INIT = 20          # start-up samples excluded from every error measure
@@ -107,7 +108,7 @@ def show(value):
 
 def save(fig, outdir, name):
     fig.tight_layout()
-    fig.savefig(outdir / name, dpi=120)
+    save_figure(fig, outdir / name, dpi=120)
 
 
 def structure_section(u, y, fast):

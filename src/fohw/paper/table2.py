@@ -16,6 +16,7 @@ from .._plotting import subplots
 from ..analysis.batch import identify_quietly
 from ..datasets import SimulatedData, paper_example
 from ..estimators.identify import OPTIONS
+from ..io.files import save_figure
 from ..results import IdentificationResult
 from .common import STRUCTURE, csv_text, paper_table2
 
@@ -361,7 +362,7 @@ def write_outputs(runs: PaperRuns, outdir, which=OUTPUTS, checkpoints=(2000, 500
             written[name] = [outdir / "table_2.md", outdir / "table_2.csv"]
         else:
             fig, _ = _FIGURES[name](runs)
-            fig.savefig(outdir / f"{name}.png", dpi=120)
+            save_figure(fig, outdir / f"{name}.png", dpi=120)
             written[name] = [outdir / f"{name}.png"]
     return written
 
