@@ -73,30 +73,27 @@ def paper_data(seed, n_samples=10_000):
     return fohw.datasets.paper_example(n_samples, random_state=seed)
 
 
-def main(argv=None):
+METHODS = {
+    "hybrid P=1 (paper)": dict(method="hybrid", innovation_length=1),
+    "hybrid P=3 (paper)": dict(method="hybrid", innovation_length=3),
+    "hybrid P=5 (paper)": dict(method="hybrid", innovation_length=5),
+    "MI-RLS P=1": dict(method="rls", innovation_length=1),
+    "MI-RLS P=5": dict(method="rls", innovation_length=5),
+    "varpro": dict(method="varpro"),
+}
+
+
+def parse_args(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--outdir", type=Path, default=Path("results"))
     ap.add_argument("--fast", action="store_true", help="3 seeds, N = 2000, N-sweep to 4000")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--jobs", type=int, default=2)
-    args = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    n_seeds = 3 if args.fast else args.seeds
-    n_main = 2000 if args.fast else 10_000
-    sweep = [500, 1000, 2000, 4000] if args.fast else [1000, 3000, 10_000, 30_000, 100_000]
-    seeds = range(n_seeds)
-    mc = dict(n_jobs=args.jobs)
-    args.outdir.mkdir(parents=True, exist_ok=True)
-    methods = {
-        "hybrid P=1 (paper)": dict(method="hybrid", innovation_length=1),
-        "hybrid P=3 (paper)": dict(method="hybrid", innovation_length=3),
-        "hybrid P=5 (paper)": dict(method="hybrid", innovation_length=5),
-        "MI-RLS P=1": dict(method="rls", innovation_length=1),
-        "MI-RLS P=5": dict(method="rls", innovation_length=5),
-        "varpro": dict(method="varpro"),
-    }
-    rows = fohw.monte_carlo(methods, seeds=seeds, settings=[{"n_samples": n_main}],
-                            make_data=paper_data, **mc)
+    return ap.parse_args(argv)
+
+
+def methods_table(rows, n_main, n_seeds, mc):
+    """Part 1: every method on the paper's example against the CRB (markdown lines, summaries)."""
     bound = crb_for(paper_data, n_main)
     d_sum = summarise(rows, value="delta")
     a_sum = summarise(rows, value="alpha_error")
@@ -104,55 +101,57 @@ def main(argv=None):
              f"## The paper's example, N = {n_main}, {n_seeds} seeds", "",
              "| method | RMS delta | RMS delta / CRB | RMS alpha error | / CRB | median seconds |",
              "|---|---:|---:|---:|---:|---:|"]
-    for name in methods:
+    for name in METHODS:
         rd, ra = d_sum[(name,)]["rms"], a_sum[(name,)]["rms"]
         secs = np.median([r["seconds"] for r in rows if r["method"] == name])
         lines.append(f"| {name} | {rd:.4f} | {rd / bound.rms_relative_error:.2f} | {ra:.4f} | "
                      f"{ra / bound.alpha_std:.2f} | {secs:.2f} |")
     lines.append(f"| **CRB** | {bound.rms_relative_error:.4f} | 1 | {bound.alpha_std:.4f} | 1 | |")
+    return lines, bound, d_sum, a_sum
 
-    lines += ["", f"## Two further systems, varpro, N = {n_main}, {n_seeds} seeds", "",
-              "| system | RMS delta | CRB | ratio | RMS alpha error | CRB | ratio |",
-              "|---|---:|---:|---:|---:|---:|---:|"]
-    all_rows = [dict(r, system="paper") for r in rows]
+
+def systems_table(seeds, n_main, n_seeds, mc):
+    """Part 2: varpro on systems B and C against their CRBs (markdown lines, the rows)."""
+    lines = ["", f"## Two further systems, varpro, N = {n_main}, {n_seeds} seeds", "",
+             "| system | RMS delta | CRB | ratio | RMS alpha error | CRB | ratio |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    rows = []
     for name, (factory, bounds) in SYSTEMS.items():
         srows = fohw.monte_carlo({"varpro": dict(method="varpro", alpha_bounds=bounds)},
                                  seeds=seeds, settings=[{"system": name, "n_samples": n_main}],
                                  make_data=make_system_data, **mc)
-        all_rows += srows
+        rows += srows
         b = crb_for(make_system_data, n_main, system=name)
         rd = summarise(srows)[("varpro",)]["rms"]
         ra = summarise(srows, value="alpha_error")[("varpro",)]["rms"]
         lines.append(f"| {name}: {factory.__doc__} | {rd:.4f} | {b.rms_relative_error:.4f} | "
                      f"{rd / b.rms_relative_error:.2f} | {ra:.5f} | {b.alpha_std:.5f} | "
                      f"{ra / b.alpha_std:.2f} |")
+    return lines, rows
 
+
+def sweep_table(seeds, sweep, n_seeds, mc):
+    """Part 3: varpro against the record length (markdown lines, rows, summaries, bounds)."""
     sweep_rows = fohw.monte_carlo({"varpro": dict(method="varpro")}, seeds=seeds,
                                   settings=[{"n_samples": n} for n in sweep],
                                   make_data=paper_data, **mc)
-    all_rows += [dict(r, system="paper, N sweep") for r in sweep_rows]
     s_sum = summarise(sweep_rows, by=("n_samples",))
     sa_sum = summarise(sweep_rows, by=("n_samples",), value="alpha_error")
     bounds_n = {n: crb_for(paper_data, n) for n in sweep}
-    lines += ["", f"## varpro against N (paper's example, {n_seeds} seeds)", "",
-              "| N | RMS delta | CRB | ratio | RMS alpha error | CRB | ratio |",
-              "|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["", f"## varpro against N (paper's example, {n_seeds} seeds)", "",
+             "| N | RMS delta | CRB | ratio | RMS alpha error | CRB | ratio |",
+             "|---:|---:|---:|---:|---:|---:|---:|"]
     for n in sweep:
         rd, ra, b = s_sum[(n,)]["rms"], sa_sum[(n,)]["rms"], bounds_n[n]
         lines.append(f"| {n} | {rd:.4f} | {b.rms_relative_error:.4f} | "
                      f"{rd / b.rms_relative_error:.2f} | {ra:.5f} | {b.alpha_std:.5f} | "
                      f"{ra / b.alpha_std:.2f} |")
-    failures = [r for r in all_rows if r.get("error")]
-    lines += ["", f"Records that diverged: {len(failures)}. Total time {time.perf_counter() - t0:.0f} s "
-              f"with --jobs {args.jobs}."]
-    text = "\n".join(lines) + "\n"
-    (args.outdir / "accuracy.md").write_text(text)
-    keys = ["system", "n_samples", "seed", "method", "delta", "alpha", "alpha_error", "J",
-            "converged", "seconds"]
-    write_csv(args.outdir / "accuracy.csv", all_rows, keys)
+    return lines, sweep_rows, s_sum, sa_sum, bounds_n
 
+
+def plot_methods(path, bound, d_sum, a_sum, n_main, n_seeds):
     fig, axes = subplots(1, 2, figsize=(11, 4))
-    names = list(methods)
+    names = list(METHODS)
     axes[0].barh(names, [d_sum[(m,)]["rms"] for m in names], color="C0")
     axes[0].axvline(bound.rms_relative_error, color="k", ls="--", label="CRB")
     axes[0].set_xscale("log")
@@ -166,8 +165,10 @@ def main(argv=None):
     axes[1].set_yticklabels([])
     fig.suptitle(f"Paper's example, N = {n_main}, {n_seeds} seeds")
     fig.tight_layout()
-    save_figure(fig, args.outdir / "accuracy_methods.png", dpi=120)
+    save_figure(fig, path, dpi=120)
 
+
+def plot_sweep(path, sweep, s_sum, sa_sum, bounds_n):
     fig, ax = subplots(figsize=(6, 4))
     ax.loglog(sweep, [s_sum[(n,)]["rms"] for n in sweep], "o-", label="varpro, RMS delta")
     ax.loglog(sweep, [bounds_n[n].rms_relative_error for n in sweep], "k--", label="CRB")
@@ -178,7 +179,37 @@ def main(argv=None):
     ax.legend()
     ax.set_title("Error against record length")
     fig.tight_layout()
-    save_figure(fig, args.outdir / "accuracy_vs_n.png", dpi=120)
+    save_figure(fig, path, dpi=120)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    t0 = time.perf_counter()
+    n_seeds = 3 if args.fast else args.seeds
+    n_main = 2000 if args.fast else 10_000
+    sweep = [500, 1000, 2000, 4000] if args.fast else [1000, 3000, 10_000, 30_000, 100_000]
+    seeds = range(n_seeds)
+    mc = dict(n_jobs=args.jobs)
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    rows = fohw.monte_carlo(METHODS, seeds=seeds, settings=[{"n_samples": n_main}],
+                            make_data=paper_data, **mc)
+    lines, bound, d_sum, a_sum = methods_table(rows, n_main, n_seeds, mc)
+    more, system_rows = systems_table(seeds, n_main, n_seeds, mc)
+    lines += more
+    more, sweep_rows, s_sum, sa_sum, bounds_n = sweep_table(seeds, sweep, n_seeds, mc)
+    lines += more
+    all_rows = ([dict(r, system="paper") for r in rows] + system_rows
+                + [dict(r, system="paper, N sweep") for r in sweep_rows])
+    failures = [r for r in all_rows if r.get("error")]
+    lines += ["", f"Records that diverged: {len(failures)}. Total time {time.perf_counter() - t0:.0f} s "
+              f"with --jobs {args.jobs}."]
+    text = "\n".join(lines) + "\n"
+    (args.outdir / "accuracy.md").write_text(text)
+    keys = ["system", "n_samples", "seed", "method", "delta", "alpha", "alpha_error", "J",
+            "converged", "seconds"]
+    write_csv(args.outdir / "accuracy.csv", all_rows, keys)
+    plot_methods(args.outdir / "accuracy_methods.png", bound, d_sum, a_sum, n_main, n_seeds)
+    plot_sweep(args.outdir / "accuracy_vs_n.png", sweep, s_sum, sa_sum, bounds_n)
     print(text)
     return 0
 
