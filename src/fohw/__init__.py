@@ -16,6 +16,7 @@ from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
+from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
     HybridOptions,
@@ -27,7 +28,7 @@ from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
 from .estimators.structured import StructuredOptions
-from .estimators.tf_fit import FractionalTFFit, fit_fractional_tf
+from .estimators.tf_fit import FractionalTFFit, fit_fractional_tf, fractional_tf_crb
 from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
@@ -46,6 +47,7 @@ from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.basis import Basis, as_basis, polynomial_basis
 from .model.fotf import FractionalTF
+from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.orders import Orders
 from .model.params import ThetaLayout
@@ -135,4 +137,10 @@ __all__ = [
     "lr_test",
     "ProfileInterval",
     "profile_interval",
+    "fractional_tf_crb",
+    "FractionalHW",
+    "FractionalHWFit",
+    "OutputMap",
+    "fit_fractional_hw",
+    "fractional_hw_crb",
 ]

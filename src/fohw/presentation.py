@@ -32,8 +32,15 @@ class ResultPresentation:
                 f"<small>{html.escape(self.message)}</small>"
                 f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
 
-    def summary(self) -> str:
-        """A text table of the estimates and the run's diagnostics."""
+    def summary(self, linear_block=True) -> str:
+        """A text table of the estimates and the run's diagnostics.
+
+        Parameters
+        ----------
+        linear_block : bool, optional
+            End with the linear block's static gain and stability verdict (default True;
+            :meth:`fohw.IdentificationResult.linear_block`).
+        """
         lines = [f"fohw identification: method={self.method!r}"
                  + (f", schedule={self.schedule!r}" if self.schedule else ""),
                  f"  samples N = {self.n_samples}, na = {self.structure.na}, "
@@ -65,7 +72,55 @@ class ResultPresentation:
                     lines.append(f"  {name} = [{vals}]")
         if self.alpha_at_bound:
             lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
+        if linear_block:
+            lines += ["", *self._linear_block_lines()]
         return "\n".join(lines)
+
+    def _linear_block_lines(self):
+        """Static gain and stability of the linear block (linearised at the operating point)."""
+        from .exceptions import ParameterError
+
+        try:
+            block = self.linear_block()
+        except ParameterError as err:
+            return [f"  linear block: undefined ({err})"]
+        gain = block.static_gain
+        why = "" if gain != 0.0 else " (no order-0 term: every fractional term vanishes at z = 1)"
+        return ["  linear block H(z) = f' B(z) / (1 - g' A(z)), linearised at the operating point "
+                f"(f' = {block.f_slope:.6g}, g' = {block.g_slope:.6g}):",
+                f"  static gain H(1) = {gain:.6g}{why}",
+                f"  stability: {block.stability()}"]
+
+    def bode(self, omega=None, *, others=None, title=None):
+        """Bode diagram of the linear block (:meth:`fohw.IdentificationResult.linear_block`).
+
+        Parameters
+        ----------
+        omega : array_like, optional
+            Angular frequencies, ``0 < omega dt <= pi`` (default: three decades up to the
+            Nyquist frequency ``pi / dt``).
+        others : dict of str to model, optional
+            Further lagged models (a ``HammersteinWiener``, a result or a ``LinearBlock``) drawn on
+            the same axes, e.g. the true model beside the estimate.
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        fig, axes
+            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); the figure is
+            not registered with pyplot, so it is never shown (save it with ``fig.savefig``).
+        """
+        from .analysis.frequency import bode_plot
+        from .model.hw_frequency import LinearBlock, linear_block
+
+        block = self.linear_block()
+        omega = block.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
+        curves = {"estimate" if others else "linear block H(exp(jωh))": block.frequency_response(omega)}
+        for label, other in (others or {}).items():
+            other = other if isinstance(other, LinearBlock) else linear_block(other)
+            curves[label] = other.frequency_response(omega)
+        return bode_plot(omega, curves, title=title)
 
     def _estimate_table(self, names, est):
         """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""

@@ -21,6 +21,7 @@ import numpy as np
 from ._validation import RANGE_TOLERANCE, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
+from .model.hw_frequency import linear_block
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.simulation import simulate
@@ -531,6 +532,17 @@ class IdentificationResult(ResultPresentation):
             raise ValueError(f"method {self.method!r} keeps no per-sample history.")
         est = self.theta_history if history else self.theta
         return np.linalg.norm(est - theta_true, axis=-1) / np.linalg.norm(theta_true)
+
+    def linear_block(self):
+        """The fitted model's linear block, linearised at the operating point (frequency view).
+
+        Returns
+        -------
+        fohw.model.hw_frequency.LinearBlock
+            Its ``frequency_response(omega)``, ``static_gain`` and ``stability()``; ``bode()``
+            draws it. Raises ParameterError when :attr:`model` is undefined.
+        """
+        return linear_block(self)
 
     # ---- using the estimate ------------------------------------------------------------------------
     def predict(self, u, y):
