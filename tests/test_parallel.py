@@ -86,8 +86,12 @@ def test_dask_killed_worker_and_closed_client_say_so():
         with distributed.Client(cluster) as client:
             out = run_tasks(die_in_a_worker, [(i, os.getpid()) for i in range(4)],
                             executor=client.get_executor())
-        assert [o for i, o in enumerate(out) if i != 2] == [0, 1, 9]
+        # dask counts a worker's death against every task queued on it, so under load a
+        # healthy task can be given up too: then its row must say so, never be wrong or blank
         assert "dask workers that ran it died" in out[2].message
+        assert all(o == i * i if not isinstance(o, TaskError)
+                   else "dask workers that ran it died" in o.message for i, o in enumerate(out))
+        assert any(not isinstance(o, TaskError) for o in out)
         client = distributed.Client(cluster)
         threading.Timer(1.0, client.close).start()       # 10 x 0.4 s on 2 workers: 2 s
         out = run_tasks(slow_square, [(i,) for i in range(10)],

@@ -70,9 +70,9 @@ def implausible_sample(simulated, measured, envelope=ENVELOPE):
     Examples
     --------
     >>> from fohw.analysis.validation import implausible_sample
-    >>> implausible_sample([0.0, 5.0, 30.0], [0.0, 1.0, 2.0]) is None
+    >>> implausible_sample([0.0, 5.0, 20.0], [0.0, 1.0, 2.0]) is None
     True
-    >>> implausible_sample([0.0, 5.0, 30.0, 1e6], [0.0, 1.0, 2.0])
+    >>> implausible_sample([0.0, 5.0, 20.0, 1e6], [0.0, 1.0, 2.0])
     (3, 1000000.0, (-20.0, 22.0))
     """
     factor = check_envelope(envelope)
