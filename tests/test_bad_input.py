@@ -427,6 +427,38 @@ API = [
     ("fractional_hw_crb", "not a FractionalHW",
      lambda t: fohw.fractional_hw_crb(np.ones(50), "model", dt=0.1, noise_std=0.1),
      fohw.ParameterError, "`model` must be a FractionalHW; got str"),
+    # issue 28 (28b)
+    ("select_structure", "#17 an empty grid {}",
+     lambda t: fohw.select_structure(U, U**3, {}, na=1, f_basis=1, g_basis=1),
+     fohw.ParameterError, "`candidates` is an empty grid {}"),
+    ("select_structure", "#17 a misspelt keyword",
+     lambda t: fohw.select_structure(U, U**3, {"naa": [1, 2]}, f_basis=1, g_basis=1),
+     fohw.ParameterError, "`candidates[0]` gives 'naa': not a keyword of fohw.identify; did "
+     "you mean 'na'?"),
+    ("select_structure", "#17 an unknown method",
+     lambda t: fohw.select_structure(U, U**3, {"na": [1]}, f_basis=1, g_basis=1,
+                                     method="nope"),
+     fohw.ParameterError, "`method` must be one of"),
+    ("select_structure", "a required keyword missing from every candidate (issue 26)",
+     lambda t: fohw.select_structure(U, U**3, {"na": [1, 2]}, f_basis=1),
+     fohw.ParameterError, "`g_basis` is required by fohw.identify and missing from every "
+     "candidate"),
+    ("select_structure", "#16 validation=1 (an int: one sample held back)",
+     lambda t: fohw.select_structure(U, U**3, {"na": [1]}, f_basis=1, g_basis=1,
+                                     validation=1),
+     fohw.ParameterError, "`validation` = 1 (an int: a number of samples) holds back 1 of 50"),
+    ("select_structure", "#16 a constant held-back output, ranked by fit %",
+     lambda t: fohw.select_structure(U, np.r_[U[:40], np.zeros(10)], {"na": [1]}, f_basis=1,
+                                     g_basis=1, validation=10),
+     fohw.ParameterError, "is constant (0.0): no candidate can be ranked by its fit %"),
+    ("compare", "#3 not a result or a model",
+     lambda t: fohw.compare("model.json", U, U),
+     fohw.ParameterError, "`model` must be an identification result (fohw.identify) or a "
+     "fohw.HammersteinWiener; got str"),
+    ("compare", "#22 a record of one sample",
+     lambda t: fohw.compare(fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1), U[:1],
+                            U[:1]),
+     fohw.DimensionError, "the record has 1 sample (`u` and `y`); compare needs at least 2"),
 ]
 
 CLI = [

@@ -75,3 +75,57 @@ def test_cli_plot_shows_the_free_run(tmp_path):
     assert main(["identify", str(path), "--na", "2", "--nb", "2", "--f-basis", "2",
                  "--g-basis", "3", "--plot", str(png)]) == 0
     assert png.stat().st_size > 10_000
+
+
+# issue 28 (28b) -------------------------------------------------------------------------------
+def test_compare_takes_a_model_not_only_a_result():
+    # The paper's record is y = Phi(alpha) theta + v (equation noise): the true model's one-step
+    # prediction error is the noise itself, and its free run is fohw.simulate's.
+    data = fohw.datasets.paper_example(600, random_state=2)
+    v = fohw.compare(data.model, data.u, data.y)
+    np.testing.assert_array_equal(v.simulated, fohw.simulate(data.model, data.u))
+    np.testing.assert_allclose(data.y - v.predicted, data.noise, atol=1e-12)
+    assert v.status == "ok" and v.in_range and np.isfinite(v.fit_simulation)
+    with pytest.raises(fohw.ParameterError, match="`model` must be an identification result"):
+        fohw.compare(data.model.structure, data.u, data.y)
+
+
+def test_constant_input_still_gives_the_fit(fitted):
+    # The cross-correlation with a constant input is undefined: skipped with a note, and the
+    # fit % of both predictions is still there (they are the ones of a direct computation).
+    data, res = fitted
+    u = np.full(400, 0.3)
+    v = res.validate(u, data.y[800:])
+    assert v.fit_simulation == fit_percent(data.y[800:], res.simulate(u))
+    assert v.fit_prediction == fit_percent(data.y[800:], res.predict(u, data.y[800:]))
+    assert v.cross_correlation is None and v.whiteness is not None
+    assert any("`u` is constant" in n for n in v.notes)
+    assert "Note: input cross-correlation test skipped" in v.to_markdown()
+
+
+def test_one_sample_names_the_record_length(fitted):
+    _, res = fitted
+    with pytest.raises(fohw.DimensionError, match="the record has 1 sample"):
+        res.validate([0.1], [0.2])
+
+
+def test_a_free_run_outside_the_envelope_is_implausible_not_scored():
+    # A stable linear model (y[k] = 0.5 y[k-1] + u[k-1]) simulated from a unit input reaches
+    # about 2; a "measured" output spanning [0, 0.01] puts the envelope (factor 10) at
+    # [-0.1, 0.11]: the first sample above 0.11 is flagged with its index and value.
+    model = fohw.HammersteinWiener([-0.5], [1.0], [1.0], [1.0], orders=0)
+    u = np.ones(50)
+    ysim = fohw.simulate(model, u)
+    y = np.linspace(0.0, 0.01, 50)
+    k = int(np.argmax(ysim > 0.11))
+    assert k > 0
+    v = fohw.compare(model, u, y)
+    assert v.status == "implausible" and v.simulated is None
+    assert np.isnan(v.fit_simulation) and np.isnan(v.rmse_simulation)
+    assert f"sample k = {k}: y[k] = {ysim[k]:.6g}" in v.diverged
+    assert "implausible" in v.to_markdown()
+    # a wider envelope (or none) scores it
+    assert fohw.compare(model, u, y, envelope=None).status == "ok"
+    assert fohw.compare(model, u, y, envelope=1e3).status == "ok"
+    with pytest.raises(fohw.ParameterError, match="`envelope`"):
+        fohw.compare(model, u, y, envelope=-1.0)

@@ -3,24 +3,58 @@
 fohw depends on no engine: a caller passes ``executor=None`` (serial, in this process), a
 :class:`concurrent.futures.ProcessPoolExecutor`, or dask's ``Client.get_executor()``. Results
 come back in task order whatever the backend, so tables are identical.
+
+One task never loses the others: a task whose worker process dies (``os._exit``, a segfault,
+the out-of-memory killer) breaks a ``ProcessPoolExecutor`` and with it every task still in it;
+those tasks are run again, each alone in a fresh one-worker process pool, so only the task
+that kills its worker is lost (:class:`TaskError`, saying so). dask retries a task whose worker
+died on other workers by itself and gives up with ``KilledWorker``; a client closed during the
+run cancels its tasks. Each case gets a message that says what happened.
 """
 
 from __future__ import annotations
 
+import os
 import sys
-from concurrent.futures import Executor
+from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 
 from .exceptions import ParameterError
 
-__all__ = ["run_tasks", "progress_bar"]
+__all__ = ["run_tasks", "progress_bar", "TaskError"]
+
+#: A task lost with its broken process pool, before its rerun.
+_LOST = object()
+
+
+def _explain(exc, isolated=False):
+    """What happened to a task, in words, from the executor's exception."""
+    name = type(exc).__name__
+    text = str(exc).strip()
+    if isinstance(exc, BrokenProcessPool):
+        if isolated:
+            return ("its worker process died while running it (killed, out of memory, a crash "
+                    "or os._exit), again when it was rerun alone in a fresh process: this task "
+                    f"kills its worker ({name})")
+        return f"its worker process died and the pool broke ({name}: {text})"
+    if name == "KilledWorker":              # distributed.scheduler.KilledWorker
+        return ("the dask workers that ran it died while running it, each time dask retried it "
+                f"(killed, out of memory, a crash or os._exit) ({name}: {text})")
+    if isinstance(exc, CancelledError) or name == "CancelledError":
+        return ("it was cancelled before it finished: the executor was shut down, or its dask "
+                "client closed, during the run" + (f" ({text})" if text else ""))
+    return f"{name}: {text}" if text else name
 
 
 class TaskError:
-    """A task that raised inside the executor machinery (pickling, a lost worker, ...)."""
+    """A task that could not be run or collected by the executor (pickling, a lost worker, ...).
 
-    def __init__(self, exc):
+    ``exception`` is the executor's exception; ``message`` says in words what happened.
+    """
+
+    def __init__(self, exc, *, isolated=False):
         self.exception = exc
-        self.message = f"{type(exc).__name__}: {exc}"
+        self.message = _explain(exc, isolated)
 
 
 def progress_bar(total, label, enabled=None):
@@ -126,8 +160,11 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
     -------
     list
         The return values; a call that could not be run or collected (a pickling error, a lost
-        worker) gives a :class:`TaskError` in its place, so one task never loses the others.
-        Exceptions raised by ``fn`` itself are the caller's to catch inside ``fn``.
+        worker) gives a :class:`TaskError` in its place, so one task never loses the others:
+        the tasks of a process pool broken by a dying worker are rerun, each alone in a fresh
+        one-worker pool (at most ``os.cpu_count()`` at a time), so only the task that kills its
+        worker is lost. Exceptions raised by ``fn`` itself are the caller's to catch inside
+        ``fn``.
     """
     if executor is not None and not isinstance(executor, Executor):
         raise ParameterError("`executor` must be a concurrent.futures.Executor (e.g. a "
@@ -145,17 +182,61 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
         for task in tasks:
             try:
                 futures.append(executor.submit(fn, *task))
+            except BrokenProcessPool:         # broken by an earlier task: rerun it alone
+                futures.append(_LOST)
             except Exception as exc:          # e.g. an argument that cannot be pickled
                 futures.append(TaskError(exc))
-        for future in futures:
-            if isinstance(future, TaskError):
+        broken = []
+        for i, future in enumerate(futures):
+            if future is _LOST or isinstance(future, TaskError):
                 out.append(future)
             else:
                 try:
                     out.append(future.result())
+                except BrokenProcessPool:     # lost with the pool, maybe not its fault
+                    out.append(_LOST)
                 except Exception as exc:      # the executor's failure, not fn's
                     out.append(TaskError(exc))
-            bar.update(1)
+            if out[-1] is _LOST:
+                broken.append(i)
+            else:
+                bar.update(1)
+        if broken:
+            _run_isolated(fn, tasks, broken, out, bar)
         return out
     finally:
         bar.close()
+
+
+def _run_isolated(fn, tasks, indices, out, bar):
+    """Rerun ``tasks[indices]``, each alone in a fresh one-worker process pool.
+
+    A task that kills its worker then loses only itself. At most ``os.cpu_count()`` pools run
+    at a time.
+    """
+    workers = max(1, min(len(indices), os.cpu_count() or 1))
+    queue = list(indices)
+    running = {}
+    try:
+        while queue or running:
+            while queue and len(running) < workers:
+                i = queue.pop(0)
+                pool = ProcessPoolExecutor(1)
+                try:
+                    running[pool.submit(fn, *tasks[i])] = (i, pool)
+                except Exception as exc:       # noqa: BLE001 - reported as the task's error
+                    out[i] = TaskError(exc, isolated=True)
+                    pool.shutdown(wait=False)
+                    bar.update(1)
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                i, pool = running.pop(future)
+                try:
+                    out[i] = future.result()
+                except Exception as exc:       # noqa: BLE001 - reported as the task's error
+                    out[i] = TaskError(exc, isolated=True)
+                pool.shutdown(wait=True)
+                bar.update(1)
+    finally:
+        for _, pool in running.values():
+            pool.shutdown(wait=False, cancel_futures=True)

@@ -564,6 +564,8 @@ def _select(args):
             pool.shutdown()
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
+        if sel.best is None and message.startswith("select_structure selected nothing"):
+            continue                    # the error below says it, in one line
         print(f"fohw: warning: {message}", file=sys.stderr)
     print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
     print(sel.to_markdown(top=args.top))

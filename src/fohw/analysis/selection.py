@@ -3,8 +3,16 @@
 :func:`select_structure` fits every candidate structure on the estimation part of a record,
 simulates it in free run over the estimation part *and on into* a held-back part it never saw,
 and ranks the candidates by the fit on the held-back part. A candidate that fails (its fit
-raises, its simulation diverges or leaves the finite numbers) is recorded with the reason and
-never loses the others. The winner is refitted on all the estimation data.
+raises, its simulation diverges, leaves the finite numbers or leaves the plausible envelope of
+the measured output) is recorded with the reason and never loses the others; it is never
+picked. The winner is refitted on all the estimation data; a refit whose free run diverges or
+is implausible is not kept either, and the next candidate is refitted instead.
+
+What can be known before any fit is checked at once (a :class:`fohw.ParameterError`): an empty
+grid, a keyword that :func:`fohw.identify` does not take, an unknown method, a required
+structure keyword (``na``, ``f_basis``, ``g_basis``) missing from a candidate, a held-back
+part too short or constant to score. ``nb`` defaults to ``na`` when a candidate does not give
+it (as on the command line).
 
 The fits are independent, so they run on any ``concurrent.futures.Executor`` (a process pool,
 or dask's ``Client.get_executor()`` for a cluster); the table is the same whatever the backend.
@@ -13,9 +21,12 @@ or dask's ``Client.get_executor()`` for a cluster); the table is the same whatev
 from __future__ import annotations
 
 import csv
+import difflib
+import inspect
 import io
 import itertools
 import numbers
+import re
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -26,9 +37,10 @@ import numpy as np
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
 from .._validation import check_array, check_same_length
-from ..exceptions import ExtrapolationWarning, ParameterError, SimulationDivergedError
+from ..exceptions import ConvergenceWarning, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
 from .metrics import aic, bic, fit_percent, rmse
+from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
 __all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
 
@@ -38,7 +50,19 @@ SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
 
 #: The columns of :attr:`Selection.rows` besides the candidate's own keywords.
 COLUMNS = ("candidate", "status", "fit", "rmse", "fit_estimation", "aic", "bic", "n_params",
-           "estimated_orders", "in_range", "fit_status", "seconds", "reason")
+           "estimated_orders", "in_range", "fit_status", "refit_status", "seconds", "reason")
+
+#: Every row ``status``: ``"ok"`` (scored), ``"diverged"``, ``"nan"``, ``"implausible"`` (the
+#: free run on the estimation input or the held-back part was not scored: it grew without
+#: bound, the output basis returned NaN or inf, or it left the measured output's envelope),
+#: ``"failed"`` (the fit, the simulation, the scoring or the executor raised), and for the
+#: candidate whose refit on all the data was not kept, ``"refit_failed"``,
+#: ``"refit_diverged"``, ``"refit_nan"``, ``"refit_implausible"``.
+STATUSES = ("ok", "diverged", "nan", "implausible", "failed", "refit_failed", "refit_diverged",
+            "refit_nan", "refit_implausible")
+
+#: Keywords of :func:`fohw.identify` a candidate must give (``nb`` defaults to ``na``).
+REQUIRED = ("na", "f_basis", "g_basis")
 
 
 def expand_candidates(candidates):
@@ -49,6 +73,9 @@ def expand_candidates(candidates):
     """
     if isinstance(candidates, Mapping):
         keys = list(candidates)
+        if not keys:
+            raise ParameterError("`candidates` is an empty grid {}: give each keyword a list of "
+                                 "values, e.g. {'na': [1, 2]}.")
         values = []
         for key in keys:
             v = candidates[key]
@@ -98,20 +125,58 @@ def _blank_row(**changes):
     """A row before (or without) a fit: every score missing."""
     return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
                      bic=np.nan, n_params=0, estimated_orders="", in_range=True, fit_status="",
-                     seconds=np.nan, reason=""), **changes)
+                     refit_status="", seconds=np.nan, reason=""), **changes)
+
+
+def free_run_check(res, u, reference, envelope, *, history=None):
+    """``(ysim, status, reason)`` of a result's free run on ``u``; ``ysim`` None unless ok.
+
+    ``status`` is ``"ok"``, ``"diverged"``, ``"nan"`` (the output basis) or ``"implausible"``
+    (outside the envelope of ``reference``, :func:`fohw.analysis.validation.implausible_sample`).
+    ExtrapolationWarnings are the caller's to catch.
+    """
+    try:
+        ysim = res.simulate(u, history=history)
+    except SimulationDivergedError as exc:
+        return None, "diverged" if exc.cause == "growth" else "nan", str(exc)
+    found = implausible_sample(ysim, reference, envelope)
+    if found is not None:
+        return None, "implausible", implausible_message(found, envelope)
+    return ysim, "ok", ""
+
+
+def _where(status, reason, score_from):
+    """Say on which part a free run failed (the held-back part continues the estimation part)."""
+    if not score_from or status not in ("diverged", "nan", "implausible"):
+        return reason
+    k = re.search(r"sample k = (\d+)", reason)
+    if k is None:
+        return reason
+    part = "estimation part" if int(k.group(1)) < score_from else "held-back part"
+    return f"on the {part} (samples 0-{score_from - 1} are the estimation part): {reason}"
 
 
 @thin_solves
-def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
+def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, reference=None,
+                   envelope=ENVELOPE):
     """One candidate: fit on the estimation part, free-run over ``u_sim``, score the tail.
 
     Module level (it is pickled for process and dask executors). Never raises: a failure is
     returned as the row's status and reason.
     """
+    t0 = time.perf_counter()
+    try:
+        return _score(u_est, y_est, u_sim, y_score, score_from, candidate,
+                      np.r_[y_est, y_score] if reference is None else reference, envelope, t0)
+    except Exception as exc:                    # noqa: BLE001 - one candidate never loses the others
+        return _blank_row(status="failed", reason=f"scoring: {type(exc).__name__}: {exc}",
+                          seconds=time.perf_counter() - t0), None
+
+
+def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envelope, t0):
     from ..estimators.identify import identify
 
     row = _blank_row()
-    t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -132,9 +197,12 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
             row["aic"] = aic(criterion, n, d)
             row["bic"] = bic(criterion, n, d)
         try:       # the simulator raises on any non-finite output, so ysim is finite
-            ysim = res.simulate(u_sim)
-        except SimulationDivergedError as exc:
-            row.update(status="diverged" if exc.cause == "growth" else "nan", reason=str(exc))
+            ysim, status, reason = free_run_check(res, u_sim, reference, envelope)
+            row.update(status=status, reason=_where(status, reason, score_from))
+            if status == "ok" and not score_from:     # a separate validation record: and the
+                yest, status, reason = free_run_check(res, u_est, reference, envelope)
+                if status != "ok":                    # estimation input
+                    row.update(status=status, reason=f"on the estimation input: {reason}")
         except Exception as exc:
             row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}")
     # result.simulate warns when the input leaves the estimation input's range
@@ -142,17 +210,15 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate):
     if row["status"] != "ok":
         row["seconds"] = time.perf_counter() - t0
         return row, res
-    if score_from:                      # the held-back part continues the estimation part
-        row["fit_estimation"] = fit_percent(y_est, ysim[:score_from])
-    else:                               # a separate validation record
-        try:
-            row["fit_estimation"] = fit_percent(y_est, res.simulate(u_est))
-        except Exception:               # noqa: BLE001 - only this column is lost
-            pass
-    row["fit"] = fit_percent(y_score, ysim[score_from:])
-    row["rmse"] = rmse(y_score, ysim[score_from:])
+    if np.ptp(y_est) > 0:
+        row["fit_estimation"] = fit_percent(y_est, ysim[:score_from] if score_from else yest)
     notes = sorted({str(w.message).split("\n")[0] for w in caught
                     if not issubclass(w.category, ExtrapolationWarning)})   # in `in_range`
+    row["rmse"] = rmse(y_score, ysim[score_from:])
+    if np.ptp(y_score) > 0:
+        row["fit"] = fit_percent(y_score, ysim[score_from:])
+    else:
+        notes.append("the held-back output is constant: its fit % is undefined (NaN)")
     if notes:
         row["reason"] = "; ".join(notes)
     row["seconds"] = time.perf_counter() - t0
@@ -168,20 +234,28 @@ class Selection:
     rows : list of dict
         One per candidate, in the order given: the candidate's keywords, then ``candidate``
         (a label), ``status`` (``"ok"``; ``"diverged"``: the free run grew without bound;
-        ``"nan"``: a basis function returned NaN or inf during it; ``"failed"``: the fit or the
-        simulation raised, the reason says what), ``fit``
-        (free-run fit % on the held-back part), ``rmse`` (on it, in the data's units),
+        ``"nan"``: a basis function returned NaN or inf during it; ``"implausible"``: it left
+        the envelope of the measured output, see ``envelope``; each on the estimation input or
+        the held-back part, the reason says which, with the sample and value; ``"failed"``:
+        the fit, the simulation, the scoring or the executor raised, the reason says what;
+        ``"refit_..."``: the candidate won but its refit on all the data failed, diverged or
+        was implausible, so the next one was refitted: :data:`STATUSES`), ``fit``
+        (free-run fit % on the held-back part; NaN unless the status is ``"ok"``, and for a
+        constant held-back output), ``rmse`` (on it, in the data's units),
         ``fit_estimation`` (free-run fit % on the estimation part), ``aic``, ``bic`` (from the
         method's own criterion on the estimation part: the one-step ``J`` of Eq. 41, or the
         mean squared simulation error for ``"output_error"``), ``n_params``,
         ``estimated_orders`` (the estimated free orders), ``in_range`` (whether the held-back
         input stayed inside the estimation input's range widened by 5 % of its span: no
         :class:`fohw.ExtrapolationWarning` from the simulation), ``fit_status`` (the
-        estimator's :class:`fohw.Status` name), ``seconds``, ``reason`` (why a candidate
-        failed, or the warnings its fit raised).
+        estimator's :class:`fohw.Status` name on the estimation part), ``refit_status`` (the
+        refit's status name where the candidate was refitted on all the data, e.g.
+        ``RANK_DEFICIENT``, or ``diverged``/``implausible``/``failed``), ``seconds``,
+        ``reason`` (why a candidate failed, or the warnings its fit raised).
     best : IdentificationResult or None
-        The winner refitted on all the data given as estimation data (``None`` if every
-        candidate failed).
+        The winner refitted on all the data given as estimation data. ``None`` means nothing
+        was selected: every candidate failed, or every refit was rejected (a
+        :class:`fohw.ConvergenceWarning` says so).
     best_index : int or None
         Its row.
     results : list of IdentificationResult or None
@@ -208,7 +282,7 @@ class Selection:
         return None if self.best_index is None else self.rows[self.best_index]
 
     def ranked(self):
-        """Rows of the candidates that simulated, best first, then the failed ones."""
+        """Rows of the candidates that were scored (status ``"ok"``), best first, then the rest."""
         col, larger = SCORES[self.score]
         ok = [r for r in self.rows if r["status"] == "ok" and np.isfinite(r[col])]
         ok.sort(key=lambda r: -r[col] if larger else r[col])
@@ -240,7 +314,7 @@ class Selection:
         """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them)."""
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
-            "in_range", "seconds", "reason"]
+            "fit_status", "refit_status", "in_range", "seconds", "reason"]
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
         for r in rows:
@@ -314,6 +388,9 @@ def _split(u, y, validation):
         uv = check_array(validation[0], "validation input")
         yv = check_array(validation[1], "validation output")
         check_same_length(uv, yv, "validation input", "validation output")
+        if len(yv) < 2:
+            raise ParameterError(f"the `validation` record has {len(yv)} sample; it needs at "
+                                 "least 2 to be scored.")
         return u, y, uv, yv, 0, f"a separate validation record of {len(yv)} samples"
     if isinstance(validation, bool) or not isinstance(validation, numbers.Real):
         raise ParameterError("`validation` must be a fraction in (0, 1), a number of samples, "
@@ -321,21 +398,79 @@ def _split(u, y, validation):
                              f"{type(validation).__name__}.")
     if isinstance(validation, numbers.Integral):
         n_val = int(validation)
+        if not 2 <= n_val <= n - 2:
+            raise ParameterError(f"`validation` = {n_val} (an int: a number of samples) holds "
+                                 f"back {n_val} of {n} samples; it must leave at least 2 for "
+                                 "estimation and hold back at least 2 (a fit % needs 2). A "
+                                 "fraction of the record is a float in (0, 1), e.g. 0.25.")
     else:
         if not 0.0 < validation < 1.0:
             raise ParameterError(f"`validation` as a fraction must be in (0, 1); got "
                                  f"{validation!r}.")
         n_val = int(round(validation * n))
-    if not 1 <= n_val <= n - 2:
-        raise ParameterError(f"`validation` holds back {n_val} of {n} samples; it must leave "
-                             "at least 2 for estimation and hold back at least 1.")
+        if not 2 <= n_val <= n - 2:
+            raise ParameterError(f"`validation` = {validation!r} holds back {n_val} of {n} "
+                                 "samples; it must leave at least 2 for estimation and hold "
+                                 "back at least 2 (a fit % needs 2).")
     n_est = n - n_val
     return (u[:n_est], y[:n_est], u, y[n_est:], n_est,
             f"the last {n_val} of {n} samples held back; free run from sample 0")
 
 
+def _keyword_source(i, key, own):
+    return f"`candidates[{i}]`" if key in own[i] else "the keywords shared by every candidate"
+
+
+def check_candidates(own, common):
+    """The candidates' full keywords (shared ones merged, ``nb`` = ``na`` where absent), checked.
+
+    Raises a :class:`fohw.ParameterError` at once, before any fit, for an unknown method, a
+    keyword that :func:`fohw.identify` does not take with the candidate's method, and a
+    required keyword (:data:`REQUIRED`) missing from a candidate.
+    """
+    from ..estimators.identify import METHODS, OPTIONS, identify
+
+    signature = [p for p in inspect.signature(identify).parameters.values()
+                 if p.kind is p.KEYWORD_ONLY]
+    default_method = next(p.default for p in signature if p.name == "method")
+    named = {p.name for p in signature}
+    cands = []
+    for i, mine in enumerate(own):
+        c = dict(common, **mine)
+        if "nb" not in c and "na" in c:
+            c["nb"] = c["na"]                         # one rule with the command line
+        method = c.get("method", default_method)
+        if not isinstance(method, str) or method not in METHODS:
+            where = (f"`candidates[{i}]['method']`" if "method" in mine else "`method`")
+            raise ParameterError(f"{where} must be one of {METHODS}; got {method!r}.")
+        known = named | set(OPTIONS[method].names())
+        for key in c:
+            if key in known:
+                continue
+            others = [m for m, opts in OPTIONS.items() if key in opts.names()]
+            if others:
+                why = (f"an option of method(s) {others}, not of {method!r} (the method of "
+                       f"candidate {i})")
+            else:
+                close = difflib.get_close_matches(key, sorted(known), n=1)
+                why = "not a keyword of fohw.identify" + (f"; did you mean {close[0]!r}?"
+                                                           if close else "")
+            raise ParameterError(f"{_keyword_source(i, key, own)} gives {key!r}: {why}.")
+        cands.append(c)
+    for key in REQUIRED:
+        missing = [i for i, c in enumerate(cands) if key not in c]
+        if missing:
+            which = ("every candidate" if len(missing) == len(cands)
+                     else "candidates " + ", ".join(map(str, missing[:10]))
+                     + (" ..." if len(missing) > 10 else ""))
+            raise ParameterError(f"`{key}` is required by fohw.identify and missing from "
+                                 f"{which}: give it in `candidates` or as a keyword shared by "
+                                 f"every candidate (select_structure(..., {key}=...)).")
+    return cands
+
+
 def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None, score="fit",
-                     refit=True, executor=None, progress=None, **common):
+                     refit=True, executor=None, progress=None, envelope=ENVELOPE, **common):
     """Choose a model structure by free-run simulation on data the fits never saw.
 
     Parameters
@@ -345,12 +480,15 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         Only this record is used to choose: the benchmark's validation record stays unseen.
     candidates : list of dict, or dict of lists
         Keyword arguments of :func:`fohw.identify` for each candidate, or a grid
-        ``{"na": [1, 2, 3], "orders": [0, "mixed"], ...}`` (all combinations).
+        ``{"na": [1, 2, 3], "orders": [0, "mixed"], ...}`` (all combinations). ``na``,
+        ``f_basis`` and ``g_basis`` are required (here or in ``**common``); ``nb`` defaults to
+        ``na`` (as ``fohw select`` without ``--nb``).
     validation : float, int or (u_val, y_val), optional
-        The held-back part: a fraction (default 0.25) or a number of samples at the end of the
-        record. Each candidate is fitted on the samples before it and simulated in free run
-        from sample 0 through both parts (the held-back part continues the simulation, with its
-        GL memory). Or a separate record, simulated from the model's operating point.
+        The held-back part: a fraction (default 0.25, a float in (0, 1)) or a number of
+        samples (an int, at least 2) at the end of the record. Each candidate is fitted on the
+        samples before it and simulated in free run from sample 0 through both parts (the
+        held-back part continues the simulation, with its GL memory). Or a separate record,
+        simulated from the model's operating point.
     method : str, optional
         The ``identify`` method of every candidate that does not name its own (default: that of
         :func:`fohw.identify`, ``"varpro"``).
@@ -366,6 +504,11 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         lambdas). The table does not depend on the backend.
     progress : bool, optional
         A progress bar on stderr; default: when stderr is a terminal.
+    envelope : float or None
+        Plausibility factor (default 10, :data:`fohw.analysis.validation.ENVELOPE`): a free
+        run (on the estimation input or the held-back part) that goes more than ``envelope``
+        times the measured output's range (max - min of every output given) outside that
+        range is ``"implausible"``, not scored and never picked. None switches the test off.
     **common
         Keywords of :func:`fohw.identify` shared by every candidate (a candidate's own value
         wins), e.g. ``offset=True, operating_point="mean", dt=4.0``.
@@ -374,13 +517,24 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     -------
     Selection
         ``.rows`` (one dict per candidate with ``"fit"`` and ``"status"``), ``.best`` (the
-        refitted winner), ``.to_markdown()``, ``.to_csv()``, ``.to_frame()``, ``.plot()``.
+        refitted winner; None when nothing was selected), ``.to_markdown()``, ``.to_csv()``,
+        ``.to_frame()``, ``.plot()``.
 
     Raises
     ------
     ParameterError
-        Bad ``candidates``, ``validation`` or ``score``. Errors inside one candidate's fit are
-        not raised: they are that candidate's ``status`` and ``reason``.
+        At once, before any fit: bad or empty ``candidates``, a keyword ``identify`` does not
+        take with the candidate's method, an unknown ``method``, a required keyword missing
+        from a candidate, a bad ``validation`` (too short, or a constant held-back output when
+        ranking by ``score="fit"``), ``score`` or ``envelope``. Errors inside one candidate's
+        fit, simulation or scoring are not raised: they are that candidate's ``status`` and
+        ``reason``.
+
+    Warns
+    -----
+    ConvergenceWarning
+        Nothing was selected (every candidate failed, diverged or was implausible, or every
+        refit was rejected): ``best`` is None, and the rows say why.
 
     Examples
     --------
@@ -410,9 +564,15 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     if method is not None:
         common = dict(common, method=method)
     own = expand_candidates(candidates)
-    cands = [dict(common, **c) for c in own]
+    cands = check_candidates(own, common)
+    factor = check_envelope(envelope)
     u_est, y_est, u_sim, y_score, score_from, described = _split(u, y, validation)
-    tasks = [(u_est, y_est, u_sim, y_score, score_from, c) for c in cands]
+    if score == "fit" and np.ptp(y_score) == 0:
+        raise ParameterError(f"the held-back output ({described}) is constant ({float(y_score[0])!r}): "
+                             "no candidate can be ranked by its fit %. Hold back a part where "
+                             "the output moves (`validation`), or rank by score='rmse'.")
+    reference = np.r_[y, y_score] if score_from == 0 else y     # every measured output
+    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, reference, factor) for c in cands]
     t0 = time.perf_counter()
     outcomes = run_tasks(_fit_and_score, tasks, executor=executor, progress=progress,
                          label="select_structure")
@@ -428,14 +588,55 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         results.append(res)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
-    ranked = selection.ranked()
-    if ranked and ranked[0]["status"] == "ok":
-        index = next(i for i, r in enumerate(rows) if r is ranked[0])
-        selection.best_index = index
-        if refit and score_from > 0:
-            from ..estimators.identify import identify
-
-            selection.best = identify(u, y, **cands[index])
-        else:
-            selection.best = results[index]
+    _pick(selection, cands, u, y, refit and score_from > 0, factor)
+    if selection.best is None:
+        counts = {}
+        for r in rows:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        text = ", ".join(f"{v} {k}" for k, v in counts.items())
+        warnings.warn(ConvergenceWarning(
+            f"select_structure selected nothing: of {len(rows)} candidates, {text}; "
+            "Selection.rows give each one's status and reason (Selection.best is None)."),
+            stacklevel=2)
     return selection
+
+
+def _pick(selection, cands, u, y, refit, envelope):
+    """The best row that simulated, refitted on all the data if asked.
+
+    A refit that raises, or whose free run on ``u`` diverges or is implausible, is not kept:
+    its row says why (``refit_*`` status) and the next ranked candidate is refitted.
+    """
+    from ..estimators.identify import identify
+
+    rows = selection.rows
+    for row in selection.ranked():
+        if row["status"] != "ok" or not np.isfinite(row[SCORES[selection.score][0]]):
+            break
+        index = next(i for i, r in enumerate(rows) if r is row)
+        if not refit:
+            selection.best_index, selection.best = index, selection.results[index]
+            return
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                best = identify(u, y, **cands[index])
+                _, status, reason = free_run_check(best, u, y, envelope)
+            except Exception as exc:                    # noqa: BLE001 - reported in the row
+                best, status, reason = None, "failed", f"{type(exc).__name__}: {exc}"
+        if status != "ok":         # not kept: its warnings go to its row, not to the user
+            notes = sorted({str(w.message).split("\n")[0] for w in caught
+                            if not issubclass(w.category, ExtrapolationWarning)})
+            row.update(status=f"refit_{status}", refit_status=status,
+                       reason="; ".join([f"refit on all the data: {reason}", *notes,
+                                         *([row["reason"]] if row["reason"] else [])]))
+            continue
+        for w in caught:            # the kept refit's warnings are the user's (as identify's)
+            if not issubclass(w.category, ExtrapolationWarning):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        row["refit_status"] = best.status.name
+        if best.status.name == "RANK_DEFICIENT":
+            row["reason"] = ("refit on all the data ended RANK_DEFICIENT (its summary() names "
+                             "the parameters)" + (f"; {row['reason']}" if row["reason"] else ""))
+        selection.best_index, selection.best = index, best
+        return

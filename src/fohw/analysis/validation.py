@@ -5,6 +5,12 @@ alone and predicts one step ahead from the measured data, and reports for both t
 the RMSE in the data's units, plus the residual tests of the one-step errors. A model can
 predict one step very well and still simulate badly or diverge; the free run is the measure
 that users of identification tools judge models by, so it comes first.
+
+A free run is scored only when it is *plausible*: besides divergence to infinity (the
+simulator's own test, :class:`fohw.SimulationDivergedError`), a free run that leaves the
+envelope of the measured output (:func:`implausible_sample`: by default more than
+:data:`ENVELOPE` times the measured output's range outside that range) is flagged
+``"implausible"`` with its sample and value, and its fit is NaN, never a finite number.
 """
 
 from __future__ import annotations
@@ -14,11 +20,85 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_array, check_int, check_same_length
-from ..exceptions import ExtrapolationWarning, SimulationDivergedError
+from .._validation import check_array, check_int, check_same_length, check_scalar
+from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
+from ..model.regressors import RegressorBuilder
+from ..model.simulation import simulate
+from ..model.system import HammersteinWiener
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
-__all__ = ["Validation", "compare"]
+__all__ = ["Validation", "compare", "implausible_sample", "ENVELOPE", "FREE_RUN_STATUSES"]
+
+#: Default plausibility factor: a free run is implausible when a sample lies more than
+#: ``ENVELOPE`` times the measured output's range (max - min) below its minimum or above its
+#: maximum (:func:`implausible_sample`).
+ENVELOPE = 10.0
+
+#: What a free run's ``status`` can be: ``"ok"``; ``"diverged"`` (grew past the simulator's
+#: divergence threshold or left the finite numbers); ``"nan"`` (the output basis returned NaN
+#: or inf at a finite output); ``"implausible"`` (finite, but outside the envelope of the
+#: measured output).
+FREE_RUN_STATUSES = ("ok", "diverged", "nan", "implausible")
+
+
+def check_envelope(envelope, name="envelope"):
+    """``envelope`` as a float ``> 0``; None or ``inf`` switch the test off (``inf``)."""
+    if envelope is None or (isinstance(envelope, (float, np.floating)) and envelope == np.inf):
+        return np.inf
+    return check_scalar(envelope, name, lower=0.0, lower_inclusive=False)
+
+
+def implausible_sample(simulated, measured, envelope=ENVELOPE):
+    """The first sample of a free run that leaves the envelope of a measured output, or None.
+
+    Parameters
+    ----------
+    simulated : array_like
+        A finite free-run output.
+    measured : array_like
+        The measured output it is judged against (its range ``[lo, hi]``, span ``hi - lo``).
+    envelope : float
+        The factor: the plausible interval is ``[lo - envelope * span, hi + envelope * span]``
+        (default :data:`ENVELOPE`, 10). For a constant measured output the span is
+        ``|lo|`` (no test if that is 0 too). ``inf`` or None switches the test off.
+
+    Returns
+    -------
+    None or (int, float, (float, float))
+        The first offending sample ``k``, its value and the plausible interval.
+
+    Examples
+    --------
+    >>> from fohw.analysis.validation import implausible_sample
+    >>> implausible_sample([0.0, 5.0, 20.0], [0.0, 1.0, 2.0]) is None
+    True
+    >>> implausible_sample([0.0, 5.0, 20.0, 1e6], [0.0, 1.0, 2.0])
+    (3, 1000000.0, (-20.0, 22.0))
+    """
+    factor = check_envelope(envelope)
+    ysim = np.asarray(simulated, dtype=float)
+    y = np.asarray(measured, dtype=float)
+    if not np.isfinite(factor) or y.size == 0:
+        return None
+    lo, hi = float(np.min(y)), float(np.max(y))
+    span = hi - lo if hi > lo else abs(lo)
+    if span == 0:
+        return None
+    low, high = lo - factor * span, hi + factor * span
+    outside = np.flatnonzero(~((ysim >= low) & (ysim <= high)))
+    if outside.size == 0:
+        return None
+    k = int(outside[0])
+    return k, float(ysim[k]), (low, high)
+
+
+def implausible_message(found, envelope=ENVELOPE, what="the measured output"):
+    """The reason text for :func:`implausible_sample`'s finding."""
+    k, value, (low, high) = found
+    return (f"the free run is implausible from sample k = {k}: y[k] = {value:.6g}, outside "
+            f"[{low:.6g}, {high:.6g}] ({what}'s range widened by {envelope:g} times its span "
+            "on each side; the `envelope` parameter). The model is unstable or absurd on this "
+            "input, so it is not scored.")
 
 
 @dataclass
@@ -30,27 +110,38 @@ class Validation:
     y : ndarray
         The measured output.
     simulated : ndarray or None
-        The free-run output (``None`` if it diverged: see ``diverged``).
+        The free-run output (``None`` if it diverged or was implausible: see ``status`` and
+        ``diverged``).
     predicted : ndarray
         The one-step-ahead prediction from the measured data.
     fit_simulation, rmse_simulation : float
         Fit % ``100 (1 - ||y - ysim|| / ||y - mean y||)`` and RMSE (data units) of the free
-        run, after ``n_init`` samples (NaN if it diverged).
+        run, after ``n_init`` samples (NaN if it diverged or was implausible; the fit % is NaN
+        too for a constant measured output, where it is undefined: see ``notes``).
     fit_prediction, rmse_prediction : float
         The same for the one-step prediction.
     whiteness, cross_correlation : CorrelationTest or None
-        Residual tests of the one-step errors (``None`` for records too short for them).
+        Residual tests of the one-step errors (``None`` for records too short for them, and
+        when they are undefined: a constant input or residual; ``notes`` says which).
     diverged : str
-        Why the free run stopped (empty if it did not).
+        Why the free run was not scored (empty if it was): the divergence or the implausible
+        sample, with its index and value.
     in_range : bool
-        Whether the input stayed inside the estimation input's range (5 % slack).
+        Whether the input stayed inside the estimation input's range (5 % slack); always True
+        for a :class:`fohw.HammersteinWiener`, which carries no estimation range.
     n_init : int
         Leading samples left out of every measure.
+    status : str
+        The free run's status, one of :data:`FREE_RUN_STATUSES`: ``"ok"``, ``"diverged"``,
+        ``"nan"`` or ``"implausible"``.
+    notes : tuple of str
+        What was skipped and why (a residual test, a fit % of a constant output, a one-step
+        prediction a model cannot give).
     """
 
     y: np.ndarray
     simulated: np.ndarray | None
-    predicted: np.ndarray
+    predicted: np.ndarray | None
     fit_simulation: float
     rmse_simulation: float
     fit_prediction: float
@@ -60,12 +151,15 @@ class Validation:
     diverged: str
     in_range: bool
     n_init: int
+    status: str = "ok"
+    notes: tuple = ()
 
     def to_markdown(self, unit=""):
         """A two-row table (free run, one step) and the residual tests."""
         u = f" ({unit})" if unit else ""
-        sim_fit = "diverged" if self.simulated is None else f"{self.fit_simulation:.1f}"
-        sim_rmse = "diverged" if self.simulated is None else f"{self.rmse_simulation:.4g}"
+        ok = self.simulated is not None
+        sim_fit = f"{self.fit_simulation:.1f}" if ok else self.status
+        sim_rmse = f"{self.rmse_simulation:.4g}" if ok else self.status
         out = [f"| | fit % | RMSE{u} |", "|---|---:|---:|",
                f"| free-run simulation | {sim_fit} | {sim_rmse} |",
                f"| one-step prediction | {self.fit_prediction:.1f} | "
@@ -79,6 +173,7 @@ class Validation:
             if t is not None:
                 out.append(f"One-step residual {name}: p = {t.p_value:.3g} "
                            f"({'passed' if t.passed else 'rejected'} at {t.dof} lags).")
+        out.extend(f"Note: {n}" for n in self.notes)
         return "\n".join(out) + "\n"
 
     def plot(self, ax=None, *, dt=None):
@@ -97,13 +192,15 @@ class Validation:
                          label=f"free run: fit {self.fit_simulation:.1f} %")
         else:
             axes[0].plot([], [], "C0", label=f"free run: {self.diverged[:60]}")
-        axes[0].plot(t, self.predicted, "C1--", lw=0.9,
-                     label=f"one step: fit {self.fit_prediction:.1f} %")
+        if self.predicted is not None:
+            axes[0].plot(t, self.predicted, "C1--", lw=0.9,
+                         label=f"one step: fit {self.fit_prediction:.1f} %")
         axes[0].legend(fontsize=8)
         axes[0].set_ylabel("output")
         if self.simulated is not None:
             axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
-        axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
+        if self.predicted is not None:
+            axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
         if self.n_init:
             for a in axes:
                 a.axvspan(t[0], t[min(self.n_init, t.size - 1)], color="0.9")
@@ -114,27 +211,78 @@ class Validation:
         return fig, axes
 
 
-def compare(result, u, y, *, history=None, n_init=0, max_lag=25, confidence=0.99):
+def _one_step(model, u, y):
+    """One-step prediction of a HammersteinWiener (its theta ``[q (x) a, p (x) b]``, Eq. 19)."""
+    u0, y0 = model.operating_point
+    builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
+                               structure=model.structure)
+    yhat = builder.matrix(model.nonlinear) @ model.linear
+    return yhat + y0 if y0 else yhat
+
+
+def _free_run(model, u, history):
+    """``(ysim or None, status, reason, caught warnings)`` of a result or a model."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ExtrapolationWarning)
+        try:
+            if isinstance(model, HammersteinWiener):
+                ysim = simulate(model, u, history=history)
+            else:
+                ysim = model.simulate(u, history=history)
+        except SimulationDivergedError as exc:
+            return None, "nan" if exc.cause == "output_basis" else "diverged", str(exc), caught
+    return ysim, "ok", "", caught
+
+
+def _measure(what, fn, notes, *args, **kwargs):
+    """``fn(*args)``, or NaN with a note when the measure is undefined (a constant output)."""
+    try:
+        return fn(*args, **kwargs)
+    except DimensionError as exc:
+        notes.append(f"{what}: {exc}")
+        return np.nan
+
+
+def compare(model, u, y, *, history=None, n_init=0, max_lag=25, confidence=0.99,
+            envelope=ENVELOPE):
     """Validate an identified model on a record: free run and one-step prediction.
 
     Parameters
     ----------
-    result : IdentificationResult
-        The model.
+    model : IdentificationResult or HammersteinWiener
+        The model: a result (its fitted predictor, as ``result.simulate``) or a
+        :class:`fohw.HammersteinWiener` (simulated by :func:`fohw.simulate`, predicted one
+        step ahead through its theta ``[q (x) a, p (x) b]``, Eq. 19).
     u, y : array_like
-        The validation record, in the data's units.
+        The validation record, in the data's units (at least 2 samples).
     history : (u_past, y_past), optional
         Measured data just before the record (the free run continues from them).
     n_init : int
         Leading samples left out of every measure (a start-up transient).
     max_lag, confidence :
         Of the residual tests (:func:`~fohw.analysis.metrics.whiteness_test`,
-        :func:`~fohw.analysis.metrics.cross_correlation_test`).
+        :func:`~fohw.analysis.metrics.cross_correlation_test`). A test that is undefined on
+        this record (a constant input for the cross-correlation, a constant residual) is
+        skipped with a note in ``notes``; the fit % and RMSE are still given.
+    envelope : float or None
+        Plausibility factor (default :data:`ENVELOPE`, 10): a free run that goes more than
+        ``envelope`` times the range of the measured ``y`` (and of ``history``'s output)
+        outside that range is ``"implausible"`` (:func:`implausible_sample`) and not scored.
+        None switches the test off.
 
     Returns
     -------
     Validation
-        A free run that diverges is reported in ``diverged`` (with its sample), not raised.
+        A free run that diverges or is implausible is reported in ``status`` and ``diverged``
+        (with its sample and value), not raised, and its fit is NaN.
+
+    Raises
+    ------
+    ParameterError
+        ``model`` is neither a result nor a HammersteinWiener, or a bad ``n_init`` or
+        ``envelope``.
+    DimensionError
+        ``u`` and ``y`` differ in length, or the record has fewer than 2 samples.
 
     Examples
     --------
@@ -142,38 +290,51 @@ def compare(result, u, y, *, history=None, n_init=0, max_lag=25, confidence=0.99
     >>> data = fohw.datasets.paper_example(1200, random_state=0)
     >>> res = fohw.identify(data.u[:800], data.y[:800], na=2, nb=2, f_basis=2, g_basis=3)
     >>> v = res.validate(data.u[800:], data.y[800:])
-    >>> v.fit_prediction > v.fit_simulation, v.diverged
-    (True, '')
+    >>> v.fit_prediction > v.fit_simulation, v.diverged, v.status
+    (True, '', 'ok')
     """
+    is_model = isinstance(model, HammersteinWiener)
+    if not is_model and not all(callable(getattr(model, name, None))
+                                for name in ("simulate", "predict")):
+        raise ParameterError("`model` must be an identification result (fohw.identify) or a "
+                             f"fohw.HammersteinWiener; got {type(model).__name__}.")
     u = check_array(u, "u")
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
+    if y.size < 2:
+        raise DimensionError(f"the record has {y.size} sample (`u` and `y`); compare needs at "
+                             "least 2 (a fit % compares the output with its mean).")
     n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
-    diverged, ysim = "", None
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ExtrapolationWarning)
-        try:
-            ysim = result.simulate(u, history=history)
-        except SimulationDivergedError as exc:
-            diverged = str(exc)
+    factor = check_envelope(envelope)
+    ysim, status, diverged, caught = _free_run(model, u, history)
     in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
     for w in caught:
         if not issubclass(w.category, ExtrapolationWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    yhat = result.predict(u, y)
+    if ysim is not None:
+        reference = y if history is None else np.r_[check_array(history[1], "history output"), y]
+        found = implausible_sample(ysim, reference, factor)
+        if found is not None:
+            ysim, status = None, "implausible"
+            diverged = implausible_message(found, factor)
+    notes = []
+    yhat = _one_step(model, u, y) if is_model else model.predict(u, y)
     fit_s = rmse_s = np.nan
     if ysim is not None:
-        fit_s = fit_percent(y, ysim, n_init=n_init)
+        fit_s = _measure("free-run fit %", fit_percent, notes, y, ysim, n_init=n_init)
         rmse_s = rmse(y, ysim, n_init=n_init)
+    fit_p = _measure("one-step fit %", fit_percent, notes, y, yhat, n_init=n_init)
     residual = y - yhat
     white = xcorr = None
     if y.size - n_init > 3 * max_lag:
-        white = whiteness_test(residual, max_lag=max_lag, confidence=confidence, n_init=n_init)
-        xcorr = cross_correlation_test(residual, u, max_lag=max_lag, confidence=confidence,
-                                       n_init=n_init)
+        white = _measure("whiteness test skipped", whiteness_test, notes, residual,
+                         max_lag=max_lag, confidence=confidence, n_init=n_init)
+        xcorr = _measure("input cross-correlation test skipped", cross_correlation_test, notes,
+                         residual, u, max_lag=max_lag, confidence=confidence, n_init=n_init)
+        white = None if isinstance(white, float) else white
+        xcorr = None if isinstance(xcorr, float) else xcorr
     return Validation(y=y, simulated=ysim, predicted=yhat, fit_simulation=fit_s,
-                      rmse_simulation=rmse_s,
-                      fit_prediction=fit_percent(y, yhat, n_init=n_init),
+                      rmse_simulation=rmse_s, fit_prediction=fit_p,
                       rmse_prediction=rmse(y, yhat, n_init=n_init), whiteness=white,
                       cross_correlation=xcorr, diverged=diverged, in_range=in_range,
-                      n_init=n_init)
+                      n_init=n_init, status=status, notes=tuple(notes))
