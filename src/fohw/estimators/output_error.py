@@ -443,7 +443,9 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     lower, upper = bounds
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     details = {} if options.start is None else {"start": "the given start"}
-    if options.start is None and s.orders.free:
+    # (a zero output has no free-run criterion to rank starts by: the single start below
+    # reports it rank deficient)
+    if options.start is None and s.orders.free and np.any(builder.y):
         chain = _Chain(builder, options, executor)
         fit, first, searches, n_candidates = chain.fit(builder, bounds)
         linear0, params0, origin = first.linear, first.params, first.name
