@@ -445,7 +445,11 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     details = {} if options.start is None else {"start": "the given start"}
     # (a zero output has no free-run criterion to rank starts by: the single start below
     # reports it rank deficient)
-    if options.start is None and s.orders.free and np.any(builder.y):
+    # (nor a class rank deficient whatever its orders, e.g. a duplicated basis function: the
+    # single start reports it without a search drifting along the null space)
+    mid = np.r_[(lower + upper) / 2, np.zeros(s.n_nonlinear - len(s.orders.free))]
+    if (options.start is None and s.orders.free and np.any(builder.y)
+            and _linalg.factor(builder.matrix(mid), with_q=False).rank == s.n_linear):
         chain = _Chain(builder, options, executor)
         fit, first, searches, n_candidates = chain.fit(builder, bounds)
         linear0, params0, origin = first.linear, first.params, first.name
