@@ -166,7 +166,8 @@ def test_the_mappings_and_arrays_are_read_only():
 
 def test_outputs_live_in_details_and_settings_in_options():
     r = FITS["output_error_mixed"]()
-    assert set(r.details) == {"simulation_sse", "alpha_history", "J_history"}
+    assert set(r.details) == {"simulation_sse", "alpha_history", "J_history", "starts",
+                              "n_starts_agreed"}           # the default chain (issue 26)
     assert "simulation_sse" not in r.options and r.options["start"] is None
     started = FITS["output_error_from_a_result"]()
     assert started.details["start"] == "the given start"
@@ -335,6 +336,12 @@ def test_todays_fit_is_the_one_the_version_2_file_holds(name):
     """No number moved: today's fit of the same data matches the old file (golden tolerances)."""
     old = fohw.load_result(DATA / f"result_v2_{name}.json")
     new = _fit(**V2_FITS[name])
+    if name == "output_error_mixed":
+        # Issue 26's default chain of starts ends lower than the file's fit from the varpro
+        # start (simulation SSE 3.0013, CONVERGED, alpha 0.738, against 3.2925, MAX_ITER,
+        # alpha 0.0073): only that may have moved.
+        assert new.details["simulation_sse"] < old.details["simulation_sse"]
+        return
     assert (new.method, new.status, new.nit, new.nfev) == (old.method, old.status, old.nit,
                                                            old.nfev)
     assert set(new.details) == set(old.details) and list(new.orders) == list(old.orders)

@@ -56,7 +56,7 @@ class Status(enum.IntEnum):
 #: The method-specific outputs fohw's estimators put in :attr:`IdentificationResult.details`;
 #: the five histories and profiles are also read as attributes of the result.
 DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
-               "alpha_profile", "simulation_sse", "start")
+               "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed")
 
 
 def _readonly(a):

@@ -29,7 +29,7 @@ OPTIONS = {name: m.options for name, m in _TABLE.items()}
 
 def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commensurate",
              offset=False, operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
-             options=None, **method_options):
+             options=None, executor=None, **method_options):
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters
@@ -100,6 +100,10 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     options : mapping or MethodOptions, optional
         The method's options, as a mapping (``options={"innovation_length": 3}``) or an instance
         of its options class.
+    executor : concurrent.futures.Executor, optional
+        Where ``method="output_error"`` runs its local searches (its option ``n_starts``): a
+        :class:`~concurrent.futures.ProcessPoolExecutor` or dask's ``Client.get_executor()``;
+        default (None) serially. The result is the same. Other methods refuse one.
     **method_options
         The same options as keywords (``innovation_length=3``). A name the method does not have
         raises :class:`fohw.ParameterError` saying which methods have it.
@@ -159,4 +163,4 @@ def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commens
     opts = declared.options.build(method, options, others=OPTIONS)
     return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
                       orders=orders, offset=offset, operating_point=operating_point, past=past,
-                      dt=dt, alpha_bounds=alpha_bounds)
+                      dt=dt, alpha_bounds=alpha_bounds, executor=executor)

@@ -31,6 +31,9 @@ Names shared by several methods mean the same everywhere:
     Residual evaluations allowed to :func:`scipy.optimize.least_squares`.
 ``n_grid``
     Points of the coarse scan of the orders (``"varpro"`` and the starts it gives).
+``n_starts``
+    Local searches from the best candidate starts (``"output_error"``'s default chain,
+    :mod:`fohw.estimators.starts`).
 ``innovation_length``, ``forgetting``, ``alpha0``
     ``P``; the forgetting factor in ``(0, 1]``; the initial order (default: the middle of
     ``alpha_bounds``).
@@ -280,9 +283,12 @@ class Method:
     supports : callable
         ``supports(structure) -> None or str``: None if the method fits that
         :class:`fohw.Structure`, else why not (a sentence completing "method 'name' …").
+    parallel : bool
+        ``run`` takes ``executor=`` (independent starts it can run in parallel).
     """
 
     name: str
     options: type
     run: Callable
     supports: Callable = every_structure
+    parallel: bool = False

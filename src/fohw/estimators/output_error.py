@@ -31,6 +31,7 @@ from .. import _linalg
 from .._threads import thin_solves
 from .._validation import check_array, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
 from ..model.simulation import simulate_predictor
 from ..results import IdentificationResult, Status
@@ -44,6 +45,7 @@ from ._common import (
 )
 from .options import N_GRID, Anything, Integer, Method, MethodOptions
 from .profile import parameter_covariance
+from .starts import AGREEMENT_RTOL, Start, agreement, multi_start
 from .varpro import VarproOptions
 from .varpro_search import separable_least_squares
 
@@ -68,16 +70,24 @@ class OutputErrorOptions(MethodOptions):
     max_nfev : int
         Residual evaluations allowed to :func:`scipy.optimize.least_squares` (default 100,
         as scipy counts them: the Jacobian evaluations, one simulation and its sensitivity
-        each, come on top; :attr:`IdentificationResult.nfev` counts both).
+        each, come on top; :attr:`IdentificationResult.nfev` counts both). Per local search.
+    n_starts : int
+        Local searches of the default chain (:mod:`fohw.estimators.starts`, used when
+        ``start`` is None and the class has free orders): the candidates (the nested integer
+        models, the equation-error estimate, a scan of the orders) are ranked by their
+        free-run criterion and the best ``n_starts`` searched (on ``executor`` when
+        :func:`fohw.identify` has one); the best result is kept. Default 2. The fit never
+        ends above the nested integer model's criterion, whatever ``n_starts``.
     """
 
     constraints = {"n_init": Integer(0, lambda c: c.n_samples - 2), "start": Anything(),
-                   "n_grid": N_GRID, "max_nfev": Integer(1)}
+                   "n_grid": N_GRID, "max_nfev": Integer(1), "n_starts": Integer(1, 1000)}
 
     n_init: int = 0
     start: object = None
     n_grid: int = 41
     max_nfev: int = 100
+    n_starts: int = 2
 
 
 @dataclass
@@ -94,6 +104,8 @@ class _OEFit:
     nfev: int
     at_lower: np.ndarray
     at_upper: np.ndarray
+    start_sse: float = np.inf
+    stuck: bool = False
 
 
 class SimulationResidual:
@@ -210,9 +222,11 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     x0 = np.r_[np.asarray(linear0, dtype=np.float64), np.asarray(params0, dtype=np.float64)]
     k = s.layout.n_output_params
     shrink = 1.0
+    sse0 = np.inf
     for _ in range(60):
         try:
-            crit.simulate(x0)
+            r0 = (y - crit.simulate(x0))[window]
+            sse0 = float(r0 @ r0)
             break
         except SimulationDivergedError:
             shrink *= 0.8
@@ -235,6 +249,11 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     escaped = np.array_equal(ls.fun, crit.penalty / y_scale)
     if escaped:
         status = Status.FAILED
+    # Stuck: the solver gave up on shrinking its trust region (xtol) without lowering the
+    # criterion from the start: the start is no minimum it found, only where it stopped.
+    stuck = (not escaped and ls.status == 3 and not sse < sse0 * (1.0 - 1e-9))
+    if stuck:
+        status = Status.FAILED
     # Standard errors from the exact sensitivity of the free run at the estimate (the
     # Jacobian of the output-noise bound, fohw.crb(noise="output")), at x with the orders put
     # on an active bound (the solver's last Jacobian is at its own x, ~1e-10 inside).
@@ -253,10 +272,14 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
                    "times the largest measured |y|), as did the start after shrinking its "
                    f"output parameters 60 times; {message}. Give a start whose simulation "
                    "stays bounded.")
+    elif stuck:
+        message = ("output-error fit stuck at its start: the local search made no step that "
+                   f"lowered the simulation error ({message}), so the estimate is where it "
+                   "started, not a minimum.")
     return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=shrink,
                   status=status, message=message, covariance=cov, noise_variance=s2,
                   nit=int(ls.njev), nfev=crit.n_simulations, at_lower=active < 0,
-                  at_upper=active > 0)
+                  at_upper=active > 0, start_sse=sse0, stuck=stuck)
 
 
 def _parameter_scale(x0, structure, u, y):
@@ -319,44 +342,164 @@ def _start(builder, options, lower, upper):
     return np.array(linear0, dtype=float), np.array(params0, dtype=float), J0, "the given start"
 
 
-@thin_solves
-def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
-    """Equation-error start (varpro) or a given one, then the simulation-error fit.
+def local_search(builder, linear0, params0, lower, upper, n_init, max_nfev):
+    """One local search of the default chain (a task for an executor): :func:`fit_output_error`."""
+    return fit_output_error(builder, linear0, params0, lower=lower, upper=upper, n_init=n_init,
+                            max_nfev=max_nfev)
 
-    ``options`` are checked (:meth:`OutputErrorOptions.check`).
+
+class _Chain:
+    """The default chain of one record (:func:`fohw.estimators.starts.multi_start`) and its costs."""
+
+    def __init__(self, builder, options, executor):
+        self.builder, self.options, self.executor = builder, options, executor
+        self.n_simulations = 0          # scan, nested fits and the searches, all counted
+        self.nested = {}                # structure -> (linear, params, sse) or None
+
+    def criterion(self, structure):
+        y, window = self.builder.y, slice(self.options.n_init, None)
+        guard = 10.0 * float(np.max(np.abs(y)))
+
+        def sse(linear, params):
+            self.n_simulations += 1
+            n = structure.n_linear
+            x = np.r_[linear, params]
+            try:
+                r = (y - simulate_predictor(structure, x[:n], x[n:], self.builder.u,
+                                            divergence_threshold=guard))[window]
+            except SimulationDivergedError:
+                return np.inf
+            value = float(r @ r)
+            return value if np.isfinite(value) else np.inf
+        return sse
+
+    def nested_fit(self, structure):
+        """``(linear, params, sse)`` of the simulation-error fit of a contained class."""
+        if structure not in self.nested:
+            sub = RegressorBuilder(self.builder.u, self.builder.y, structure=structure)
+            n_free = len(structure.orders.free)
+            lo, hi = self.bounds
+            bounds = (np.full(n_free, lo[0]), np.full(n_free, hi[0]))
+            got = self.fit(sub, bounds)
+            self.nested[structure] = None if got is None else (got[0].linear, got[0].params,
+                                                               got[0].sse)
+        return self.nested[structure]
+
+    def fit(self, builder, bounds):
+        """``(fit, start, searches, n_candidates)``, or None for a rank-deficient single start."""
+        options, s = self.options, builder.structure
+        lower, upper = bounds
+        if s.orders.free:
+            self.bounds = bounds
+
+            def equation_error():
+                vp = separable_least_squares(builder, bounds=bounds,
+                                             options=VarproOptions(n_grid=options.n_grid))
+                return vp.linear, vp.params
+
+            chain = multi_start(builder, bounds, nested_fit=self.nested_fit,
+                                equation_error=equation_error, criterion=self.criterion(s),
+                                search=local_search,
+                                search_args=(options.n_init, options.max_nfev),
+                                n_starts=options.n_starts,
+                                executor=self.executor if builder is self.builder else None)
+            self.n_simulations += sum(f.nfev for _, f in chain.searches if f is not None)
+            return chain.fit, chain.start, chain.searches, chain.n_candidates
+        linear0, params0, _, origin = _start(builder, options, lower, upper)
+        if _linalg.factor(builder.matrix(params0), with_q=False).rank < s.n_linear:
+            return None
+        fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
+                               n_init=options.n_init, max_nfev=options.max_nfev)
+        self.n_simulations += fit.nfev
+        return fit, Start(origin, linear0, params0, fit.start_sse), [], 1
+
+
+def _advice(options, fit, structure):
+    """What to try next, among what the user has not done already."""
+    tips = []
+    if fit.status == Status.MAX_ITER:
+        tips.append(f"raise max_nfev (it was {options.max_nfev})")
+    if options.start is None and structure.orders.free:
+        tips.append(f"raise n_starts (it was {options.n_starts})")
+    elif options.start is not None:
+        tips.append("fit without `start` (the default chain of starts)")
+    if structure.orders.free:
+        tips.append("fix the orders (orders=0, or a number) to compare")
+    return "; ".join(tips)
+
+
+@thin_solves
+def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0), executor=None):
+    """The default chain of starts (or a given start), then the simulation-error fit.
+
+    ``options`` are checked (:meth:`OutputErrorOptions.check`). Without ``start``, a class
+    with free orders is fitted from the best candidates of :func:`~fohw.estimators.starts.
+    multi_start` (nested integer models, the equation-error estimate, a scan of the orders);
+    ``executor`` runs its local searches.
     """
     s = builder.structure
     check_enough_samples(builder.n_samples - options.n_init, s,
                          after=f" after n_init = {options.n_init}" if options.n_init else "")
     lower, upper = bounds
-    linear0, params0, J0, origin = _start(builder, options, lower, upper)
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
-    details = {} if options.start is None else {"start": origin}
-    Phi0 = builder.matrix(params0)
-    fac = _linalg.factor(Phi0, with_q=False)
-    if fac.rank < fac.n_columns:        # not identifiable: no fit (it would drift along the
-        return finish(builder, method="output_error", linear=linear0, params=params0,  # null
-                      status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0,        # space)
-                      rank_factor=fac, options=record, details=details,
-                      operating_point=operating_point,
-                      message=f"no simulation-error fit: the start ({origin}) is rank deficient.")
-    fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
-                           n_init=options.n_init, max_nfev=options.max_nfev)
+    details = {} if options.start is None else {"start": "the given start"}
+    # (a zero output has no free-run criterion to rank starts by: the single start below
+    # reports it rank deficient)
+    # (nor a class rank deficient whatever its orders, e.g. a duplicated basis function: the
+    # single start reports it without a search drifting along the null space)
+    mid = np.r_[(lower + upper) / 2, np.zeros(s.n_nonlinear - len(s.orders.free))]
+    if (options.start is None and s.orders.free and np.any(builder.y)
+            and _linalg.factor(builder.matrix(mid), with_q=False).rank == s.n_linear):
+        chain = _Chain(builder, options, executor)
+        fit, first, searches, n_candidates = chain.fit(builder, bounds)
+        linear0, params0, origin = first.linear, first.params, first.name
+        J0 = float(np.mean((builder.y - builder.matrix(params0) @ linear0) ** 2))
+        nfev = chain.n_simulations
+        done = [f.sse for _, f in searches if f is not None]
+        agreed = agreement(done)
+        details["starts"] = [
+            {"start": c.name, "orders": dict(zip(s.orders.free, map(float, c.params))),
+             "start_sse": c.sse, "sse": None if f is None else f.sse,
+             "status": None if f is None else f.status.name,
+             "nfev": None if f is None else f.nfev} for c, f in searches]
+        details["n_starts_agreed"] = agreed
+        chain_note = (f" Default chain: {n_candidates} candidate starts (nested integer models, "
+                      f"the equation-error estimate, a scan of the orders), the best "
+                      f"{len(searches)} searched; {agreed} of {len(done)} ended within "
+                      f"{AGREEMENT_RTOL:g} of the best criterion; {nfev} simulations in all.")
+    else:
+        linear0, params0, J0, origin = _start(builder, options, lower, upper)
+        Phi0 = builder.matrix(params0)
+        fac = _linalg.factor(Phi0, with_q=False)
+        if fac.rank < fac.n_columns:    # not identifiable: no fit (it would drift along the
+            return finish(builder, method="output_error", linear=linear0, params=params0,
+                          status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0,  # null space)
+                          rank_factor=fac, options=record, details=details,
+                          operating_point=operating_point,
+                          message=f"no simulation-error fit: the start ({origin}) is rank "
+                                  "deficient.")
+        fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
+                               n_init=options.n_init, max_nfev=options.max_nfev)
+        nfev, chain_note = fit.nfev, ""
     message = fit.message
     first = ", ".join(f"{n} = {v:.6g}" for n, v in zip(s.nonlinear_names, params0))
     message += (f" Started from {origin}" + (f" ({first})" if first else "")
                 + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "
                    "stable." if fit.start_shrink < 1 else "."))
-    message += f" Simulation error criterion from sample {options.n_init} on."
+    message += f" Simulation error criterion from sample {options.n_init} on." + chain_note
     for j, name in enumerate(s.orders.free):
         if fit.at_lower[j] or fit.at_upper[j]:
             message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j])
+    if fit.status in (Status.MAX_ITER, Status.FAILED):
+        tips = _advice(options, fit, s)
+        if tips:
+            message += f" To try: {tips}."
     details["simulation_sse"] = fit.sse
     Phi = builder.matrix(fit.params)
     J = float(np.mean((builder.y - Phi @ fit.linear) ** 2))
     alpha_history = [params0[0], fit.params[0]] if s.orders.free else None
     return finish(builder, method="output_error", linear=fit.linear, params=fit.params,
-                  status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
+                  status=fit.status, nit=fit.nit, nfev=nfev, message=message,
                   alpha_at_bound=bool(np.any(fit.at_lower) or np.any(fit.at_upper)),
                   options=record, details=details, Phi=Phi, covariance=fit.covariance,
                   noise_variance=fit.noise_variance, alpha_history=alpha_history,
@@ -365,4 +508,4 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0))
 
 
 #: ``method="output_error"`` as :func:`fohw.identify` dispatches it (every structure).
-METHOD = Method("output_error", OutputErrorOptions, output_error_result)
+METHOD = Method("output_error", OutputErrorOptions, output_error_result, parallel=True)

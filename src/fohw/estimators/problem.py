@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
+from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -81,7 +82,7 @@ def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=Fal
     return Problem(builder, bounds, point, (float(u.min()), float(u.max())))
 
 
-def fit_method(method, options, u, y, **model):
+def fit_method(method, options, u, y, executor=None, **model):
     """Run one method on a record: :func:`prepare`, the method's own checks, then its run.
 
     Parameters
@@ -93,6 +94,9 @@ def fit_method(method, options, u, y, **model):
         checked here against the record.
     u, y : array_like
         The record.
+    executor : concurrent.futures.Executor, optional
+        Where a method with independent starts (``method.parallel``) runs them; an error for
+        any other method (nothing is ignored).
     **model
         The keywords of :func:`prepare`.
 
@@ -100,6 +104,17 @@ def fit_method(method, options, u, y, **model):
     -------
     IdentificationResult
     """
+    extra = {}
+    if executor is not None:
+        if not method.parallel:
+            raise ParameterError(f"method {method.name!r} runs nothing in parallel, so it takes "
+                                 f"no `executor`; got {type(executor).__name__}. `executor` is "
+                                 "used by method='output_error' (its starts).")
+        if not isinstance(executor, Executor):
+            raise ParameterError("`executor` must be a concurrent.futures.Executor (e.g. a "
+                                 "ProcessPoolExecutor, or dask's Client.get_executor()) or "
+                                 f"None; got {type(executor).__name__}.")
+        extra["executor"] = executor
     problem = prepare(u, y, **model)
     reason = method.supports(problem.structure)
     if reason:
@@ -109,7 +124,7 @@ def fit_method(method, options, u, y, **model):
     # and criterion for finiteness and raises EstimationDivergedError with the reason.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         result = method.run(problem.builder, options, problem.bounds,
-                            operating_point=problem.operating_point)
+                            operating_point=problem.operating_point, **extra)
     return replace(result, input_range=problem.input_range)
 
 
