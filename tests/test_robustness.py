@@ -189,3 +189,49 @@ def test_library_code_leaves_the_matplotlib_backend_alone(module, tmp_path):
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "svg"
     assert (tmp_path / "figure_3.png").stat().st_size > 0
+
+
+# ---- issue 28 (28c) -----------------------------------------------------------------------------
+
+
+def test_masked_samples_are_refused_not_fitted():
+    """Issue 28 #11: the values under a mask were fitted (alpha 0.04 for a true 0.59)."""
+    d = fohw.datasets.paper_example(300, random_state=0)
+    mask = np.zeros(d.u.size, bool)
+    mask[100:110] = True
+    u = np.ma.masked_array(d.u.copy(), mask=mask)
+    u.data[mask] = 1e3
+    for call in (lambda: fohw.identify(u, d.y, **STRUCT),
+                 lambda: fohw.identify(d.u, np.ma.masked_array(d.y, mask=mask), **STRUCT),
+                 lambda: fohw.simulate(fohw.datasets.paper_model(), u),
+                 lambda: fohw.gl_difference(u, 0.5)):
+        with pytest.raises(fohw.ParameterError, match=r"is a masked array with 10 masked "
+                           r"sample\(s\) \(the first at index 100\).*filled"):
+            call()
+    # A masked array with nothing masked is just its data.
+    clean = np.ma.masked_array(d.u, mask=np.zeros(d.u.size, bool))
+    a = fohw.identify(clean, np.ma.masked_array(d.y), **STRUCT)
+    b = fohw.identify(d.u, d.y, **STRUCT)
+    assert a.alpha == b.alpha and np.array_equal(a.theta, b.theta)
+
+
+@pytest.mark.parametrize("bad, text", [
+    (np.arange(50).astype("datetime64[s]"), "got datetime64[s] values (dates or durations)"),
+    (np.arange(50).astype("timedelta64[ms]"), "got timedelta64[ms] values (dates or durations)"),
+    (np.arange(50).astype(str), "got an array of strings (dtype <U"),
+    (np.arange(50.0).astype(object), "got an array of Python objects (dtype object)"),
+    (np.arange(50) * 1j, "must be real; got a complex array"),
+])
+def test_non_numeric_samples_are_refused_naming_the_argument(bad, text):
+    """Issue 28 #11: datetime64 input was read as seconds since the epoch."""
+    y = np.random.default_rng(0).uniform(-1, 1, 50)
+    res = fohw.identify(y, y**3, na=1, nb=1, f_basis=1, g_basis=1)
+    for name, call in (("u", lambda: fohw.identify(bad, y, na=1, nb=1, f_basis=1, g_basis=1)),
+                       ("y", lambda: fohw.identify(y, bad, na=1, nb=1, f_basis=1, g_basis=1)),
+                       ("u", lambda: fohw.simulate(fohw.datasets.paper_model(), bad)),
+                       ("u", lambda: res.simulate(bad)),
+                       ("y", lambda: res.predict(y, bad)),
+                       ("x", lambda: fohw.gl_difference(bad, 0.5))):
+        with pytest.raises(fohw.ParameterError) as info:
+            call()
+        assert f"`{name}`" in str(info.value) and text in str(info.value)
