@@ -20,7 +20,14 @@ import scipy.fft
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative, past_transient
+from .gl import (
+    CausalConvolution,
+    convolution_at,
+    gl_weights,
+    gl_weights_derivative,
+    past_transient,
+)
+from .orders import ORDER_RANGE
 from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
@@ -204,8 +211,10 @@ class RegressorBuilder:
 
         With ``derivative=True``, their exact derivative with respect to the order
         (convolution with :func:`fohw.gl_weights_derivative`). Divided by ``dt**alpha``.
+        ``alpha`` must lie in :data:`fohw.model.orders.ORDER_RANGE` (``[0, 2]``), the orders
+        every fohw model allows.
         """
-        alpha = check_scalar(alpha, "alpha")
+        alpha = check_scalar(alpha, "alpha", lower=ORDER_RANGE[0], upper=ORDER_RANGE[1])
         return self._differences(alpha, derivative)
 
     def _differences(self, nu, derivative=False):
@@ -276,7 +285,8 @@ class RegressorBuilder:
     def check_params(self, params):
         """The nonlinear parameters as a finite vector of :attr:`Structure.n_nonlinear` entries.
 
-        One number is accepted when there is one nonlinear parameter.
+        One number is accepted when there is one nonlinear parameter. The free orders must
+        lie in :data:`fohw.model.orders.ORDER_RANGE` (``[0, 2]``), as in every model.
         """
         params = np.atleast_1d(np.asarray(params, dtype=np.float64))
         k = self.structure.n_nonlinear
@@ -285,6 +295,11 @@ class RegressorBuilder:
                                  f"need {k} value(s); got {params.shape}.")
         if not np.all(np.isfinite(params)):
             raise ParameterError(f"the nonlinear parameters must be finite; got {params}.")
+        lo, hi = ORDER_RANGE
+        for name, value in zip(self.structure.orders.free, params):
+            if not lo <= value <= hi:
+                raise ParameterError(f"the order {name!r} must be in [{lo:g}, {hi:g}] (the orders "
+                                     f"fohw's models allow); got {float(value)!r}.")
         return params
 
     def term_orders(self, params):
