@@ -26,6 +26,7 @@ from .gl import (
     gl_weights,
     gl_weights_derivative,
     past_transient,
+    sampling_scale,
 )
 from .orders import ORDER_RANGE
 from .structure import Structure
@@ -222,11 +223,11 @@ class RegressorBuilder:
         h = self.structure.dt
         if not derivative:
             d = self._convolve(gl_weights(nu, n))
-            return d if h == 1.0 else d * h**-nu
+            return d if h == 1.0 else d * sampling_scale(h, nu, "dt")
         d = self._convolve(gl_weights_derivative(nu, n))
         if h == 1.0:
             return d
-        return (d - np.log(h) * self._convolve(gl_weights(nu, n))) * h**-nu
+        return (d - np.log(h) * self._convolve(gl_weights(nu, n))) * sampling_scale(h, nu, "dt")
 
     def _convolve(self, weights):
         """The stacked basis signals convolved with ``weights``, shape ``(n_g + n_f, N)``.
