@@ -235,3 +235,64 @@ def test_non_numeric_samples_are_refused_naming_the_argument(bad, text):
         with pytest.raises(fohw.ParameterError) as info:
             call()
         assert f"`{name}`" in str(info.value) and text in str(info.value)
+
+
+def _rescaled(res, c, e):
+    """theta, past of ``res`` (fitted to u * c, y * e) brought back to the units of u, y."""
+    s = res.structure
+    f = [e ** (1 - j) for j in range(1, len(s.g_basis) + 1) for _ in s.orders.output]
+    f += [e / c**j for j in range(1, len(s.f_basis) + 1) for _ in s.orders.input]
+    return res.theta / np.array(f), np.array(res.past) / [c, e]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("past", ["rest", "estimate"])
+@pytest.mark.parametrize("method", ["varpro", "structured", "output_error"])
+def test_units_from_1e_minus_150_to_1e150(method, past):
+    """Issue 28 #4: rescaling u and y rescales the model and nothing else, or a clear error.
+
+    Before: AttributeError (no start when the grid criterion was all NaN), IndexError, scipy's
+    "array must not contain infs or NaNs", an empty argmin, and past levels that moved with
+    the units (u * 1e-100). Representable units give the reference fit (the criterion to 1e-8,
+    the orders to 1e-5: the same optimum, stopped at the solver's tolerance); u**3 beyond the
+    doubles (u * 1e+-150) is an error that says to rescale.
+    """
+    d = fohw.datasets.paper_example(300, random_state=0)
+    structure = dict(na=1, nb=2, f_basis=3, g_basis=1)
+    ref = fohw.identify(d.u, d.y, method=method, past=past, **structure)
+    for k in range(-150, 151, 50):
+        for ku, ky in ((k, k), (k, 0), (0, k)):
+            c, e = 10.0**ku, 10.0**ky
+            if abs(ku) >= 150:                 # u**3 underflows or overflows
+                with pytest.raises(fohw.ParameterError, match="(?i)rescale"):
+                    fohw.identify(d.u * c, d.y * e, method=method, past=past, **structure)
+                continue
+            res = fohw.identify(d.u * c, d.y * e, method=method, past=past, **structure)
+            theta, levels = _rescaled(res, c, e)
+            assert res.status == ref.status, (ku, ky)
+            assert abs(res.J / e**2 - ref.J) <= 1e-8 * ref.J, (ku, ky)
+            assert abs(res.alpha - ref.alpha) <= 1e-5, (ku, ky)
+            np.testing.assert_allclose(theta, ref.theta, rtol=0, atol=1e-4 * np.abs(ref.theta).max())
+            np.testing.assert_allclose(levels, ref.past, rtol=0, atol=1e-4)
+            # Standard errors where their squares are doubles (sizes up to about 1e+-150),
+            # else none and a note.
+            size = max(abs(ky - j * ku) for j in (1, 2, 3))
+            if size > 200:
+                assert res.covariance is None and "No standard errors" in res.message
+            elif size <= 100:
+                assert res.covariance is not None
+
+
+@pytest.mark.parametrize("orders, na, nb", [("commensurate", 1, 2), ("per_lag", 3, 1)])
+@pytest.mark.parametrize("past", ["rest", "estimate"])
+def test_the_issue_s_scales_end_in_a_clear_error(orders, na, nb, past):
+    """Issue 28 #4, the calls as reported (N = 16): AttributeError and IndexError before."""
+    d = fohw.datasets.paper_example(16, random_state=0)
+    with pytest.raises(fohw.ParameterError, match=r"basis function 'x\^3' of `u` underflows.*"
+                       r"Rescale `u`"):
+        fohw.identify(d.u * 1e-150, d.y * 1e20, na=na, nb=nb, f_basis=3, g_basis=1,
+                      orders=orders, past=past)
+    with pytest.raises(fohw.ParameterError, match=r"the parameter 'p3b1' would be about "
+                       r"1e-40\d .*Rescale `u` and `y`"):
+        fohw.identify(d.u * 1e100, d.y * 1e-100, na=na, nb=nb, f_basis=3, g_basis=1,
+                      orders=orders, past=past)

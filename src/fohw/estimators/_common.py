@@ -12,6 +12,7 @@ from ..exceptions import (
     ConvergenceWarning,
     DimensionError,
     EstimationDivergedError,
+    ParameterError,
     RankDeficiencyWarning,
 )
 from ..results import IdentificationResult, Status, recover_model
@@ -33,6 +34,84 @@ def rms_scale(x):
             return 1.0
         value = m * float(np.sqrt(np.mean(np.square(x / m))))
     return value
+
+
+#: A parameter whose natural size (:func:`natural_sizes`) is within ``2**±WORKING_RANGE`` of 1
+#: is searched as it is; one beyond is searched in units of its size (a power of 2), so that
+#: the solver's tolerance on the steps (relative to ``||x||``) means the same in every unit.
+WORKING_RANGE = 20
+#: Natural sizes beyond ``2**±REPRESENTABLE`` (about 1e±301) leave too little room (1e7) for
+#: the estimates themselves and the products the estimators form: the units are refused.
+REPRESENTABLE = 1000
+#: Variances are squares of the sizes: beyond ``2**±VARIANCE_RANGE`` (1e±150) they are not
+#: doubles, and the covariance is left out.
+VARIANCE_RANGE = 500
+
+
+def natural_sizes(builder):
+    """``log2`` of each parameter's natural size: linear (theta, offset), orders, past levels.
+
+    A theta entry multiplies a regressor made from one basis signal; its size is that of ``y``
+    over that signal's (RMS over the record: the units, not the estimate). The offset is in
+    the units of ``y``, the orders have none, the past levels those of ``u`` and ``y``.
+    Rescaling ``u`` and ``y`` moves these and nothing else.
+    """
+    s = builder.structure
+    log_y = np.log2(rms_scale(builder.y))
+    n_g = len(s.g_basis)
+    out = []
+    for i, row in enumerate(builder.signals):
+        terms = s.orders.output if i < n_g else s.orders.input
+        out += [log_y - np.log2(rms_scale(row))] * len(terms)
+    if s.offset:
+        out.append(log_y)
+    out += [0.0] * len(s.orders.free)
+    if s.past == "estimate":
+        out += [np.log2(rms_scale(builder.u)), log_y]
+    return np.array(out, dtype=float)
+
+
+def working_scale(log_sizes):
+    """Powers of 2 near the natural sizes beyond ``2**±WORKING_RANGE``, 1 elsewhere."""
+    log_sizes = np.asarray(log_sizes, dtype=float)
+    return np.where(np.abs(log_sizes) > WORKING_RANGE, np.exp2(np.round(log_sizes)), 1.0)
+
+
+def check_units(builder):
+    """Refuse data whose units put a parameter beyond what doubles can hold, naming it.
+
+    Raises
+    ------
+    ParameterError
+        A parameter's natural size (:func:`natural_sizes`) is beyond ``2**±REPRESENTABLE``.
+    """
+    s = builder.structure
+    names = s.linear_names + s.nonlinear_names
+    for name, size in zip(names, natural_sizes(builder)):
+        if abs(size) > REPRESENTABLE:
+            raise ParameterError(
+                f"in the units of the data the parameter {name!r} would be about "
+                f"1e{size * np.log10(2.0):+.0f} (the RMS of `y` over that of its regressor), "
+                "beyond the range doubles hold with room for the products the estimators "
+                "form (1e±301). Rescale `u` and `y` (e.g. to an RMS near 1): fohw's estimates "
+                "rescale with the data.")
+
+
+def scaled_problem(residual, jacobian, x0, lower, upper, scale):
+    """``residual``, ``jacobian``, start and bounds in ``z = x / scale`` (``scale``: powers of 2).
+
+    With every scale 1 the functions are returned as they are (the same numbers as before).
+    """
+    if np.all(scale == 1.0):
+        return residual, jacobian, x0, lower, upper
+
+    def res(z):
+        return residual(z * scale)
+
+    def jac(z):
+        return jacobian(z * scale) * scale
+
+    return res, jac, None if x0 is None else x0 / scale, lower / scale, upper / scale
 
 
 def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
@@ -145,6 +224,13 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
             f"{np.max(np.abs(builder.y)):.3g}, max |Phi| = {np.max(np.abs(Phi)):.3g}): the data "
             "are too large for floating point once squared or passed through the basis "
             "functions; rescale u and y (the estimates rescale with them).")
+    if covariance is not None:
+        sizes = natural_sizes(builder)
+        if np.any(np.abs(sizes) > VARIANCE_RANGE) or not np.all(np.isfinite(covariance)):
+            covariance = None
+            message += (" No standard errors: in the units of the data the variances of "
+                        "some parameters are beyond the range of doubles (rescale u and y, "
+                        "e.g. to an RMS near 1, to have them).")
     if rank_factor is None:
         rank_factor = _linalg.factor(Phi, with_q=False)
     if rank_factor.rank < rank_factor.n_columns:

@@ -137,6 +137,30 @@ class LaggedColumns:
         return out
 
 
+def _evaluate(basis, x, name):
+    """The basis signals of ``x``, refusing one that underflows (its column would carry nothing).
+
+    A signal underflows when its largest value is below the smallest normal double although
+    ``x`` is not zero: ``u**3`` of ``u`` in units of 1e-150, say. For a polynomial basis a
+    signal that is 0 everywhere is the same underflow; a custom function may be 0 by design, and
+    a zero column is then reported as rank deficiency.
+    """
+    values = basis.evaluate(x, name)
+    peak_x = float(np.max(np.abs(x)))
+    if peak_x == 0.0:
+        return values
+    tiny = np.finfo(np.float64).tiny
+    for row, fname in zip(values, basis.names):
+        peak = float(np.max(np.abs(row)))
+        if peak < tiny and (peak > 0.0 or basis.is_polynomial):
+            raise ParameterError(
+                f"basis function {fname!r} of `{name}` underflows: its largest value is "
+                f"{peak!r}, below the smallest normal double (2.2e-308), although max |{name}| = "
+                f"{peak_x:.3g}; its regressors would carry no information. Rescale `{name}` "
+                "(fohw's estimates rescale with the data) or use fewer basis functions.")
+    return values
+
+
 class RegressorBuilder:
     """Information matrices of one record for many values of the nonlinear parameters.
 
@@ -199,7 +223,7 @@ class RegressorBuilder:
         self.n_samples = n
         self.u, self.y = u, y
         # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
-        self.signals = np.vstack([self.g_basis.evaluate(y, "y"), self.f_basis.evaluate(u, "u")])
+        self.signals = np.vstack([_evaluate(self.g_basis, y, "y"), _evaluate(self.f_basis, u, "u")])
         self._n_g = len(self.g_basis)
         self.lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
         self._convolution = CausalConvolution(self.signals)
@@ -320,7 +344,9 @@ class RegressorBuilder:
         u_p, y_p = past
         out = []
         for basis, x, scale in ((self.g_basis, y_p, self.y), (self.f_basis, u_p, self.u)):
-            step = 1e-6 * max(abs(x), float(np.sqrt(np.mean(scale * scale))), 1e-300)
+            peak = float(np.max(np.abs(scale)))      # the RMS without squares that underflow
+            rms = peak * float(np.sqrt(np.mean(np.square(scale / peak)))) if peak else 0.0
+            step = 1e-6 * max(abs(x), rms, 1e-300)
             hi = basis.evaluate(np.array([x + step]))[:, 0]
             lo = basis.evaluate(np.array([x - step]))[:, 0]
             out.append((hi - lo) / (2 * step))
