@@ -114,12 +114,30 @@ def scaled_problem(residual, jacobian, x0, lower, upper, scale):
     return res, jac, None if x0 is None else x0 / scale, lower / scale, upper / scale
 
 
-def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
+def kept_above_zero(structure, n_linear, lower):
+    """Mask of the entries of ``(linear..., params)`` never put on a lower bound of 0.
+
+    With estimated past levels the model jumps at an order of exactly 0: a term of order 0
+    sees the level itself before ``k = 0`` (``S_inf(0) = 1``), a term of order ``nu > 0``
+    forgets it entirely (``S_inf(nu) = 0``) however small ``nu`` is, and its partial sums
+    ``S_t(nu) ~ t**-nu`` are still about 1 over any record. A solver that stops just above 0
+    has fitted the limit ``nu -> 0+``, a different model from ``nu = 0``: its order stays
+    where the solver evaluated it. ``lower`` are the bounds of the free orders.
+    """
+    mask = np.zeros(n_linear + structure.n_nonlinear, dtype=bool)
+    if structure.past == "estimate":
+        n_free = len(structure.orders.free)
+        mask[n_linear:n_linear + n_free] = np.asarray(lower, dtype=float) == 0.0
+    return mask
+
+
+def bounded_least_squares(residual, x0, *, jac, lower, upper, keep=None, **options):
     """Bounded nonlinear least squares as every fohw estimator runs it.
 
     :func:`scipy.optimize.least_squares` (trust-region reflective, ``x_scale="jac"``) from
     ``x0`` clipped into the bounds; the entries the solver reports on an active bound are put
-    on it (it stops about 1e-10 inside), and its status is mapped to :class:`fohw.Status`.
+    on it (it stops about 1e-10 inside; not those in ``keep``), and its status is mapped to
+    :class:`fohw.Status`.
     Used by varpro's polish, ``"structured"`` and ``"output_error"``.
 
     Parameters
@@ -132,6 +150,9 @@ def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
         The Jacobian of ``residual``, or a finite-difference scheme (``"2-point"``).
     lower, upper : ndarray
         Bounds of every entry of ``x`` (``-inf``/``inf`` for unbounded ones).
+    keep : ndarray of bool, optional
+        Entries left where the solver evaluated them even when active on their lower bound
+        (:func:`kept_above_zero`: the model is not continuous there).
     **options
         ``ftol``, ``xtol``, ``gtol``, ``max_nfev`` of :func:`scipy.optimize.least_squares`.
 
@@ -147,7 +168,10 @@ def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
     ls = scipy.optimize.least_squares(residual, np.clip(x0, lower, upper), jac=jac,
                                       method="trf", bounds=(lower, upper), x_scale="jac",
                                       **options)
-    x = np.where(ls.active_mask < 0, lower, np.where(ls.active_mask > 0, upper, ls.x))
+    at_lower = ls.active_mask < 0
+    if keep is not None:
+        at_lower = at_lower & ~keep
+    x = np.where(at_lower, lower, np.where(ls.active_mask > 0, upper, ls.x))
     return x, solver_status(ls), ls
 
 
@@ -273,8 +297,18 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         details=out)
 
 
-def bound_note(name, lo, hi, at_lower, at_upper):
-    """Advice when a free order ends at the edge of its bounds, advice that can be followed."""
+def bound_note(name, lo, hi, at_lower, at_upper, value=None):
+    """Advice when a free order ends at the edge of its bounds, advice that can be followed.
+
+    ``value``: the order where it ended when it was kept just above a lower bound of 0
+    (:func:`kept_above_zero`).
+    """
+    if at_lower and lo == 0.0 and value is not None and value != 0.0:
+        return (f" {name} ended at {value:.3g}, on the lower bound 0 as far as the solver can "
+                "go: with estimated past levels order 0 is another model (a term of order 0 "
+                "keeps the past level, one of any order above 0 forgets it), so the order "
+                "stays where the fit was evaluated. orders='mixed' keeps order-0 terms "
+                "beside the fractional ones.")
     if at_lower and lo == 0.0:
         return (f" {name} ended at the lower bound 0: the data favour integer-order (memoryless) "
                 "terms. The commensurate model has no static gain for an order > 0, so records "

@@ -38,6 +38,7 @@ from ._common import (
     bounded_least_squares,
     bounds_record,
     finish,
+    kept_above_zero,
     natural_sizes,
     rms_scale,
     scaled_problem,
@@ -139,6 +140,7 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
     scale = structured_scale(builder)         # parameters far from size 1: in their units
     res, jac, z0, lo_z, hi_z = scaled_problem(residual, jacobian, x0, lo, hi, scale)
     z, status, ls = bounded_least_squares(res, z0, jac=jac, lower=lo_z, upper=hi_z,
+                                          keep=kept_above_zero(s, m, lower),
                                           ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev)
     x = z * scale
     rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
@@ -190,7 +192,8 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
                f"scipy.optimize.least_squares: {ls.message}")
     for j, name in enumerate(s.orders.free):
         if active[j]:
-            message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0)
+            message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0,
+                                  value=params[j])
     return finish(builder, method="structured", linear=linear, params=params, status=status,
                   nit=vp.nit + int(ls.njev), nfev=vp.nfev + int(ls.nfev), message=message,
                   alpha_at_bound=bool(np.any(active != 0)), options=record,

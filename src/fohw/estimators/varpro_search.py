@@ -22,6 +22,7 @@ from ..results import Status
 from ._common import (
     bounded_least_squares,
     check_enough_samples,
+    kept_above_zero,
     natural_sizes,
     rms_scale,
     scaled_problem,
@@ -312,8 +313,8 @@ def _polish(builder, linear, params, lo, hi, opts):
     res, jac, z0, lower_z, upper_z = scaled_problem(residual, jacobian, np.r_[linear, params],
                                                     lower, upper, scale)
     z, _, ls = bounded_least_squares(res, z0, jac=jac, lower=lower_z, upper=upper_z,
-                                     ftol=opts.tol, xtol=opts.tol, gtol=opts.tol,
-                                     max_nfev=opts.max_nfev)
+                                     keep=kept_above_zero(s, n, lo), ftol=opts.tol,
+                                     xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
     x = z * scale
     rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
     return x[:n], x[n:], rss, ls
