@@ -362,7 +362,7 @@ def _check_result_fields(d, version, path):
 
 #: The methods that give standard errors (a covariance and a noise variance).
 _COVARIANCE_METHODS = ("varpro", "output_error", "structured")
-#: What each known entry of ``details`` must be: ``(dimensions, lower bound of its values)``.
+#: What each known entry of ``details`` must be: ``(dimensions or "text", (low, high) of its values)``.
 _DETAILS = {"alpha_history": (1, ORDER_RANGE), "alpha_sample_history": (1, ORDER_RANGE),
             "J_history": (1, (0.0, np.inf)), "theta_history": (2, None),
             "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None)}
