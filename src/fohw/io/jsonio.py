@@ -452,14 +452,12 @@ def _check_detail(key, value, path):
         return
     if ndim == 0:
         ok = _is_number(value) and limits[0] <= value <= limits[1]
-        arr = None
+    elif isinstance(value, dict):
+        arr = _array_field({key: value}, key, path, name=f"details.{key}")
+        ok = arr.ndim == ndim and (limits is None or bool(
+            np.all((arr >= limits[0]) & (arr <= limits[1]))))
     else:
-        arr = np.asarray(value) if not isinstance(value, dict) else None
         ok = False
-        if isinstance(value, dict):
-            arr = _array_field({key: value}, key, path, name=f"details.{key}")
-            ok = arr.ndim == ndim and (limits is None or bool(
-                np.all((arr >= limits[0]) & (arr <= limits[1]))))
     if not ok:
         need = {0: "a number", 1: "a 1-D array", 2: "a 2-D array"}[ndim]
         within = "" if limits is None else f" in [{limits[0]:g}, {limits[1]:g}]"
