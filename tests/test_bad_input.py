@@ -23,6 +23,7 @@ S = dict(na=2, nb=2, f_basis=2, g_basis=3)
 U = np.random.default_rng(0).uniform(-1, 1, 50)
 Y = np.zeros(50)
 M = fohw.datasets.paper_model
+_PAPER16 = fohw.datasets.paper_example(16, random_state=0)
 
 
 def _bad_file(tmp, text, name="bad.dat"):
@@ -459,6 +460,40 @@ API = [
      lambda t: fohw.compare(fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1), U[:1],
                             U[:1]),
      fohw.DimensionError, "the record has 1 sample (`u` and `y`); compare needs at least 2"),
+    # issue 28 (28c)
+    ("identify", "issue 28 #4: u * 1e-150 with f_basis=3 (was AttributeError)",
+     lambda t: fohw.identify(_PAPER16.u * 1e-150, _PAPER16.y * 1e20, na=1, nb=2, f_basis=3,
+                             g_basis=1, past="estimate"),
+     fohw.ParameterError, "basis function 'x^3' of `u` underflows"),
+    ("identify", "issue 28 #4: u * 1e100, y * 1e-100 (was scipy's 'array must not contain infs')",
+     lambda t: fohw.identify(_PAPER16.u * 1e100, _PAPER16.y * 1e-100, na=1, nb=2, f_basis=3,
+                             g_basis=1),
+     fohw.ParameterError, "the parameter 'p3b1' would be about 1e-401"),
+    ("gl_difference", "issue 28 #5: h**-alpha overflows (was OverflowError)",
+     lambda t: fohw.gl_difference(np.ones(10), 2.0, h=1e-300),
+     fohw.ParameterError, "`h` = 1e-300 with the order 2.0 gives the scale h**-order = 10**600"),
+    ("gl_weights", "issue 28 #5: n = 10**12 (was MemoryError)",
+     lambda t: fohw.gl_weights(0.5, 10**12),
+     fohw.ParameterError, "`n` = 1000000000000 needs 8 TB of memory"),
+    ("identify", "issue 28 #11: a masked array with masked samples (they were fitted)",
+     lambda t: fohw.identify(np.ma.masked_array(U, mask=U > 0.9), U**3, **S),
+     fohw.ParameterError, "`u` is a masked array with"),
+    ("identify", "issue 28 #11: datetime64 samples (read as seconds since 1970)",
+     lambda t: fohw.identify(np.arange(50).astype("datetime64[s]"), U, **S),
+     fohw.ParameterError, "`u` must be an array of real numbers; got datetime64[s] values"),
+    ("information_matrix", "issue 28 #14: alpha = -1 (was accepted)",
+     lambda t: fohw.information_matrix(U, U, -1.0, **S),
+     fohw.ParameterError, "`alpha` must be in [0, 2]; got -1.0"),
+    ("load_result", "issue 28 #23: an extra order key (was refused at simulate time)",
+     lambda t: fohw.load_result(_result_file(t, orders={"alpha": 0.5, "beta": 0.5})),
+     fohw.DataFileError, "field 'orders' gives the orders ['alpha', 'beta'], but field "
+     "'structure' has the free orders ['alpha']"),
+    ("load_result", "issue 28 #10: an order outside the run's alpha_bounds",
+     lambda t: fohw.load_result(_result_file(t, orders={"alpha": 1.5})),
+     fohw.DataFileError, "outside field 'options.alpha_bounds' = [0.0, 1.0]"),
+    ("load_result", "issue 28 #10: a schedule the method does not have",
+     lambda t: fohw.load_result(_result_file(t, schedule="recursive")),
+     fohw.DataFileError, "field 'schedule' is 'recursive', but method 'varpro' has no schedule"),
 ]
 
 CLI = [

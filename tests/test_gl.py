@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from scipy.special import binom
 
 import fohw
-from fohw.model.gl import _DIRECT_MAX_LENGTH, _DIRECT_MAX_MEMORY
+from fohw.model.gl import _DIRECT_MAX_LENGTH, _DIRECT_MAX_MEMORY, past_transient
 
 ALPHAS = [0.1, 0.5, 0.6, 0.999, 1.0, 1.3, 1.75, 1.999]
 # Lengths on both sides of the direct/FFT switch, including non-"fast" FFT sizes.
@@ -228,3 +228,25 @@ def test_input_is_not_modified():
     x0 = x.copy()
     fohw.gl_difference(x, 0.5)
     np.testing.assert_array_equal(x, x0)
+
+
+def test_a_scale_beyond_float_range_names_h():
+    """Issue 28 #5: h**-alpha overflowing was a bare OverflowError."""
+    with pytest.raises(fohw.ParameterError, match=r"`h` = 1e-300 with the order 2.0 gives the "
+                       r"scale h\*\*-order = 10\*\*600, beyond the largest double"):
+        fohw.gl_difference(np.ones(10), 2.0, h=1e-300)
+    with pytest.raises(fohw.ParameterError, match=r"`h` = 1e-300"):
+        past_transient(2.0, 1, 10, h=1e-300)
+    # Sums that overflow although the scale does not: named as well, no RuntimeWarning.
+    with pytest.raises(fohw.ParameterError, match=r"overflows: with max \|x\| = 1e\+308"):
+        fohw.gl_difference(np.full(10, 1e308), -1.0)
+    # An underflowing scale is the correctly rounded result 0.
+    assert np.array_equal(fohw.gl_difference(np.ones(3), 2.0, h=1e300), np.zeros(3))
+
+
+@pytest.mark.parametrize("call", [fohw.gl_weights, fohw.gl_weights_derivative])
+def test_weights_beyond_memory_are_refused_naming_n(call):
+    """Issue 28 #5: gl_weights(0.5, 10**12) was numpy's bare MemoryError."""
+    with pytest.raises(fohw.ParameterError, match=r"`n` = 1000000000000 needs \d.* TB of "
+                       r"memory .*more than this machine's"):
+        call(0.5, 10**12)

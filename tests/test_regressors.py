@@ -64,3 +64,21 @@ def test_basis_returning_nonfinite_is_named():
                              "it returned a non-finite"):
         fohw.information_matrix(np.r_[-1.0, np.ones(9)], np.ones(10), 0.5, na=1, nb=1,
                                 f_basis=[np.log], g_basis=1)
+
+
+@pytest.mark.parametrize("bad", [-1.0, -1e-12, 2.0 + 1e-9, 3.5])
+def test_orders_outside_the_model_range_are_refused(bad):
+    """Issue 28 #14: information_matrix accepted alpha = -1, which every model refuses."""
+    rng = np.random.default_rng(0)
+    u, y = rng.uniform(-1, 1, 60), rng.uniform(-1, 1, 60)
+    with pytest.raises(fohw.ParameterError, match=r"`alpha` must be in \[0, 2\]"):
+        fohw.information_matrix(u, y, bad, na=2, nb=2, f_basis=1, g_basis=1)
+    builder = fohw.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="per_lag")
+    with pytest.raises(fohw.ParameterError, match=r"the order 'alpha_a2' must be in \[0, 2\]"):
+        builder.matrix([0.5, bad, 0.5])
+    with pytest.raises(fohw.ParameterError, match=r"the order 'alpha_b1' must be in \[0, 2\]"):
+        builder.matrix_derivatives([0.5, 0.5, bad])
+    # The ends of the range are orders like any other.
+    for edge in (0.0, 2.0):
+        assert np.all(np.isfinite(fohw.information_matrix(u, y, edge, na=2, nb=2, f_basis=1,
+                                                          g_basis=1)))

@@ -353,3 +353,63 @@ def test_todays_fit_is_the_one_the_version_2_file_holds(name):
             assert a is b, name_
         else:
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12, err_msg=name_)
+
+
+# ---- issue 28 (28c): every stored fact agrees with the others, checked on loading ----------------
+def _v3_file(tmp_path, name, change):
+    path = tmp_path / "r.json"
+    fohw.save_result(FITS[name](), path)
+    d = json.loads(path.read_text())
+    change(d)
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize("name, change, match", [
+    ("varpro", lambda d: d["orders"].update(beta=0.5),          # was refused at simulate time
+     r"field 'orders' gives the orders \['alpha', 'beta'\], but field 'structure' has the free "
+     r"orders \['alpha'\]: the file contradicts itself"),
+    ("per_lag_dt", lambda d: d["orders"].pop("alpha_a2"),
+     r"field 'orders' gives the orders \['alpha_a1', 'alpha_b1'\], but field 'structure'"),
+    ("varpro", lambda d: d.update(structure=[1, 2]), r"field 'structure' must be an object"),
+    ("varpro", lambda d: d["structure"].update(orders=[1]),
+     r"field 'structure' is not a model class fohw can read: `orders` must be described"),
+    ("varpro", lambda d: d["structure"].update(past="sometimes"),
+     r"field 'structure' is not a model class fohw can read: `past` must be one of"),
+    ("varpro", lambda d: d.update(theta={"shape": [3], "data": [1.0, 2.0, 3.0]}),
+     r"field 'theta' has shape \[3\], but field 'structure' has 10 entries"),
+    ("varpro", lambda d: d.update(n_samples=2),
+     r"field 'n_samples' is 2, but field 'structure' has lags up to 2"),
+    ("varpro", lambda d: d["options"].update(alpha_bounds=[0.9, 1.0]),
+     r"order 'alpha' is 0\.6.*, outside field 'options.alpha_bounds' = \[0.9, 1.0\]"),
+    ("per_lag_dt", lambda d: d["options"].update(alpha_bounds={"alpha_a1": [0.0, 1.0]}),
+     r"field 'options.alpha_bounds' must be a pair \(low, high\)"),
+    ("varpro", lambda d: d["options"].update(alpha_bounds=[1.0, 0.0]),
+     r"field 'options.alpha_bounds' must be a pair \(low, high\) with 0 <= low < high <= 2"),
+    ("varpro", lambda d: d.update(schedule="recursive"),
+     r"field 'schedule' is 'recursive', but method 'varpro' has no schedule"),
+    ("hybrid", lambda d: d.update(schedule="iterative"),
+     r"field 'schedule' is 'iterative', but method 'hybrid' was run with 'recursive'"),
+    ("rls", lambda d: d.update(method="varpro"),
+     r"field 'schedule' is 'recursive', but method 'varpro' has no schedule"),
+    ("hybrid", lambda d: d.update(noise_variance=1.0),
+     r"field 'noise_variance' is given, but method 'hybrid' gives no standard errors"),
+    ("varpro", lambda d: d.update(status=int(fohw.Status.RANK_DEFICIENT)),
+     r"field 'covariance' is given, but field 'status' says the fit is rank deficient"),
+    ("varpro", lambda d: d["details"].update(alpha_history={"shape": [1], "data": [3.5]}),
+     r"field 'details.alpha_history' must be a 1-D array of values in \[0, 2\]"),
+    ("varpro", lambda d: d["details"].update(J_history="low"),
+     r"field 'details.J_history' must be a 1-D array of values in \[0, inf\]"),
+    ("output_error_mixed", lambda d: d["details"].update(simulation_sse=-1.0),
+     r"field 'details.simulation_sse' must be a number of values in \[0, inf\]"),
+    ("varpro", lambda d: d["details"].update(secret=1),
+     r"field 'details.secret' is not part of a fohw-result file"),
+    ("varpro", lambda d: d.update(past=[1.0, 0.0]),
+     r"inconsistent fohw-result file: `past` is \(1.0, 0.0\), but the structure has "
+     r"past='rest'"),
+])
+def test_a_result_file_whose_facts_disagree_is_refused_naming_the_field(tmp_path, name, change,
+                                                                         match):
+    """Issue 28 #10/#23: each was loaded (or failed later, or named a TypeError)."""
+    with pytest.raises(fohw.DataFileError, match=match):
+        fohw.load_result(_v3_file(tmp_path, name, change))

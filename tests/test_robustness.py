@@ -193,3 +193,110 @@ def test_library_code_leaves_the_matplotlib_backend_alone(module, tmp_path):
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "svg"
     assert (tmp_path / "figure_3.png").stat().st_size > 0
+
+
+# ---- issue 28 (28c) -----------------------------------------------------------------------------
+
+
+def test_masked_samples_are_refused_not_fitted():
+    """Issue 28 #11: the values under a mask were fitted (alpha 0.04 for a true 0.59)."""
+    d = fohw.datasets.paper_example(300, random_state=0)
+    mask = np.zeros(d.u.size, bool)
+    mask[100:110] = True
+    u = np.ma.masked_array(d.u.copy(), mask=mask)
+    u.data[mask] = 1e3
+    for call in (lambda: fohw.identify(u, d.y, **STRUCT),
+                 lambda: fohw.identify(d.u, np.ma.masked_array(d.y, mask=mask), **STRUCT),
+                 lambda: fohw.simulate(fohw.datasets.paper_model(), u),
+                 lambda: fohw.gl_difference(u, 0.5)):
+        with pytest.raises(fohw.ParameterError, match=r"is a masked array with 10 masked "
+                           r"sample\(s\) \(the first at index 100\).*filled"):
+            call()
+    # A masked array with nothing masked is just its data.
+    clean = np.ma.masked_array(d.u, mask=np.zeros(d.u.size, bool))
+    a = fohw.identify(clean, np.ma.masked_array(d.y), **STRUCT)
+    b = fohw.identify(d.u, d.y, **STRUCT)
+    assert a.alpha == b.alpha and np.array_equal(a.theta, b.theta)
+
+
+@pytest.mark.parametrize("bad, text", [
+    (np.arange(50).astype("datetime64[s]"), "got datetime64[s] values (dates or durations)"),
+    (np.arange(50).astype("timedelta64[ms]"), "got timedelta64[ms] values (dates or durations)"),
+    (np.arange(50).astype(str), "got an array of strings (dtype <U"),
+    (np.arange(50.0).astype(object), "got an array of Python objects (dtype object)"),
+    (np.arange(50) * 1j, "must be real; got a complex array"),
+])
+def test_non_numeric_samples_are_refused_naming_the_argument(bad, text):
+    """Issue 28 #11: datetime64 input was read as seconds since the epoch."""
+    y = np.random.default_rng(0).uniform(-1, 1, 50)
+    res = fohw.identify(y, y**3, na=1, nb=1, f_basis=1, g_basis=1)
+    for name, call in (("u", lambda: fohw.identify(bad, y, na=1, nb=1, f_basis=1, g_basis=1)),
+                       ("y", lambda: fohw.identify(y, bad, na=1, nb=1, f_basis=1, g_basis=1)),
+                       ("u", lambda: fohw.simulate(fohw.datasets.paper_model(), bad)),
+                       ("u", lambda: res.simulate(bad)),
+                       ("y", lambda: res.predict(y, bad)),
+                       ("x", lambda: fohw.gl_difference(bad, 0.5))):
+        with pytest.raises(fohw.ParameterError) as info:
+            call()
+        assert f"`{name}`" in str(info.value) and text in str(info.value)
+
+
+def _rescaled(res, c, e):
+    """theta, past of ``res`` (fitted to u * c, y * e) brought back to the units of u, y."""
+    s = res.structure
+    f = [e ** (1 - j) for j in range(1, len(s.g_basis) + 1) for _ in s.orders.output]
+    f += [e / c**j for j in range(1, len(s.f_basis) + 1) for _ in s.orders.input]
+    return res.theta / np.array(f), np.array(res.past) / [c, e]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("past", ["rest", "estimate"])
+@pytest.mark.parametrize("method", ["varpro", "structured", "output_error"])
+def test_units_from_1e_minus_150_to_1e150(method, past):
+    """Issue 28 #4: rescaling u and y rescales the model and nothing else, or a clear error.
+
+    Before: AttributeError (no start when the grid criterion was all NaN), IndexError, scipy's
+    "array must not contain infs or NaNs", an empty argmin, and past levels that moved with
+    the units (u * 1e-100). Representable units give the reference fit (the criterion to 1e-8,
+    the orders to 1e-5: the same optimum, stopped at the solver's tolerance); u**3 beyond the
+    doubles (u * 1e+-150) is an error that says to rescale.
+    """
+    d = fohw.datasets.paper_example(300, random_state=0)
+    structure = dict(na=1, nb=2, f_basis=3, g_basis=1)
+    ref = fohw.identify(d.u, d.y, method=method, past=past, **structure)
+    for k in range(-150, 151, 50):
+        for ku, ky in ((k, k), (k, 0), (0, k)):
+            c, e = 10.0**ku, 10.0**ky
+            if abs(ku) >= 150:                 # u**3 underflows or overflows
+                with pytest.raises(fohw.ParameterError, match="(?i)rescale"):
+                    fohw.identify(d.u * c, d.y * e, method=method, past=past, **structure)
+                continue
+            res = fohw.identify(d.u * c, d.y * e, method=method, past=past, **structure)
+            theta, levels = _rescaled(res, c, e)
+            assert res.status == ref.status, (ku, ky)
+            assert abs(res.J / e**2 - ref.J) <= 1e-8 * ref.J, (ku, ky)
+            assert abs(res.alpha - ref.alpha) <= 1e-5, (ku, ky)
+            np.testing.assert_allclose(theta, ref.theta, rtol=0, atol=1e-4 * np.abs(ref.theta).max())
+            np.testing.assert_allclose(levels, ref.past, rtol=0, atol=1e-4)
+            # Standard errors where their squares are doubles (sizes up to about 1e+-150),
+            # else none and a note.
+            size = max(abs(ky - j * ku) for j in (1, 2, 3))
+            if size > 200:
+                assert res.covariance is None and "No standard errors" in res.message
+            elif size <= 100:
+                assert res.covariance is not None
+
+
+@pytest.mark.parametrize("orders, na, nb", [("commensurate", 1, 2), ("per_lag", 3, 1)])
+@pytest.mark.parametrize("past", ["rest", "estimate"])
+def test_the_issue_s_scales_end_in_a_clear_error(orders, na, nb, past):
+    """Issue 28 #4, the calls as reported (N = 16): AttributeError and IndexError before."""
+    d = fohw.datasets.paper_example(16, random_state=0)
+    with pytest.raises(fohw.ParameterError, match=r"basis function 'x\^3' of `u` underflows.*"
+                       r"Rescale `u`"):
+        fohw.identify(d.u * 1e-150, d.y * 1e20, na=na, nb=nb, f_basis=3, g_basis=1,
+                      orders=orders, past=past)
+    with pytest.raises(fohw.ParameterError, match=r"the parameter 'p3b1' would be about "
+                       r"1e-40\d .*Rescale `u` and `y`"):
+        fohw.identify(d.u * 1e100, d.y * 1e-100, na=na, nb=nb, f_basis=3, g_basis=1,
+                      orders=orders, past=past)

@@ -51,14 +51,48 @@ def check_int(value, name: str, *, minimum: int | None = None, maximum: int | No
 
 
 def check_array(x, name: str, *, ndim: int | None = 1, min_length: int = 1) -> np.ndarray:
-    """Return ``x`` as a float64 array of the given dimension with only finite values."""
+    """Return ``x`` as a float64 array of the given dimension with only finite values.
+
+    Only real numbers are samples: booleans, integers and floats are converted; complex
+    numbers, strings, dates (``datetime64``), durations (``timedelta64``) and arbitrary objects
+    are refused, never read as numbers. A masked array is accepted only when nothing is masked
+    (fohw never fits the values hidden under a mask).
+    """
+    if np.ma.isMaskedArray(x):
+        mask = np.ma.getmaskarray(x)
+        if mask.any():
+            where = np.argwhere(mask)[0]
+            first = int(where[0]) if mask.ndim == 1 else tuple(int(i) for i in where)
+            raise ParameterError(
+                f"`{name}` is a masked array with {int(mask.sum())} masked sample(s) (the first "
+                f"at index {first}); fohw does not skip masked samples and will not fit the "
+                f"values under the mask. Fill them (`{name}.filled(value)`, or interpolate) or "
+                "cut the record to a stretch without masked samples.")
+        x = np.ma.getdata(x)
     try:
-        arr = np.asarray(x, dtype=np.float64)
+        raw = np.asarray(x)
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"`{name}` must be an array of real numbers; got {type(x).__name__}"
                              f" that cannot be converted ({exc}).") from None
-    if np.iscomplexobj(x):
+    kind = raw.dtype.kind
+    if kind == "c":
         raise ParameterError(f"`{name}` must be real; got a complex array.")
+    if kind in "mM":
+        raise ParameterError(
+            f"`{name}` must be an array of real numbers; got {raw.dtype} values (dates or "
+            "durations), which fohw will not read as numbers. Pass the samples themselves; a "
+            "time stamp column gives the sampling time `dt`, not a signal.")
+    if kind not in "biuf":
+        what = {"U": "strings", "S": "bytes", "O": "Python objects", "V": "structured records"}
+        raise ParameterError(
+            f"`{name}` must be an array of real numbers; got an array of "
+            f"{what.get(kind, 'values')} (dtype {raw.dtype}). Convert it first, e.g. "
+            f"np.asarray({name}, dtype=float), or read the file with fohw.read_record.")
+    try:
+        arr = raw.astype(np.float64, copy=False)
+    except (TypeError, ValueError, OverflowError) as exc:      # pragma: no cover - numeric kinds
+        raise ParameterError(f"`{name}` must be an array of real numbers; got {raw.dtype} "
+                             f"values that cannot be converted ({exc}).") from None
     if ndim is not None and arr.ndim != ndim:
         raise DimensionError(f"`{name}` must be {ndim}-D; got an array of shape ({_shape_text(arr)}).")
     if arr.ndim >= 1 and arr.shape[-1] < min_length:

@@ -18,7 +18,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validation import RANGE_TOLERANCE, check_scalar, input_in_range
+from ._validation import RANGE_TOLERANCE, check_array, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
@@ -551,8 +551,8 @@ class IdentificationResult(ResultPresentation):
         ``u`` and ``y`` in the data's units; the operating point is removed and added back.
         """
         u0, y0 = self.operating_point
-        u = np.asarray(u, dtype=np.float64)
-        y = np.asarray(y, dtype=np.float64)
+        u = check_array(u, "u")
+        y = check_array(y, "y")
         builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
                                    structure=self.structure)
         yhat = builder.matrix(self.nonlinear) @ self.linear
@@ -587,10 +587,10 @@ class IdentificationResult(ResultPresentation):
             ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
+        u = check_array(u, "u")
         if self.input_range is not None:
-            u_arr = np.asarray(u, dtype=np.float64)
-            if u_arr.ndim == 1 and np.all(np.isfinite(u_arr)) \
-                    and not input_in_range(u_arr, self.input_range):
+            u_arr = u
+            if not input_in_range(u_arr, self.input_range):
                 lo, hi = self.input_range
                 warnings.warn(ExtrapolationWarning(
                     f"the input spans [{u_arr.min():.4g}, {u_arr.max():.4g}], beyond the range "

@@ -12,6 +12,7 @@ from ..exceptions import (
     ConvergenceWarning,
     DimensionError,
     EstimationDivergedError,
+    ParameterError,
     RankDeficiencyWarning,
 )
 from ..results import IdentificationResult, Status, recover_model
@@ -35,12 +36,108 @@ def rms_scale(x):
     return value
 
 
-def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
+#: A parameter whose natural size (:func:`natural_sizes`) is within ``2**±WORKING_RANGE`` of 1
+#: is searched as it is; one beyond is searched in units of its size (a power of 2), so that
+#: the solver's tolerance on the steps (relative to ``||x||``) means the same in every unit.
+WORKING_RANGE = 20
+#: Natural sizes beyond ``2**±REPRESENTABLE`` (about 1e±301) leave too little room (1e7) for
+#: the estimates themselves and the products the estimators form: the units are refused.
+REPRESENTABLE = 1000
+#: Variances are squares of the sizes: beyond ``2**±VARIANCE_RANGE`` (1e±150) they are not
+#: doubles, and the covariance is left out.
+VARIANCE_RANGE = 500
+
+
+def natural_sizes(builder):
+    """``log2`` of each parameter's natural size: linear (theta, offset), orders, past levels.
+
+    A theta entry multiplies a regressor made from one basis signal; its size is that of ``y``
+    over that signal's (RMS over the record: the units, not the estimate). The offset is in
+    the units of ``y``, the orders have none, the past levels those of ``u`` and ``y``.
+    Rescaling ``u`` and ``y`` moves these and nothing else.
+    """
+    s = builder.structure
+    log_y = np.log2(rms_scale(builder.y))
+    n_g = len(s.g_basis)
+    out = []
+    for i, row in enumerate(builder.signals):
+        terms = s.orders.output if i < n_g else s.orders.input
+        out += [log_y - np.log2(rms_scale(row))] * len(terms)
+    if s.offset:
+        out.append(log_y)
+    out += [0.0] * len(s.orders.free)
+    if s.past == "estimate":
+        out += [np.log2(rms_scale(builder.u)), log_y]
+    return np.array(out, dtype=float)
+
+
+def working_scale(log_sizes):
+    """Powers of 2 near the natural sizes beyond ``2**±WORKING_RANGE``, 1 elsewhere."""
+    log_sizes = np.asarray(log_sizes, dtype=float)
+    return np.where(np.abs(log_sizes) > WORKING_RANGE, np.exp2(np.round(log_sizes)), 1.0)
+
+
+def check_units(builder):
+    """Refuse data whose units put a parameter beyond what doubles can hold, naming it.
+
+    Raises
+    ------
+    ParameterError
+        A parameter's natural size (:func:`natural_sizes`) is beyond ``2**±REPRESENTABLE``.
+    """
+    s = builder.structure
+    names = s.linear_names + s.nonlinear_names
+    for name, size in zip(names, natural_sizes(builder)):
+        if abs(size) > REPRESENTABLE:
+            raise ParameterError(
+                f"in the units of the data the parameter {name!r} would be about "
+                f"1e{size * np.log10(2.0):+.0f} (the RMS of `y` over that of its regressor), "
+                "beyond the range doubles hold with room for the products the estimators "
+                "form (1e±301). Rescale `u` and `y` (e.g. to an RMS near 1): fohw's estimates "
+                "rescale with the data.")
+
+
+def scaled_problem(residual, jacobian, x0, lower, upper, scale):
+    """``residual``, ``jacobian``, start and bounds in ``z = x / scale`` (``scale``: powers of 2).
+
+    With every scale 1 the functions are returned as they are (the same numbers as before).
+    """
+    if np.all(scale == 1.0):
+        return residual, jacobian, x0, lower, upper
+
+    def res(z):
+        return residual(z * scale)
+
+    def jac(z):
+        return jacobian(z * scale) * scale
+
+    return res, jac, None if x0 is None else x0 / scale, lower / scale, upper / scale
+
+
+def kept_above_zero(structure, n_linear, lower):
+    """Mask of the entries of ``(linear..., params)`` never put on a lower bound of 0.
+
+    With estimated past levels the model jumps at an order of exactly 0: a term of order 0
+    sees the level itself before ``k = 0`` (``S_inf(0) = 1``), a term of order ``nu > 0``
+    forgets it entirely (``S_inf(nu) = 0``) however small ``nu`` is, and its partial sums
+    ``S_t(nu) ~ t**-nu`` are still about 1 over any record. A solver that stops just above 0
+    has fitted the limit ``nu -> 0+``, a different model from ``nu = 0``: its order stays
+    where the solver evaluated it. ``lower`` are the bounds of the free orders.
+    """
+    mask = np.zeros(n_linear + structure.n_nonlinear, dtype=bool)
+    if structure.past == "estimate":
+        n_free = len(structure.orders.free)
+        mask[n_linear:n_linear + n_free] = np.asarray(lower, dtype=float) == 0.0
+    return mask
+
+
+def bounded_least_squares(residual, x0, *, jac, lower, upper, keep=None, **options):
     """Bounded nonlinear least squares as every fohw estimator runs it.
 
     :func:`scipy.optimize.least_squares` (trust-region reflective, ``x_scale="jac"``) from
     ``x0`` clipped into the bounds; the entries the solver reports on an active bound are put
-    on it (it stops about 1e-10 inside), and its status is mapped to :class:`fohw.Status`.
+    on it (it stops about 1e-10 inside; not those in ``keep``), and its status is mapped to
+    :class:`fohw.Status`.
     Used by varpro's polish, ``"structured"`` and ``"output_error"``.
 
     Parameters
@@ -53,6 +150,9 @@ def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
         The Jacobian of ``residual``, or a finite-difference scheme (``"2-point"``).
     lower, upper : ndarray
         Bounds of every entry of ``x`` (``-inf``/``inf`` for unbounded ones).
+    keep : ndarray of bool, optional
+        Entries left where the solver evaluated them even when active on their lower bound
+        (:func:`kept_above_zero`: the model is not continuous there).
     **options
         ``ftol``, ``xtol``, ``gtol``, ``max_nfev`` of :func:`scipy.optimize.least_squares`.
 
@@ -68,7 +168,10 @@ def bounded_least_squares(residual, x0, *, jac, lower, upper, **options):
     ls = scipy.optimize.least_squares(residual, np.clip(x0, lower, upper), jac=jac,
                                       method="trf", bounds=(lower, upper), x_scale="jac",
                                       **options)
-    x = np.where(ls.active_mask < 0, lower, np.where(ls.active_mask > 0, upper, ls.x))
+    at_lower = ls.active_mask < 0
+    if keep is not None:
+        at_lower = at_lower & ~keep
+    x = np.where(at_lower, lower, np.where(ls.active_mask > 0, upper, ls.x))
     return x, solver_status(ls), ls
 
 
@@ -145,6 +248,13 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
             f"{np.max(np.abs(builder.y)):.3g}, max |Phi| = {np.max(np.abs(Phi)):.3g}): the data "
             "are too large for floating point once squared or passed through the basis "
             "functions; rescale u and y (the estimates rescale with them).")
+    if covariance is not None:
+        sizes = natural_sizes(builder)
+        if np.any(np.abs(sizes) > VARIANCE_RANGE) or not np.all(np.isfinite(covariance)):
+            covariance = None
+            message += (" No standard errors: in the units of the data the variances of "
+                        "some parameters are beyond the range of doubles (rescale u and y, "
+                        "e.g. to an RMS near 1, to have them).")
     if rank_factor is None:
         rank_factor = _linalg.factor(Phi, with_q=False)
     if rank_factor.rank < rank_factor.n_columns:
@@ -187,8 +297,18 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         details=out)
 
 
-def bound_note(name, lo, hi, at_lower, at_upper):
-    """Advice when a free order ends at the edge of its bounds, advice that can be followed."""
+def bound_note(name, lo, hi, at_lower, at_upper, value=None):
+    """Advice when a free order ends at the edge of its bounds, advice that can be followed.
+
+    ``value``: the order where it ended when it was kept just above a lower bound of 0
+    (:func:`kept_above_zero`).
+    """
+    if at_lower and lo == 0.0 and value is not None and value != 0.0:
+        return (f" {name} ended at {value:.3g}, on the lower bound 0 as far as the solver can "
+                "go: with estimated past levels order 0 is another model (a term of order 0 "
+                "keeps the past level, one of any order above 0 forgets it), so the order "
+                "stays where the fit was evaluated. orders='mixed' keeps order-0 terms "
+                "beside the fractional ones.")
     if at_lower and lo == 0.0:
         return (f" {name} ended at the lower bound 0: the data favour integer-order (memoryless) "
                 "terms. The commensurate model has no static gain for an order > 0, so records "

@@ -41,6 +41,7 @@ from ._common import (
     bounds_record,
     check_enough_samples,
     finish,
+    kept_above_zero,
     rms_scale,
 )
 from .options import N_GRID, Anything, Integer, Method, MethodOptions
@@ -240,6 +241,7 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     residual, jacobian = crit.scaled(scale, y_scale)
     z, status, ls = bounded_least_squares(residual, x0 / scale, jac=jacobian,
                                           lower=bound_lo / scale, upper=bound_hi / scale,
+                                          keep=kept_above_zero(s, n_lin, lower),
                                           max_nfev=max_nfev)
     x = z * scale
     fun = ls.fun * y_scale
@@ -489,7 +491,8 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     message += f" Simulation error criterion from sample {options.n_init} on." + chain_note
     for j, name in enumerate(s.orders.free):
         if fit.at_lower[j] or fit.at_upper[j]:
-            message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j])
+            message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j],
+                                  value=fit.params[j])
     if fit.status in (Status.MAX_ITER, Status.FAILED):
         tips = _advice(options, fit, s)
         if tips:

@@ -21,7 +21,7 @@ from .._validation import AlphaBounds, check_array, check_int, check_same_length
 from ..exceptions import DataWarning, ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.structure import Structure
-from ._common import rms_scale
+from ._common import check_units, rms_scale
 
 __all__ = ["Problem", "prepare", "fit_method", "OPERATING_POINTS"]
 
@@ -79,6 +79,7 @@ def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=Fal
         _warn_levels(u, y)
     _warn_tiny(y_dev)
     builder = RegressorBuilder(u_dev, y_dev, structure=structure)
+    check_units(builder)
     return Problem(builder, bounds, point, (float(u.min()), float(u.max())))
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import scipy.linalg
 
 from .. import _linalg
+from ._common import rms_scale, working_scale
 
 __all__ = ["Profile", "BLOCK_ROWS", "row_blocks", "rank_factor", "profile_theta",
            "parameter_covariance"]
@@ -164,11 +165,14 @@ class Profile:
         resid = builder.y - columns.matvec(linear)
         k, n = fac.rank, columns.n_columns
         r_k = fac.r[:k, :k]
+        # dPhi^T r in units of y (a power of 2, 1 for moderate units): regressors of 1e300
+        # times residuals of 1e100 would overflow before the division by the column norms.
+        y_unit = float(working_scale(np.log2(rms_scale(builder.y))))
         v, z = [], []
         for m in range(params.shape[0]):
             derivative = builder.columns(params, which=m)
             v.append(derivative.matvec(linear))
-            w = (derivative.rmatvec(resid) / fac.scale)[fac.perm[:k]]
+            w = (derivative.rmatvec(resid / y_unit) / fac.scale)[fac.perm[:k]] * y_unit
             z.append(scipy.linalg.solve_triangular(r_k, w, trans="T", check_finite=False))
         r = _linalg.triangular(row_blocks(columns, v), n + len(v))
         qtv = (fac.q.T @ r[:n, n:])[:k]                        # Q^T v, first k entries
@@ -177,7 +181,7 @@ class Profile:
             coef = np.zeros(n)
             coef[fac.perm[:k]] = scipy.linalg.solve_triangular(r_k, qtv[:, m] - z[m],
                                                                check_finite=False)
-            out[:, m] = columns.matvec(coef / fac.scale) - v[m]
+            out[:, m] = _scaled_matvec(columns, coef, fac.scale) - v[m]
         return out
 
     def covariance(self, linear, params, rss):
@@ -196,6 +200,25 @@ class Profile:
         s2 = rss / (builder.n_samples - d)
         inverse, _ = _linalg.inverse_gram_triangular(r, builder.n_samples)
         return (None if inverse is None else s2 * inverse), s2
+
+
+def _scaled_matvec(columns, coef, scale):
+    """``Phi @ (coef / scale)``, also where ``coef / scale`` overflows but the product does not.
+
+    The columns of data in units of 1e-100 and beyond have norms (``scale``) near the smallest
+    double, so ``coef / scale`` can exceed the largest while each column times it is moderate:
+    then each equilibrated column ``Phi[:, j] / scale[j]`` is formed and multiplied instead.
+    """
+    with np.errstate(over="ignore"):
+        x = coef / scale
+    if np.all(np.isfinite(x)):
+        return columns.matvec(x)
+    out = np.zeros(columns.n_samples)
+    for j in np.flatnonzero(coef):                 # rare: O(N n^2), never at moderate units
+        e = np.zeros(columns.n_columns)
+        e[j] = 1.0
+        out += coef[j] * (columns.matvec(e) / scale[j])
+    return out
 
 
 def rank_factor(builder, params):

@@ -33,7 +33,17 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from ..results import Status
-from ._common import bound_note, bounded_least_squares, bounds_record, finish, rms_scale
+from ._common import (
+    bound_note,
+    bounded_least_squares,
+    bounds_record,
+    finish,
+    kept_above_zero,
+    natural_sizes,
+    rms_scale,
+    scaled_problem,
+    working_scale,
+)
 from .options import MAX_NFEV, N_GRID, POSITIVE, Method, MethodOptions
 from .profile import parameter_covariance
 from .varpro import VarproOptions
@@ -63,6 +73,24 @@ class StructuredOptions(MethodOptions):
     n_grid: int = 41
     tol: float = 1e-10
     max_nfev: int | None = None
+
+
+def structured_scale(builder):
+    """Working scales of the structured parameters (``a, b, p_2.., q_2..``, offset, nonlinear).
+
+    From the working scales ``w`` of theta's entries (one per basis signal,
+    :func:`~fohw.estimators._common.working_scale`): ``a`` takes the first output signal's,
+    ``q_j`` the ratio of signal ``j``'s to it (``q_1 = 1``), likewise ``b`` and ``p``. All 1
+    for data in moderate units.
+    """
+    s = builder.structure
+    w = working_scale(natural_sizes(builder))
+    n_out, n_in = len(s.orders.output), len(s.orders.input)
+    n_g, n_f = len(s.g_basis), len(s.f_basis)
+    wg = w[0:n_g * n_out:n_out]
+    wf = w[n_g * n_out:n_g * n_out + n_f * n_in:n_in]
+    return np.r_[np.full(n_out, wg[0]), np.full(n_in, wf[0]), wf[1:] / wf[0], wg[1:] / wg[0],
+                 w[s.layout.n_params:]]
 
 
 def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
@@ -109,8 +137,12 @@ def fit_structured(builder, x0, *, lower, upper, tol=1e-10, max_nfev=None):
 
     lo = np.r_[np.full(m, -np.inf), lower, np.full(n_past, -np.inf)]
     hi = np.r_[np.full(m, np.inf), upper, np.full(n_past, np.inf)]
-    x, status, ls = bounded_least_squares(residual, x0, jac=jacobian, lower=lo, upper=hi,
+    scale = structured_scale(builder)         # parameters far from size 1: in their units
+    res, jac, z0, lo_z, hi_z = scaled_problem(residual, jacobian, x0, lo, hi, scale)
+    z, status, ls = bounded_least_squares(res, z0, jac=jac, lower=lo_z, upper=hi_z,
+                                          keep=kept_above_zero(s, m, lower),
                                           ftol=tol, xtol=tol, gtol=tol, max_nfev=max_nfev)
+    x = z * scale
     rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
     linear, params = s.from_structured(x)
     return x, rss, builder.jacobian(linear, params) @ s.structured_jacobian(x), status, ls
@@ -133,8 +165,13 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
                       rank_factor=vp.rank_factor, options=record,
                       operating_point=operating_point,
                       message="no structured fit: the varpro start is rank deficient.")
+    # The rank-one recovery weighs theta's entries in their working units (a best rank-one fit
+    # is not invariant to scaling the rows of a block): the same start in every unit.
+    w = working_scale(natural_sizes(builder))
+    n_lin = s.n_linear
     try:
-        x0 = s.to_structured(vp.linear, vp.params)
+        x0 = s.to_structured(vp.linear / w[:n_lin], vp.params / w[n_lin:]) \
+            * structured_scale(builder)
     except ParameterError as exc:
         raise ParameterError(f"fohw.identify('structured'): cannot start from the varpro "
                              f"estimate: {exc}") from None
@@ -155,7 +192,8 @@ def structured_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
                f"scipy.optimize.least_squares: {ls.message}")
     for j, name in enumerate(s.orders.free):
         if active[j]:
-            message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0)
+            message += bound_note(name, lower[j], upper[j], active[j] < 0, active[j] > 0,
+                                  value=params[j])
     return finish(builder, method="structured", linear=linear, params=params, status=status,
                   nit=vp.nit + int(ls.njev), nfev=vp.nfev + int(ls.nfev), message=message,
                   alpha_at_bound=bool(np.any(active != 0)), options=record,

@@ -93,7 +93,8 @@ def varpro_result(builder, options, bounds, *, operating_point=(0.0, 0.0)):
     message = fit.message
     for m, name in enumerate(s.orders.free):
         if fit.at_lower[m] or fit.at_upper[m]:
-            message += bound_note(name, lo[m], hi[m], fit.at_lower[m], fit.at_upper[m])
+            message += bound_note(name, lo[m], hi[m], fit.at_lower[m], fit.at_upper[m],
+                                  value=fit.params[m])
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lo, hi))
     profile = np.vstack([fit.grid, fit.grid_J]) if fit.grid.size else None
     rank_factor = fit.rank_factor

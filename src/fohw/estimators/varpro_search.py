@@ -17,8 +17,18 @@ import numpy as np
 import scipy.ndimage
 import scipy.optimize
 
+from ..exceptions import EstimationDivergedError
 from ..results import Status
-from ._common import bounded_least_squares, check_enough_samples, rms_scale, solver_status
+from ._common import (
+    bounded_least_squares,
+    check_enough_samples,
+    kept_above_zero,
+    natural_sizes,
+    rms_scale,
+    scaled_problem,
+    solver_status,
+    working_scale,
+)
 from .profile import Profile
 
 __all__ = ["VarproFit", "separable_least_squares"]
@@ -121,7 +131,7 @@ def _scalar_search(builder, profile, lo, hi, opts):
     """One free order: a grid scan inside the bounds, then Brent's bounded search."""
     n_samples = builder.n_samples
     grid = np.linspace(lo, hi, opts.n_grid + 2)[1:-1]
-    grid_J = np.array([profile(a)[1] for a in grid]) / n_samples
+    grid_J = _finite_somewhere(np.array([profile(a)[1] for a in grid]) / n_samples, builder.y)
     i = int(np.argmin(grid_J))
     left = grid[i - 1] if i > 0 else lo + 1e-6 * (hi - lo)
     right = grid[i + 1] if i < opts.n_grid - 1 else hi - 1e-6 * (hi - lo)
@@ -170,7 +180,8 @@ def _vector_search(builder, profile, lo, hi, opts):
     grid_points = [np.r_[lo + t * (hi - lo), np.zeros(n_past)] for t in tau]
     if n_free == 0:                       # only past levels: start at rest
         grid_points, tau = [np.zeros(n_past)], np.zeros(1)
-    grid_J = np.array([profile(p)[1] for p in grid_points]) / n_samples
+    grid_J = _finite_somewhere(np.array([profile(p)[1] for p in grid_points]) / n_samples,
+                               builder.y)
     if n_free in _FULL_GRID:
         starts, origin = _grid_minima(profile, lo, hi, n_past)
     else:
@@ -179,6 +190,23 @@ def _vector_search(builder, profile, lo, hi, opts):
     message = f"variable projection from {len(starts)} start(s) ({origin}): {best.message}"
     grid = lo[0] + tau * (hi[0] - lo[0]) if n_free else tau
     return best.x, ([], []), grid, grid_J, nit, best.status > 0, message
+
+
+def _finite_somewhere(values, y):
+    """The criterion on a grid, NaN read as +inf; an error naming the cause if none is finite.
+
+    Where no point of the grid has a finite criterion there is no start for any search (the
+    squared errors or the regressors overflow); NaN points elsewhere are never minima.
+    """
+    values = np.where(np.isnan(values), np.inf, values)
+    if not np.any(np.isfinite(values)):
+        raise EstimationDivergedError(
+            "fohw.identify: the one-step criterion J is not finite at any of the "
+            f"{values.size} points of the grid of the orders: in the units of the data the "
+            f"squared errors (max |y| = {float(np.max(np.abs(y))):.3g}) or the regressors "
+            "overflow; rescale u and y (e.g. to an RMS near 1): fohw's estimates rescale with "
+            "the data.")
+    return values
 
 
 def _grid_minima(profile, lo, hi, n_past):
@@ -192,7 +220,8 @@ def _grid_minima(profile, lo, hi, n_past):
     m = _FULL_GRID[n_free]
     axes = [lo[j] + np.linspace(0.0, 1.0, m + 2)[1:-1] * (hi[j] - lo[j]) for j in range(n_free)]
     mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n_free)
-    values = np.array([profile(np.r_[p, np.zeros(n_past)])[1] for p in mesh])
+    values = _finite_somewhere(np.array([profile(np.r_[p, np.zeros(n_past)])[1] for p in mesh]),
+                               profile.builder.y)
     cube = values.reshape((m,) * n_free)
     minima = np.flatnonzero(cube == scipy.ndimage.minimum_filter(cube, size=3, mode="nearest"))
     starts = [np.r_[mesh[i], np.zeros(n_past)] for i in minima[np.argsort(values[minima])][:4]]
@@ -239,15 +268,21 @@ def _project_from(profile, starts, lo, hi, n_past, tol):
     def golub_pereyra(params):
         return profile.golub_pereyra(params) / y_scale
 
+    n_free = lo.shape[0]
+    scale = working_scale(natural_sizes(profile.builder)[-(n_free + n_past):]) \
+        if n_free + n_past else np.ones(0)
+    res, jac, _, lower_z, upper_z = scaled_problem(residual, golub_pereyra, None, lower, upper,
+                                                   scale)
     best, nit = None, 0
     for x0 in starts:
         x0 = np.clip(x0, lower, upper)
-        ls = scipy.optimize.least_squares(residual, x0, jac=golub_pereyra, bounds=(lower, upper),
+        ls = scipy.optimize.least_squares(res, x0 / scale, jac=jac, bounds=(lower_z, upper_z),
                                           method="trf", x_scale="jac", ftol=tol, xtol=tol,
                                           gtol=tol)
         nit += int(ls.njev)
         if best is None or ls.cost < best.cost:
             best = ls
+    best.x = best.x * scale
     return best, nit
 
 
@@ -272,8 +307,14 @@ def _polish(builder, linear, params, lo, hi, opts):
 
     lower = np.r_[np.full(n, -np.inf), lo, np.full(n_past, -np.inf)]
     upper = np.r_[np.full(n, np.inf), hi, np.full(n_past, np.inf)]
-    x, _, ls = bounded_least_squares(residual, np.r_[linear, params], jac=jacobian, lower=lower,
-                                     upper=upper, ftol=opts.tol, xtol=opts.tol, gtol=opts.tol,
-                                     max_nfev=opts.max_nfev)
+    # Parameters far from size 1 (data in units of 1e±6 and beyond) are searched in units of
+    # their natural size, so that the step tolerance means the same in every unit.
+    scale = working_scale(natural_sizes(builder))
+    res, jac, z0, lower_z, upper_z = scaled_problem(residual, jacobian, np.r_[linear, params],
+                                                    lower, upper, scale)
+    z, _, ls = bounded_least_squares(res, z0, jac=jac, lower=lower_z, upper=upper_z,
+                                     keep=kept_above_zero(s, n, lo), ftol=opts.tol,
+                                     xtol=opts.tol, gtol=opts.tol, max_nfev=opts.max_nfev)
+    x = z * scale
     rss = float(ls.fun @ ls.fun) * y_scale * y_scale      # inf, not OverflowError
     return x[:n], x[n:], rss, ls

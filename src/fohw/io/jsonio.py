@@ -24,9 +24,10 @@ import os
 import numpy as np
 
 from ..estimators.identify import METHODS
-from ..exceptions import DataFileError, ParameterError
+from ..exceptions import DataFileError, DimensionError, ParameterError
 from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis
 from ..model.orders import ORDER_RANGE
+from ..model.structure import Structure
 from ..model.system import HammersteinWiener
 from ..results import IdentificationResult, Status
 from .files import read_json, write_json
@@ -359,6 +360,111 @@ def _check_result_fields(d, version, path):
                                 "not an object).")
 
 
+#: The methods that give standard errors (a covariance and a noise variance).
+_COVARIANCE_METHODS = ("varpro", "output_error", "structured")
+#: What each known entry of ``details`` must be: ``(dimensions or "text", (low, high) of its values)``.
+_DETAILS = {"alpha_history": (1, ORDER_RANGE), "alpha_sample_history": (1, ORDER_RANGE),
+            "J_history": (1, (0.0, np.inf)), "theta_history": (2, None),
+            "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None)}
+
+
+def _contradiction(path, text):
+    raise DataFileError(f"{path}: {text}: the file contradicts itself.")
+
+
+def _structure_field(body, f, g, path):
+    """The stored model class, or a DataFileError naming ``structure``."""
+    try:
+        return Structure.from_dict(body["structure"], f_basis=f, g_basis=g)
+    except ParameterError as exc:
+        raise DataFileError(f"{path}: field 'structure' is not a model class fohw can read: "
+                            f"{exc}") from None
+
+
+def _check_agreement(body, structure, path):
+    """The stored facts agree with each other and with the structure (before the result is built).
+
+    Checked: the orders are exactly the structure's free orders and lie inside the run's
+    ``alpha_bounds``; theta has the structure's entries; the record was longer than the lags;
+    ``schedule`` is the run's; a covariance and a noise variance only from a method that gives
+    them and not for a rank-deficient fit; the known ``details`` are of their kind.
+    """
+    free = list(structure.orders.free)
+    if sorted(body["orders"]) != sorted(free):
+        _contradiction(path, f"field 'orders' gives the orders {sorted(body['orders'])}, but "
+                       f"field 'structure' has the free orders {free}")
+    n_theta = structure.layout.n_params
+    shape = body["theta"]["shape"]
+    if shape != [n_theta]:
+        _contradiction(path, f"field 'theta' has shape {shape}, but field 'structure' has "
+                       f"{n_theta} entries ({', '.join(structure.layout.names)})")
+    lags = max(structure.na, structure.nb)
+    if body["n_samples"] <= lags:
+        _contradiction(path, f"field 'n_samples' is {body['n_samples']}, but field 'structure' "
+                       f"has lags up to {lags}, which need a longer record")
+    _check_bounds(body, free, path)
+    method, schedule = body["method"], body["schedule"]
+    expected = body["options"].get("schedule", "recursive" if method == "rls" else "")
+    if schedule != expected:
+        _contradiction(path, f"field 'schedule' is {schedule!r}, but method {method!r} "
+                       f"was run with {expected!r}" if expected else
+                       f"field 'schedule' is {schedule!r}, but method {method!r} has no schedule")
+    for key in ("covariance", "noise_variance"):
+        if body[key] is None:
+            continue
+        if method not in _COVARIANCE_METHODS:
+            _contradiction(path, f"field {key!r} is given, but method {method!r} gives no "
+                           f"standard errors (only {', '.join(_COVARIANCE_METHODS)} do)")
+        if body["status"] == int(Status.RANK_DEFICIENT):
+            _contradiction(path, f"field {key!r} is given, but field 'status' says the fit is "
+                           "rank deficient, which has none")
+    for key, value in body["details"].items():
+        _check_detail(key, value, path)
+
+
+def _check_bounds(body, free, path):
+    bounds = body["options"].get("alpha_bounds")
+    if bounds is None:
+        return
+    pairs = bounds if isinstance(bounds, dict) else {n: bounds for n in free}
+    for name in free:
+        pair = pairs.get(name)
+        if not isinstance(pair, list) or len(pair) != 2 or not all(_is_number(v) for v in pair) \
+                or not ORDER_RANGE[0] <= pair[0] < pair[1] <= ORDER_RANGE[1]:
+            raise DataFileError(f"{path}: field 'options.alpha_bounds' must be a pair (low, high) "
+                                f"with 0 <= low < high <= 2, or such a pair per free order; got "
+                                f"{bounds!r}.")
+        value = body["orders"][name]
+        if not pair[0] <= value <= pair[1]:
+            _contradiction(path, f"field 'orders': order {name!r} is {value!r}, outside "
+                           f"field 'options.alpha_bounds' = {pair!r}, the bounds the run kept "
+                           "it in")
+
+
+def _check_detail(key, value, path):
+    if key not in _DETAILS:
+        raise DataFileError(f"{path}: field 'details.{key}' is not part of a fohw-result file "
+                            f"(its details are {', '.join(sorted(_DETAILS))}).")
+    ndim, limits = _DETAILS[key]
+    if ndim == "text":
+        if not isinstance(value, str):
+            _bad({key: value}, f"details.{key}", "a string", path)
+        return
+    if ndim == 0:
+        ok = _is_number(value) and limits[0] <= value <= limits[1]
+    elif isinstance(value, dict):
+        arr = _array_field({key: value}, key, path, name=f"details.{key}")
+        ok = arr.ndim == ndim and (limits is None or bool(
+            np.all((arr >= limits[0]) & (arr <= limits[1]))))
+    else:
+        ok = False
+    if not ok:
+        need = {0: "a number", 1: "a 1-D array", 2: "a 2-D array"}[ndim]
+        within = "" if limits is None else f" in [{limits[0]:g}, {limits[1]:g}]"
+        raise DataFileError(f"{path}: field 'details.{key}' must be {need} of values{within}; "
+                            f"got {value!r}."[:400])
+
+
 def _check_covariance(cov, n_estimates, path):
     if cov is None:
         return
@@ -399,7 +505,10 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     orders, offset, past levels, operating point and input range included; a covariance must
     also be symmetric with a non-negative diagonal), and the facts must agree with each other
     (orders in ``[0, 2]`` and those of the structure, an offset only where one is fitted, a
-    known method, ``input_range`` in order; in a version-2 file ``alpha``, ``layout`` and
+    known method, ``input_range`` in order, the orders those the structure frees and inside the
+    run's ``alpha_bounds``, theta as long as the structure's, a record longer than the lags,
+    ``schedule`` the run's, standard errors only from a method that gives them and not for a
+    rank-deficient fit, ``details`` of their kinds; in a version-2 file ``alpha``, ``layout`` and
     ``parameter_names`` as derived): a file edited or damaged by hand is a
     :class:`~fohw.DataFileError` naming the field, never a result that fails later.
     """
@@ -411,8 +520,11 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     _check_result_fields(body, version, path)
     f = _basis(body["structure"]["f_basis"], f_basis, "f_basis", path)
     g = _basis(body["structure"]["g_basis"], g_basis, "g_basis", path)
+    _check_agreement(body, _structure_field(body, f, g, path), path)
     try:
         result = IdentificationResult.from_dict(body, f_basis=f, g_basis=g)
+    except (ParameterError, DimensionError) as exc:      # one fact against another
+        raise DataFileError(f"{path}: inconsistent fohw-result file: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise DataFileError(f"{path}: malformed or inconsistent fohw-result file "
                             f"({type(exc).__name__}: {exc})") from None
@@ -465,6 +577,12 @@ def load_result(path, *, f_basis=None, g_basis=None):
     Returns
     -------
     IdentificationResult
+
+    Raises
+    ------
+    DataFileError
+        The file is not a fohw-result file, a field is of the wrong kind, or two stored facts
+        disagree (:func:`result_from_dict` lists the checks); the message names the field.
     """
     return result_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
                             path=os.fspath(path))

@@ -12,18 +12,65 @@ short signals and short memories use the direct sum.
 
 from __future__ import annotations
 
+import math
+import os
+
 import numpy as np
 import scipy.fft
 
 from .._validation import check_array, check_int, check_scalar
-from ..exceptions import DimensionError
+from ..exceptions import DimensionError, ParameterError
 
 __all__ = ["gl_weights", "gl_weights_unchecked", "gl_weights_derivative", "gl_difference",
-           "past_transient"]
+           "past_transient", "sampling_scale", "check_length"]
 
 # Below these sizes the direct O(N * L) sum beats the FFT (see benchmarks/bench_gl.py).
 _DIRECT_MAX_MEMORY = 48
 _DIRECT_MAX_LENGTH = 160
+
+
+def _memory_bytes():
+    """The physical memory of this machine in bytes, or None where the system does not say."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):       # pragma: no cover - not POSIX
+        return None
+
+
+def _bytes_text(n_bytes):
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if n_bytes >= size:
+            return f"{n_bytes / size:.3g} {unit}"
+    return f"{n_bytes:.0f} bytes"
+
+
+def check_length(n, name="n", *, arrays=1):
+    """``n`` as a positive int whose ``arrays`` float64 arrays of ``n`` entries fit in memory.
+
+    Refused (naming ``name``, the memory needed and the machine's) when they need more than
+    the machine's physical memory: numpy would raise a bare ``MemoryError`` or the system
+    would start swapping.
+    """
+    n = check_int(n, name, minimum=1)
+    need = 8 * arrays * n
+    have = _memory_bytes()
+    if have is not None and need > have:
+        raise ParameterError(f"`{name}` = {n} needs {_bytes_text(need)} of memory "
+                             f"({arrays} float64 array(s) of {n} entries), more than this "
+                             f"machine's {_bytes_text(have)}; use fewer samples or weights.")
+    return n
+
+
+def sampling_scale(h, nu, name="h"):
+    """``h**-nu``, the scale of Eq. (4), or a ParameterError naming ``name`` if it overflows."""
+    try:
+        return h ** -nu
+    except OverflowError:
+        raise ParameterError(
+            f"`{name}` = {h!r} with the order {nu!r} gives the scale {name}**-order = "
+            f"10**{-nu * math.log10(h):.4g}, beyond the largest double (1.8e308): the "
+            f"difference cannot be represented. Use a sampling time in other units (the "
+            f"differences scale with it).") from None
 
 
 def gl_weights(alpha, n):
@@ -57,7 +104,7 @@ def gl_weights(alpha, n):
     >>> fohw.gl_weights(1.0, 4)
     array([ 1., -1.,  0.,  0.])
     """
-    return gl_weights_unchecked(check_scalar(alpha, "alpha"), check_int(n, "n", minimum=1))
+    return gl_weights_unchecked(check_scalar(alpha, "alpha"), check_length(n, "n"))
 
 
 def gl_weights_unchecked(alpha, n):
@@ -101,7 +148,7 @@ def gl_weights_derivative(alpha, n):
     array([ 0.        , -1.        ,  0.5       ,  0.16666667])
     """
     alpha = check_scalar(alpha, "alpha")
-    n = check_int(n, "n", minimum=1)
+    n = check_length(n, "n", arrays=6)
     i = np.arange(1, n, dtype=np.float64)
     c = (i - 1.0 - alpha) / i
     with np.errstate(divide="ignore"):
@@ -157,9 +204,9 @@ def past_transient(nu, lag, n, h=1.0, *, derivative=False):
         dout = np.zeros(n)
         dout[lag:] = -dpartial
         if h != 1.0:
-            dout = (dout - np.log(h) * out) * h**-nu
+            dout = (dout - np.log(h) * out) * sampling_scale(h, nu)
         return dout
-    return out if h == 1.0 else out * h**-nu
+    return out if h == 1.0 else out * sampling_scale(h, nu)
 
 def _use_direct(n, m):
     return m <= _DIRECT_MAX_MEMORY or n <= _DIRECT_MAX_LENGTH
@@ -266,7 +313,8 @@ def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
     Raises
     ------
     ParameterError
-        Non-finite ``x`` or ``alpha``, ``memory < 1`` or ``h <= 0``.
+        Non-finite ``x`` or ``alpha``, ``memory < 1``, ``h <= 0``, or a difference beyond the
+        largest double (``h**-alpha`` or the sums overflow).
     DimensionError
         ``axis`` out of range or an empty time axis.
 
@@ -300,9 +348,17 @@ def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
     else:
         m = min(check_int(memory, "memory", minimum=1), n)
     xt = np.moveaxis(x, axis, -1)
-    out = causal_convolve(xt, gl_weights_unchecked(alpha, m))
-    if h != 1.0:
-        out *= h ** (-alpha)
+    scale = 1.0 if h == 1.0 else sampling_scale(h, alpha)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = causal_convolve(xt, gl_weights_unchecked(alpha, m))
+        if h != 1.0:
+            out *= scale
+    if not np.all(np.isfinite(out)):
+        by = "" if h == 1.0 else f" and h**-alpha = {scale:.3g}"
+        raise ParameterError(
+            f"the GL difference of order {alpha!r} overflows: with max |x| = "
+            f"{float(np.max(np.abs(x))):.3g}{by} its values go beyond the largest double "
+            "(1.8e308). Rescale `x` (the difference scales with it) or `h`.")
     return np.moveaxis(out, -1, axis)
 
 

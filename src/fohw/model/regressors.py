@@ -20,7 +20,15 @@ import scipy.fft
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .gl import CausalConvolution, convolution_at, gl_weights, gl_weights_derivative, past_transient
+from .gl import (
+    CausalConvolution,
+    convolution_at,
+    gl_weights,
+    gl_weights_derivative,
+    past_transient,
+    sampling_scale,
+)
+from .orders import ORDER_RANGE
 from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
@@ -129,6 +137,30 @@ class LaggedColumns:
         return out
 
 
+def _evaluate(basis, x, name):
+    """The basis signals of ``x``, refusing one that underflows (its column would carry nothing).
+
+    A signal underflows when its largest value is below the smallest normal double although
+    ``x`` is not zero: ``u**3`` of ``u`` in units of 1e-150, say. For a polynomial basis a
+    signal that is 0 everywhere is the same underflow; a custom function may be 0 by design, and
+    a zero column is then reported as rank deficiency.
+    """
+    values = basis.evaluate(x, name)
+    peak_x = float(np.max(np.abs(x)))
+    if peak_x == 0.0:
+        return values
+    tiny = np.finfo(np.float64).tiny
+    for row, fname in zip(values, basis.names):
+        peak = float(np.max(np.abs(row)))
+        if peak < tiny and (peak > 0.0 or basis.is_polynomial):
+            raise ParameterError(
+                f"basis function {fname!r} of `{name}` underflows: its largest value is "
+                f"{peak!r}, below the smallest normal double (2.2e-308), although max |{name}| = "
+                f"{peak_x:.3g}; its regressors would carry no information. Rescale `{name}` "
+                "(fohw's estimates rescale with the data) or use fewer basis functions.")
+    return values
+
+
 class RegressorBuilder:
     """Information matrices of one record for many values of the nonlinear parameters.
 
@@ -191,7 +223,7 @@ class RegressorBuilder:
         self.n_samples = n
         self.u, self.y = u, y
         # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
-        self.signals = np.vstack([self.g_basis.evaluate(y, "y"), self.f_basis.evaluate(u, "u")])
+        self.signals = np.vstack([_evaluate(self.g_basis, y, "y"), _evaluate(self.f_basis, u, "u")])
         self._n_g = len(self.g_basis)
         self.lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
         self._convolution = CausalConvolution(self.signals)
@@ -204,8 +236,10 @@ class RegressorBuilder:
 
         With ``derivative=True``, their exact derivative with respect to the order
         (convolution with :func:`fohw.gl_weights_derivative`). Divided by ``dt**alpha``.
+        ``alpha`` must lie in :data:`fohw.model.orders.ORDER_RANGE` (``[0, 2]``), the orders
+        every fohw model allows.
         """
-        alpha = check_scalar(alpha, "alpha")
+        alpha = check_scalar(alpha, "alpha", lower=ORDER_RANGE[0], upper=ORDER_RANGE[1])
         return self._differences(alpha, derivative)
 
     def _differences(self, nu, derivative=False):
@@ -213,11 +247,11 @@ class RegressorBuilder:
         h = self.structure.dt
         if not derivative:
             d = self._convolve(gl_weights(nu, n))
-            return d if h == 1.0 else d * h**-nu
+            return d if h == 1.0 else d * sampling_scale(h, nu, "dt")
         d = self._convolve(gl_weights_derivative(nu, n))
         if h == 1.0:
             return d
-        return (d - np.log(h) * self._convolve(gl_weights(nu, n))) * h**-nu
+        return (d - np.log(h) * self._convolve(gl_weights(nu, n))) * sampling_scale(h, nu, "dt")
 
     def _convolve(self, weights):
         """The stacked basis signals convolved with ``weights``, shape ``(n_g + n_f, N)``.
@@ -276,7 +310,8 @@ class RegressorBuilder:
     def check_params(self, params):
         """The nonlinear parameters as a finite vector of :attr:`Structure.n_nonlinear` entries.
 
-        One number is accepted when there is one nonlinear parameter.
+        One number is accepted when there is one nonlinear parameter. The free orders must
+        lie in :data:`fohw.model.orders.ORDER_RANGE` (``[0, 2]``), as in every model.
         """
         params = np.atleast_1d(np.asarray(params, dtype=np.float64))
         k = self.structure.n_nonlinear
@@ -285,6 +320,11 @@ class RegressorBuilder:
                                  f"need {k} value(s); got {params.shape}.")
         if not np.all(np.isfinite(params)):
             raise ParameterError(f"the nonlinear parameters must be finite; got {params}.")
+        lo, hi = ORDER_RANGE
+        for name, value in zip(self.structure.orders.free, params):
+            if not lo <= value <= hi:
+                raise ParameterError(f"the order {name!r} must be in [{lo:g}, {hi:g}] (the orders "
+                                     f"fohw's models allow); got {float(value)!r}.")
         return params
 
     def term_orders(self, params):
@@ -304,7 +344,9 @@ class RegressorBuilder:
         u_p, y_p = past
         out = []
         for basis, x, scale in ((self.g_basis, y_p, self.y), (self.f_basis, u_p, self.u)):
-            step = 1e-6 * max(abs(x), float(np.sqrt(np.mean(scale * scale))), 1e-300)
+            peak = float(np.max(np.abs(scale)))      # the RMS without squares that underflow
+            rms = peak * float(np.sqrt(np.mean(np.square(scale / peak)))) if peak else 0.0
+            step = 1e-6 * max(abs(x), rms, 1e-300)
             hi = basis.evaluate(np.array([x + step]))[:, 0]
             lo = basis.evaluate(np.array([x - step]))[:, 0]
             out.append((hi - lo) / (2 * step))
