@@ -20,6 +20,7 @@ record the fit was made on, checked against the fit's ``J``) are passed again.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +29,7 @@ import scipy.stats
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..estimators.identify import identify
-from ..exceptions import ParameterError
+from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.orders import Orders
 from ..results import REFITS, IdentificationResult
 
@@ -109,10 +110,16 @@ def refit(result, u, y, *, orders=None, start=None):
             bounds = (0.0, 1.0)
     if result.method == "output_error":
         options["start"] = start
-    return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
-                    method=result.method, orders=orders, offset=s.offset,
-                    operating_point=result.operating_point, past=s.past, dt=s.dt,
-                    alpha_bounds=bounds, options=options)
+    # A refit started at (or next to) the full fit's optimum may stop without a step ("stuck at
+    # its start") or at its evaluation limit: its criterion is still an upper bound of the
+    # profile there, which can only widen the interval, so its ConvergenceWarning is not the
+    # user's business.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
+                        method=result.method, orders=orders, offset=s.offset,
+                        operating_point=result.operating_point, past=s.past, dt=s.dt,
+                        alpha_bounds=bounds, options=options)
 
 
 def order_bounds(result, name):

@@ -365,7 +365,10 @@ _COVARIANCE_METHODS = ("varpro", "output_error", "structured")
 #: What each known entry of ``details`` must be: ``(dimensions or "text", (low, high) of its values)``.
 _DETAILS = {"alpha_history": (1, ORDER_RANGE), "alpha_sample_history": (1, ORDER_RANGE),
             "J_history": (1, (0.0, np.inf)), "theta_history": (2, None),
-            "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None)}
+            "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None),
+            "starts": ("starts", None), "n_starts_agreed": ("count", None)}
+#: The fields of each entry of ``details["starts"]`` (output_error's chain of starts).
+_START_FIELDS = {"start", "orders", "start_sse", "sse", "status", "nfev"}
 
 
 def _contradiction(path, text):
@@ -450,6 +453,13 @@ def _check_detail(key, value, path):
         if not isinstance(value, str):
             _bad({key: value}, f"details.{key}", "a string", path)
         return
+    if ndim == "count":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            _bad({key: value}, f"details.{key}", "a non-negative integer", path)
+        return
+    if ndim == "starts":
+        _check_starts(value, path)
+        return
     if ndim == 0:
         ok = _is_number(value) and limits[0] <= value <= limits[1]
     elif isinstance(value, dict):
@@ -463,6 +473,28 @@ def _check_detail(key, value, path):
         within = "" if limits is None else f" in [{limits[0]:g}, {limits[1]:g}]"
         raise DataFileError(f"{path}: field 'details.{key}' must be {need} of values{within}; "
                             f"got {value!r}."[:400])
+
+
+def _check_starts(value, path):
+    """``details.starts``: one object per searched start, each with :data:`_START_FIELDS`."""
+    if not isinstance(value, list):
+        _bad({"starts": value}, "details.starts", "a list of objects", path)
+    for i, entry in enumerate(value):
+        where = f"details.starts[{i}]"
+        if not isinstance(entry, dict) or set(entry) != _START_FIELDS:
+            got = sorted(entry) if isinstance(entry, dict) else entry
+            raise DataFileError(f"{path}: field '{where}' must be an object with the fields "
+                                f"{sorted(_START_FIELDS)}; got {got!r}."[:400])
+        numbers = [entry["start_sse"]] + ([] if entry["sse"] is None else [entry["sse"]])
+        if not (isinstance(entry["start"], str) and isinstance(entry["orders"], dict)
+                and all(_is_number(v) for v in entry["orders"].values())
+                and all(_is_number(v) and v >= 0 for v in numbers)
+                and (entry["status"] is None or entry["status"] in Status.__members__)
+                and (entry["nfev"] is None or (isinstance(entry["nfev"], int)
+                                               and not isinstance(entry["nfev"], bool)
+                                               and entry["nfev"] >= 0))):
+            raise DataFileError(f"{path}: field '{where}' is malformed (a start's name, its orders, "
+                                f"criteria >= 0, a status name and a count); got {entry!r}."[:400])
 
 
 def _check_covariance(cov, n_estimates, path):
