@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from .._types import ArrayLike
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.regressors import RegressorBuilder
@@ -243,8 +245,10 @@ def _measure(what, fn, notes, *args, **kwargs):
         return np.nan
 
 
-def compare(model, u, y, *, history=None, n_init=0, max_lag=25, confidence=0.99,
-            envelope=ENVELOPE):
+def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
+            history: tuple[ArrayLike, ArrayLike] | None = None, n_init: int = 0,
+            max_lag: int = 25, confidence: float = 0.99,
+            envelope: float = ENVELOPE) -> Validation:
     """Validate an identified model on a record: free run and one-step prediction.
 
     Parameters

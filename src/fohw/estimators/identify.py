@@ -11,9 +11,16 @@ class are checked by :mod:`fohw.estimators.problem`.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from concurrent.futures import Executor
+from typing import Any
 
+from .._types import ArrayLike, PairLike
 from ..exceptions import ParameterError
+from ..model.basis import BasisLike
+from ..model.orders import OrdersLike
+from ..results import IdentificationResult
 from . import hybrid, output_error, rls, structured, varpro
+from .options import MethodOptions
 from .problem import OPERATING_POINTS, fit_method
 
 __all__ = ["identify", "METHODS", "OPTIONS", "OPERATING_POINTS"]
@@ -27,9 +34,13 @@ METHODS = tuple(_TABLE)
 OPTIONS = {name: m.options for name, m in _TABLE.items()}
 
 
-def identify(u, y, *, na, nb, f_basis, g_basis, method="varpro", orders="commensurate",
-             offset=False, operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
-             options=None, executor=None, **method_options):
+def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike,
+             g_basis: BasisLike, method: str = "varpro", orders: OrdersLike = "commensurate",
+             offset: bool = False, operating_point: str | PairLike | None = None,
+             past: str = "rest", dt: float = 1.0,
+             alpha_bounds: PairLike | Mapping[str, PairLike] = (0.0, 1.0),
+             options: Mapping[str, Any] | MethodOptions | None = None,
+             executor: Executor | None = None, **method_options: Any) -> IdentificationResult:
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters

@@ -233,7 +233,7 @@ def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> Ha
         raise DataFileError(f"{path}: malformed fohw-model file: {exc}") from None
 
 
-def save_model(model, path):
+def save_model(model: HammersteinWiener, path: str | os.PathLike) -> None:
     """Write a model to a JSON file (atomically; :func:`load_model` reads it back exactly).
 
     Examples
@@ -250,7 +250,8 @@ def save_model(model, path):
     write_json(model_to_dict(model), path)
 
 
-def load_model(path, *, f_basis=None, g_basis=None):
+def load_model(path: str | os.PathLike, *, f_basis: Basis | None = None,
+               g_basis: Basis | None = None) -> HammersteinWiener:
     """Read a model written by :func:`save_model` (custom bases must be passed again)."""
     return model_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
                            path=os.fspath(path))
@@ -566,7 +567,7 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     return result
 
 
-def save_result(result, path):
+def save_result(result: IdentificationResult, path: str | os.PathLike) -> None:
     """Write an identification result to a JSON file (atomically).
 
     :func:`load_result` reads it back with every float exact. Settings without a JSON form (a
@@ -597,7 +598,8 @@ def save_result(result, path):
     write_json(result_to_dict(result), path)
 
 
-def load_result(path, *, f_basis=None, g_basis=None):
+def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
+                g_basis: Basis | None = None) -> IdentificationResult:
     """Read an identification result written by :func:`save_result`.
 
     Parameters

@@ -35,6 +35,7 @@ import io
 import os
 from array import array
 from dataclasses import dataclass, field
+from typing import BinaryIO, TextIO
 
 import numpy as np
 
@@ -562,8 +563,10 @@ def _column(table, spec, what):
                          f"{type(spec).__name__}.")
 
 
-def read_record(path, u=None, y=None, *, dt=None, name=None, input_unit="", output_unit="",
-                time_unit="", source="", decimal=".") -> Record:
+def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | int | None = None,
+                y: str | int | None = None, *, dt: float | str | None = None,
+                name: str | None = None, input_unit: str = "", output_unit: str = "",
+                time_unit: str = "", source: str = "", decimal: str = ".") -> Record:
     """Read a measured record from a CSV or whitespace-separated text file.
 
     Parameters

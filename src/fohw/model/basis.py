@@ -21,10 +21,6 @@ from ..exceptions import DimensionError, ParameterError
 __all__ = ["Basis", "polynomial_basis", "as_basis"]
 
 
-#: A basis of a static nonlinearity as the public API accepts it: a :class:`Basis`, an int (a
-#: polynomial degree) or a sequence of callables.
-BasisLike = Union["Basis", int, Sequence[Callable[[np.ndarray], np.ndarray]]]
-
 
 class _Power:
     """``x -> x**n`` as a picklable, printable callable."""
@@ -215,6 +211,11 @@ class Basis:
 
 #: The highest degree :func:`polynomial_basis` builds.
 MAX_POLYNOMIAL_DEGREE = 100
+
+
+#: A basis of a static nonlinearity as the public API accepts it: a :class:`Basis`, an int (a
+#: polynomial degree) or a sequence of callables.
+BasisLike = Union[Basis, int, Sequence[Callable[[np.ndarray], np.ndarray]]]
 
 
 def polynomial_basis(degree: int) -> Basis:

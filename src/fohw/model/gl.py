@@ -18,6 +18,7 @@ import os
 import numpy as np
 import scipy.fft
 
+from .._types import ArrayLike
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError
 
@@ -73,7 +74,7 @@ def sampling_scale(h, nu, name="h"):
             f"differences scale with it).") from None
 
 
-def gl_weights(alpha, n):
+def gl_weights(alpha: float, n: int) -> np.ndarray:
     """Grünwald–Letnikov weights ``beta[j] = (-1)**j * binom(alpha, j)``, ``j = 0..n-1``.
 
     Parameters
@@ -116,7 +117,7 @@ def gl_weights_unchecked(alpha, n):
     return beta
 
 
-def gl_weights_derivative(alpha, n):
+def gl_weights_derivative(alpha: float, n: int) -> np.ndarray:
     """Exact derivative of the GL weights with respect to the order, ``d beta[j] / d alpha``.
 
     Parameters
@@ -286,7 +287,8 @@ def causal_convolve(x, weights):
     return CausalConvolution(x, memory=weights.shape[0])(weights)
 
 
-def gl_difference(x, alpha, *, axis=-1, memory=None, h=1.0):
+def gl_difference(x: ArrayLike, alpha: float, *, axis: int = -1, memory: int | None = None,
+                  h: float = 1.0) -> np.ndarray:
     """Grünwald–Letnikov fractional difference of a signal (or a batch of signals).
 
     Parameters

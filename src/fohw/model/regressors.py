@@ -18,8 +18,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from .._types import ArrayLike, PairLike
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
+from .basis import BasisLike
 from .gl import (
     CausalConvolution,
     convolution_at,
@@ -28,7 +30,7 @@ from .gl import (
     past_transient,
     sampling_scale,
 )
-from .orders import ORDER_RANGE
+from .orders import ORDER_RANGE, OrdersLike
 from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
@@ -452,8 +454,10 @@ class RegressorBuilder:
             G[:, n + m] = self.columns(params, which=m).matvec(linear)
         return G
 
-def information_matrix(u, y, alpha, *, na, nb, f_basis, g_basis, orders=None, offset=False,
-                       past="rest", dt=1.0):
+def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, na: int, nb: int,
+                       f_basis: BasisLike, g_basis: BasisLike, orders: OrdersLike | None = None,
+                       offset: bool = False, past: str | PairLike = "rest",
+                       dt: float = 1.0) -> np.ndarray:
     """Information matrix of a fractional-order Hammerstein–Wiener record.
 
     Parameters
