@@ -10,7 +10,7 @@ import pytest
 import fohw
 from fohw._validation import input_in_range
 from fohw.analysis.metrics import fit_percent, rmse
-from fohw.analysis.selection import expand_candidates
+from fohw.analysis.selection import expand_candidates, unidentifiable
 from fohw.cli import main
 
 STRUCT = dict(f_basis=2, g_basis=3)
@@ -482,3 +482,138 @@ def test_the_readme_select_example_picks_a_model_that_validates(tmp_path, capsys
     rows = {r.split(",")[0]: r.split(",")[1] for r in csv_path.read_text().splitlines()[1:]}
     picked = next(t for t in out.splitlines() if t.startswith("best: "))[6:].split(" (held-back")[0]
     assert rows[picked] == "ok"                               # the pick's own row is clean
+
+
+# issue 26 (t26b): unidentifiable candidates, the thermal-style case, the LR column, the docs
+
+def first_order(u):
+    """The true plant of the thermal-style case: y[k] = 0.9 y[k-1] + 0.1 u[k-1], linear."""
+    y = np.zeros(len(u))
+    for k in range(1, len(u)):
+        y[k] = 0.9 * y[k - 1] + 0.1 * u[k - 1]
+    return y
+
+
+def test_thermal_style_two_level_input_old_rule_blows_up_new_one_validates():
+    # A heater switched between two power levels (0.2 and 1.0) drives a first-order plant; the
+    # validation input sweeps 0.1-1.9, off the estimation range. Every candidate predicts the
+    # held-back part (the same two levels) about equally well, so the old rule (the best
+    # held-back fit, no identifiability flags) picks an input polynomial of degree >= 2, which
+    # the two levels cannot identify; on the validation input it leaves the envelope.
+    rng = np.random.default_rng(0)
+    n = 400
+    u = np.where(rng.random(n // 20) > 0.5, 1.0, 0.2).repeat(20)
+    y = first_order(u) + 0.02 * rng.standard_normal(n)
+    uv = 1.0 + 0.9 * np.sin(0.03 * np.arange(n))
+    yv = first_order(uv) + 0.02 * rng.standard_normal(n)
+    grid = {"na": [1, 2], "f_basis": [1, 2, 3], "g_basis": [1, 3]}      # g_basis 3: cubic g
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ExtrapolationWarning)
+        sel = fohw.select_structure(u, y, grid, orders=0, validation=0.25, offset=True,
+                                    operating_point="mean")
+        fits = [r["fit"] if np.isfinite(r["fit"]) else -np.inf for r in sel.rows]
+        old = int(np.argmax(fits))                      # the old rule: ignore the flags
+        v_old = fohw.compare(sel.results[old], uv, yv)
+        v_new = fohw.compare(sel.best, uv, yv)
+    assert sel.rows[old]["f_basis"] >= 2 and sel.rows[old]["status"] == "unidentifiable"
+    assert v_old.status in ("implausible", "diverged") and not np.isfinite(v_old.fit_simulation)
+    assert v_new.status == "ok" and v_new.fit_simulation > 80
+    assert sel.best_row["f_basis"] == 1
+    for r in sel.rows:          # degree >= 2 levels: flagged with the reason, never picked
+        if r["f_basis"] >= 2:
+            assert r["status"] == "unidentifiable"
+            assert "2 distinct level(s) (0.2, 1)" in r["reason"]
+        else:
+            assert r["status"] == "ok"
+    assert "| unidentifiable |" in sel.to_markdown()
+
+
+def test_a_two_level_input_is_checked_against_the_basis_size():
+    # Degree 1 on two levels is identified, degree 2 is not: the count is columns + constant.
+    rng = np.random.default_rng(1)
+    u = np.where(rng.random(30) > 0.5, 1.0, -1.0).repeat(10)
+    y = first_order(u) + 0.01 * rng.standard_normal(u.size)
+    fit1 = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, orders=0)
+    assert unidentifiable(fit1, u) == ""
+    three = np.r_[u, 0.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit2 = fohw.identify(u, y, na=1, nb=1, f_basis=2, g_basis=1, orders=0)
+    assert "2 columns and the estimation input takes only 2 distinct level(s)" in \
+        unidentifiable(fit2, u)
+    assert unidentifiable(fit2, three) == ""            # three levels identify degree 2
+
+
+def test_mixed_class_at_alpha_zero_with_cancelling_columns_is_flagged():
+    # The paper example's mixed class fitted by varpro goes to alpha ~ 1e-6 with coefficient
+    # pairs of +-1e5: the log-memory limit, a near-duplicate column pair, not an order.
+    data = fohw.datasets.paper_example(300, random_state=0)
+    res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3, orders="mixed")
+    assert res.orders["alpha"] < 1e-3
+    why = unidentifiable(res, data.u)
+    assert why.startswith("near-duplicate columns: alpha = ") and "cancelling" in why
+    sel = fohw.select_structure(data.u, data.y, {"orders": [0, "mixed"]}, na=2, nb=2,
+                                f_basis=2, g_basis=3, validation=0.2)
+    mixed = sel.rows[1]           # its held-back fit is higher, but alpha is no order here
+    assert mixed["status"] == "unidentifiable" and np.isfinite(mixed["fit"])
+    assert "not identifiable: near-duplicate columns: alpha = " in mixed["reason"]
+    assert mixed["fit"] > sel.rows[0]["fit"] and sel.best_row is sel.rows[0]
+
+
+def test_lr_column_against_the_nested_integer_candidate(paper):
+    sel = fohw.select_structure(paper.u, paper.y, {"orders": [0, "commensurate", "per_lag"],
+                                                   "g_basis": [3]}, na=2, nb=2, f_basis=2)
+    ref = fohw.lr_test(sel.results[0], sel.results[1])
+    assert sel.rows[1]["lr_pvalue"] == ref.pvalue
+    assert sel.rows[1]["lr_reference"] == ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1, one-step RSS "
+                                           "vs orders=0 g_basis=3")
+    assert sel.rows[2]["lr_pvalue"] == fohw.lr_test(sel.results[0], sel.results[2]).pvalue
+    assert np.isnan(sel.rows[0]["lr_pvalue"]) and sel.rows[0]["lr_reference"] == ""
+    assert "| lr_pvalue |" in sel.to_markdown()
+    # no nested candidate in the grid: NaN and no column in the table
+    alone = fohw.select_structure(paper.u, paper.y, {"orders": ["commensurate"]}, na=2, nb=2,
+                                  **STRUCT)
+    assert np.isnan(alone.rows[0]["lr_pvalue"]) and "lr_pvalue" not in alone.to_markdown()
+
+
+def test_lr_column_of_the_mixed_class_is_nan_unless_davies_is_cheap(paper):
+    kw = dict(na=2, nb=2, **STRUCT, validation=0.25)
+    oe = fohw.select_structure(paper.u[:400], paper.y[:400], {"orders": [0, "mixed"]},
+                               method="output_error", **kw)
+    assert np.isnan(oe.rows[1]["lr_pvalue"])
+    assert oe.rows[1]["lr_reference"].startswith("not computed vs orders=0: order(s) alpha not "
+                                                 "identified under the null")
+    vp = fohw.select_structure(paper.u, paper.y, {"orders": [0, "mixed"]}, **kw)
+    if vp.results[1] is not None:
+        assert vp.rows[1]["lr_pvalue"] == fohw.lr_test(vp.results[0], vp.results[1]).pvalue
+        assert vp.rows[1]["lr_reference"].startswith("Davies bound")
+
+
+def docs_select_example():
+    """The select_structure block of docs/real_data.md, as written there."""
+    path = os.path.join(os.path.dirname(__file__), os.pardir, "docs", "real_data.md")
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    blocks = [b.split("```", 1)[0] for b in text.split("```python\n")[1:]]
+    (block,) = [b for b in blocks if "fohw.select_structure(" in b]
+    return block
+
+
+@pytest.mark.slow
+def test_the_real_data_docs_select_example_runs_and_selects(capsys):
+    # Before: the block had no `nb`, every candidate `failed` with a TypeError, best None, no
+    # warning. Its exact call (72 output-error candidates on the tanks, about 70 s) must run.
+    block = docs_select_example()
+    assert "select_structure(bench.estimation" in block and "best_by" in block
+    namespace = {"fohw": fohw}
+    with warnings.catch_warnings(record=True) as caught:     # the user sees these as well
+        warnings.simplefilter("always")
+        exec(compile(block, "docs/real_data.md", "exec"), namespace)     # noqa: S102
+    assert all(issubclass(w.category, (fohw.ConvergenceWarning, fohw.ExtrapolationWarning,
+                                       fohw.RankDeficiencyWarning)) for w in caught), \
+        [str(w.message) for w in caught]
+    assert not any("selected nothing" in str(w.message) for w in caught)
+    sel = namespace["sel"]
+    assert len(sel.rows) == 72 and sel.best is not None
+    assert sel.best_row["status"] == "ok" and np.isfinite(sel.best_row["fit"])
+    assert namespace["best_per_class"] and "| candidate | status |" in capsys.readouterr().out

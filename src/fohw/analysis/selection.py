@@ -5,7 +5,11 @@ simulates it in free run over the estimation part *and on into* a held-back part
 and ranks the candidates by the fit on the held-back part. A candidate that fails (its fit
 raises, its simulation diverges, leaves the finite numbers or leaves the plausible envelope of
 the measured output) is recorded with the reason and never loses the others; it is never
-picked. The winner is refitted on all the estimation data; a refit whose free run diverges or
+picked. A candidate the estimation input cannot identify (an input basis with as many columns
+as the input has distinct levels, a mixed-class order gone to 0 with cancelling coefficients)
+is ``"unidentifiable"``, with the reason, and never picked either. Each fractional candidate
+is tested against its nested integer candidate in the grid (``lr_pvalue``, :func:`fohw.lr_test`).
+The winner is refitted on all the estimation data; a refit whose free run diverges or
 is implausible is not kept either, and the next candidate is refitted instead.
 
 What can be known before any fit is checked at once (a :class:`fohw.ParameterError`): an empty
@@ -39,6 +43,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_same_length
 from ..exceptions import ConvergenceWarning, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..record import Record
+from .lrtest import cancelled_orders, lr_test, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
@@ -50,16 +55,20 @@ SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
 
 #: The columns of :attr:`Selection.rows` besides the candidate's own keywords.
 COLUMNS = ("candidate", "status", "fit", "rmse", "fit_estimation", "aic", "bic", "n_params",
-           "estimated_orders", "in_range", "fit_status", "refit_status", "seconds", "reason")
+           "estimated_orders", "in_range", "fit_status", "refit_status", "seconds", "reason",
+           "lr_pvalue", "lr_reference")
 
 #: Every row ``status``: ``"ok"`` (scored), ``"diverged"``, ``"nan"``, ``"implausible"`` (the
 #: free run on the estimation input or the held-back part was not scored: it grew without
 #: bound, the output basis returned NaN or inf, or it left the measured output's envelope),
-#: ``"failed"`` (the fit, the simulation, the scoring or the executor raised), and for the
-#: candidate whose refit on all the data was not kept, ``"refit_failed"``,
-#: ``"refit_diverged"``, ``"refit_nan"``, ``"refit_implausible"``.
-STATUSES = ("ok", "diverged", "nan", "implausible", "failed", "refit_failed", "refit_diverged",
-            "refit_nan", "refit_implausible")
+#: ``"failed"`` (the fit, the simulation, the scoring or the executor raised),
+#: ``"unidentifiable"`` (the estimation input cannot identify the candidate: its input basis
+#: has more columns than the input has distinct levels less one, e.g. a polynomial of degree
+#: >= the number of levels; or its mixed-class order went to 0 with cancelling coefficients,
+#: :func:`unidentifiable`), and for the candidate whose refit on all the data was not kept,
+#: ``"refit_failed"``, ``"refit_diverged"``, ``"refit_nan"``, ``"refit_implausible"``.
+STATUSES = ("ok", "diverged", "nan", "implausible", "failed", "unidentifiable", "refit_failed",
+            "refit_diverged", "refit_nan", "refit_implausible")
 
 #: Keywords of :func:`fohw.identify` a candidate must give (``nb`` defaults to ``na``).
 REQUIRED = ("na", "f_basis", "g_basis")
@@ -126,6 +135,32 @@ def _blank_row(**changes):
     return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
                      bic=np.nan, n_params=0, estimated_orders="", in_range=True, fit_status="",
                      refit_status="", seconds=np.nan, reason=""), **changes)
+
+
+def unidentifiable(res, u_est):
+    """Why the estimation input ``u_est`` cannot identify the fit ``res`` ("" if it can).
+
+    Two reasons, both cheap: (1) the input takes ``L`` distinct levels and the input basis has
+    ``m >= L`` columns, so with a constant (the operating point, or the static gain of the
+    linear block) its columns are linearly dependent on the levels the data visit: a polynomial
+    of degree ``>= L`` (e.g. degree 2 or 3 on a two-level input) is then anything between the
+    levels, and its extrapolation is arbitrary; (2) a free order of the mixed class went to 0
+    with its terms cancelling their order-0 partners
+    (:func:`fohw.analysis.lrtest.cancelled_orders`): a near-duplicate column pair.
+    """
+    reasons = []
+    f_basis = res.structure.f_basis
+    m = len(f_basis.names)
+    levels = np.unique(np.asarray(u_est, dtype=float))
+    if m >= levels.size:
+        reasons.append(f"the input basis {_describe(f_basis)} has {m} columns and the "
+                       f"estimation input takes only {levels.size} distinct level(s) "
+                       f"({', '.join(f'{v:.4g}' for v in levels[:5])}): with the constant, "
+                       f"{m + 1} columns on {levels.size} levels are linearly dependent, so the "
+                       "input map is not identified (use a basis of at most "
+                       f"{max(levels.size - 1, 0)} column(s), or an input with more levels)")
+    reasons.extend(f"near-duplicate columns: {note}" for note in cancelled_orders(res).values())
+    return "; ".join(reasons)
 
 
 def free_run_check(res, u, reference, envelope, *, history=None):
@@ -205,9 +240,15 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
                     row.update(status=status, reason=f"on the estimation input: {reason}")
         except Exception as exc:
             row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}")
+        why = unidentifiable(res, u_est)
+        unknown = why and row["status"] == "ok"
+        if unknown:                   # scored below for the record, never ranked nor picked
+            row["status"] = "unidentifiable"
     # result.simulate warns when the input leaves the estimation input's range
     row["in_range"] = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
-    if row["status"] != "ok":
+    if row["status"] != "ok" and not unknown:
+        if why:
+            row["reason"] = f"{row['reason']}; not identifiable: {why}"
         row["seconds"] = time.perf_counter() - t0
         return row, res
     if np.ptp(y_est) > 0:
@@ -219,6 +260,8 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
         row["fit"] = fit_percent(y_score, ysim[score_from:])
     else:
         notes.append("the held-back output is constant: its fit % is undefined (NaN)")
+    if unknown:
+        notes.insert(0, f"not identifiable: {why}")
     if notes:
         row["reason"] = "; ".join(notes)
     row["seconds"] = time.perf_counter() - t0
@@ -251,7 +294,14 @@ class Selection:
         estimator's :class:`fohw.Status` name on the estimation part), ``refit_status`` (the
         refit's status name where the candidate was refitted on all the data, e.g.
         ``RANK_DEFICIENT``, or ``diverged``/``implausible``/``failed``), ``seconds``,
-        ``reason`` (why a candidate failed, or the warnings its fit raised).
+        ``reason`` (why a candidate failed, or the warnings its fit raised), ``lr_pvalue``
+        (does the fractional order earn its keep: the p-value of :func:`fohw.lr_test` of the
+        candidate against its nested integer candidate, the same keywords with orders 0, if
+        the grid has it; on the estimation part's criterion, with the chi-bar-squared mixture
+        of Self & Liang for orders on the boundary; NaN for the mixed class unless Davies'
+        bound is cheap, a ``"varpro"`` fit of one order; :func:`lr_columns`),
+        ``lr_reference`` (the reference distribution and the nested candidate, or why the
+        p-value was not computed).
     best : IdentificationResult or None
         The winner refitted on all the data given as estimation data. ``None`` means nothing
         was selected: every candidate failed, or every refit was rejected (a
@@ -311,10 +361,15 @@ class Selection:
         return ["candidate"] + [c for c in COLUMNS if c != "candidate"]
 
     def to_markdown(self, top=None, columns=None):
-        """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them)."""
+        """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them).
+
+        The default columns include ``lr_pvalue`` when some row has one.
+        """
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
+        if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
+            cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
         for r in rows:
@@ -586,6 +641,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
             row, res = outcome
         rows.append(dict(c, candidate=_label(mine), **row))
         results.append(res)
+    lr_columns(rows, results, cands)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
@@ -599,6 +655,54 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
             "Selection.rows give each one's status and reason (Selection.best is None)."),
             stacklevel=2)
     return selection
+
+
+def _cheap_davies(full):
+    """Whether lr_test's Davies bound reads its profile from the fit (no refits)."""
+    return (full.method == "varpro" and full.alpha_profile is not None
+            and len(full.orders) == 1 and full.structure.past == "rest")
+
+
+def lr_columns(rows, results, cands):
+    """Fill ``lr_pvalue`` and ``lr_reference`` of every row (in place).
+
+    A row whose fit has free orders is tested by :func:`fohw.lr_test` against its nested
+    integer candidate: the row of the grid with the same keywords but ``orders`` (its fit's
+    orders are those of the fractional fit at 0), both fits on the same estimation part. The
+    reference is lr_test's ``"auto"``: the chi-bar-squared mixture (``0.5 chi2_0 + 0.5 chi2_1``
+    for one order; Self & Liang 1987) when every order is on the boundary under the null; for
+    an order that is not identified under the null (the mixed class), Davies' (1987) bound
+    only when it is cheap (a ``"varpro"`` fit of one order keeps the profile), else NaN and
+    ``lr_reference`` says so. No nested candidate in the grid: NaN and an empty reference.
+    """
+    for row in rows:
+        row["lr_pvalue"], row["lr_reference"] = np.nan, ""
+    fitted = [(i, r) for i, r in enumerate(results) if r is not None]
+    for i, full in fitted:
+        if not full.structure.orders.free:
+            continue
+        null, _, unidentified = null_orders(full.structure.orders)
+        mine = {k: _describe(v) for k, v in cands[i].items() if k != "orders"}
+        nested = next((j for j, r in fitted if not r.structure.orders.free
+                       and r.structure.orders == null
+                       and {k: _describe(v) for k, v in cands[j].items() if k != "orders"}
+                       == mine), None)
+        if nested is None:
+            continue
+        against = f"vs {rows[nested]['candidate']}"
+        if unidentified and not _cheap_davies(full):
+            rows[i]["lr_reference"] = (
+                f"not computed {against}: order(s) {', '.join(unidentified)} not identified "
+                "under the null and Davies' bound needs refits here; call fohw.lr_test(..., "
+                "reference='davies' or 'bootstrap', u=, y=)")
+            continue
+        try:
+            test = lr_test(results[nested], full)
+        except (ParameterError, ValueError, ArithmeticError) as exc:
+            rows[i]["lr_reference"] = f"not computed {against}: {str(exc).split('. ')[0]}"
+            continue
+        rows[i]["lr_pvalue"] = test.pvalue
+        rows[i]["lr_reference"] = f"{test.distribution}, {test.criterion} {against}"
 
 
 def _pick(selection, cands, u, y, refit, envelope):
