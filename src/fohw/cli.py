@@ -301,21 +301,42 @@ def _validation_arg(text):
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``fohw`` command."""
-    from .estimators.hybrid import SCHEDULES
-    from .estimators.identify import METHODS
-
     parser = _Parser(prog="fohw",
                      description="Identification of fractional-order Hammerstein-Wiener systems.")
     parser.add_argument("--version", action="version", version=f"fohw {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    _add_identify_parser(sub)
+    _add_select_parser(sub)
+    _add_simulate_parser(sub)
+    _add_data_parser(sub)
+    _add_reproduce_parser(sub)
+    return parser
+
+
+def _add_data_file(cmd, columns_help, decimal_help):
+    """The data file, ``--columns`` and ``--decimal-comma`` (identify, select)."""
+    cmd.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
+    cmd.add_argument("--columns", help=columns_help)
+    cmd.add_argument("--decimal-comma", action="store_true", help=decimal_help)
+
+
+def _add_dt(cmd):
+    cmd.add_argument("--dt", type=float, default=None,
+                     help="sampling time (default: the file's Ts, else 1)")
+
+
+def _add_quiet(cmd, text="no stage messages on stderr"):
+    cmd.add_argument("-q", "--quiet", action="store_true", help=text)
+
+
+def _add_identify_parser(sub):
+    from .estimators.hybrid import SCHEDULES
+    from .estimators.identify import METHODS
 
     ide = sub.add_parser("identify", help="identify a model from a data file")
-    ide.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
-    ide.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'u,y' "
-                     "(default: the columns named u and y, or the two columns of a two-column "
-                     "file)")
-    ide.add_argument("--decimal-comma", action="store_true", help="the file writes 0,5 for "
-                     "0.5 (columns then separated by ';' or whitespace)")
+    _add_data_file(ide, "input and output columns, e.g. '0,1' or 'u,y' (default: the columns "
+                   "named u and y, or the two columns of a two-column file)",
+                   "the file writes 0,5 for 0.5 (columns then separated by ';' or whitespace)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
     ide.add_argument("--nb", type=int, required=True, help="input lags")
     ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
@@ -326,8 +347,7 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting (and add them "
                      "back when simulating)")
-    ide.add_argument("--dt", type=float, default=None,
-                     help="sampling time (default: the file's Ts, else 1)")
+    _add_dt(ide)
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
                      help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
     ide.add_argument("--schedule", choices=SCHEDULES, default=None,
@@ -342,15 +362,16 @@ def build_parser() -> argparse.ArgumentParser:
     ide.add_argument("--plot", help="write a figure of the free-run simulation and the one-step "
                      "prediction (PNG) to this file")
     ide.add_argument("--save", help="save the full result as JSON (fohw.load_result)")
-    ide.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr "
-                     "(errors and warnings still)")
+    _add_quiet(ide, "no stage messages on stderr (errors and warnings still)")
+
+
+def _add_select_parser(sub):
+    from .estimators.identify import METHODS
 
     sel = sub.add_parser("select", help="choose a structure by free-run simulation on a "
                          "held-back part (fohw.select_structure)")
-    sel.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
-    sel.add_argument("--columns", help="input and output columns, e.g. '0,1' or 'uEst,yEst' "
-                     "(default: as for identify)")
-    sel.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    _add_data_file(sel, "input and output columns, e.g. '0,1' or 'uEst,yEst' (default: as for "
+                   "identify)", "as for identify")
     for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
                        ("--f-basis", "input polynomial degrees"),
                        ("--g-basis", "output polynomial degrees")):
@@ -366,15 +387,16 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("--offset", action="store_true", help="a constant term in every model")
     sel.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting")
-    sel.add_argument("--dt", type=float, default=None,
-                     help="sampling time (default: the file's Ts, else 1)")
+    _add_dt(sel)
     sel.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     sel.add_argument("--top", type=_positive_int, default=10, help="rows to print (default 10)")
     sel.add_argument("--csv", help="write every row to this CSV file")
     sel.add_argument("--plot", help="write the scores (PNG) to this file")
     sel.add_argument("--save", help="save the refitted winner as JSON (fohw.load_result)")
-    sel.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr")
+    _add_quiet(sel)
 
+
+def _add_simulate_parser(sub):
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
     sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model, or "
                      "a result JSON written by `fohw identify --save` (the fitted predictor is "
@@ -385,8 +407,10 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--noise-std", type=float, default=0.0)
     sim.add_argument("--seed", type=int, default=None)
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
-    sim.add_argument("-q", "--quiet", action="store_true", help="no stage messages on stderr")
+    _add_quiet(sim)
 
+
+def _add_data_parser(sub):
     dat = sub.add_parser("data", help="write a record shipped with fohw (or a simulated one) "
                          "to a file, to try the commands on; without NAME, list them")
     dat.add_argument("name", nargs="?", choices=_DATA_NAMES, help="the record")
@@ -395,6 +419,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="paper_example: number of samples (default 2000)")
     dat.add_argument("--seed", type=int, default=0, help="paper_example: seed (default 0)")
 
+
+def _add_reproduce_parser(sub):
     rep = sub.add_parser("reproduce", help="reproduce the paper's tables and figures")
     rep.add_argument("what", choices=sorted(list(_REPRODUCE) + ["robot-arm", "accuracy",
                                                                  "forgetting"]),
@@ -409,7 +435,6 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--forgetting", type=float, default=None, metavar="LAMBDA",
                      help="table2/figures: forgetting factor on r in (0, 1]; not in the paper "
                      "(default 1: the paper as printed)")
-    return parser
 
 
 def _fohw_warnings():
@@ -431,18 +456,20 @@ def _decimal(args):
 
 
 def _identify(args):
-    import time
-    import warnings
-
-    from . import identify
-    from .analysis.validation import compare
-    from .exceptions import FohwError
-    from .results import Status
-
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
     data, names, file_dt = read_table(args.data, _decimal(args))
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    options = _method_options(args)
+    res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
+    _print_warnings(str(w.message) for w in caught)
+    _print_identified(args, res, check)
+    _save_identified(args, res, check)
+    return 0
+
+
+def _method_options(args):
+    """The options of the method: ``--schedule`` and the like, then every ``--option``."""
     options = {name: value for name, value in (("schedule", args.schedule),
                                                ("innovation_length", args.innovation_length),
                                                ("max_iter", args.max_iter)) if value is not None}
@@ -450,13 +477,25 @@ def _identify(args):
         if name in options:
             raise UsageError(f"option {name!r} given twice.")
         options[name] = value
+    return options
+
+
+def _fit_and_check(args, u, y, options, dt):
+    """Identify, then the free-run fit on the record: ``(result, check, caught warnings)``."""
+    import time
+    import warnings
+
+    from . import identify
+    from .analysis.validation import compare
+    from .exceptions import FohwError
+
     start = time.perf_counter()
     _stage(args, f"identifying with {args.method} on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=_dt(args.dt, file_dt))
+                       offset=args.offset, operating_point=args.operating_point, dt=dt)
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -466,8 +505,19 @@ def _identify(args):
             except FohwError as exc:        # e.g. a constant output: no fit index
                 warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
-    for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
+    return res, check, caught
+
+
+def _print_warnings(messages, skip=None):
+    """Each warning message once, in order, as ``fohw: warning: ...`` on stderr."""
+    for message in dict.fromkeys(messages):
+        if skip is not None and skip(message):
+            continue
         print(f"fohw: warning: {message}", file=sys.stderr)
+
+
+def _print_identified(args, res, check):
+    """The estimates and the fit on the record: a summary, or JSON with ``--json``."""
     if args.json:
         out = {"alpha": res.alpha, "theta": dict(zip(res.parameter_names, res.theta.tolist())),
                "J": res.J, "converged": res.converged, "status": res.status.name,
@@ -482,6 +532,12 @@ def _identify(args):
     else:
         print(res.summary())
         print(_fit_text(check))
+
+
+def _save_identified(args, res, check):
+    """``--save`` and ``--plot``; an error, and nothing written, if the fit FAILED."""
+    from .results import Status
+
     if res.status == Status.FAILED:
         raise UsageError(f"the fit FAILED ({res.message.rstrip('.')}); nothing was saved or "
                          "plotted (the estimates above are the optimiser's last point).")
@@ -497,7 +553,6 @@ def _identify(args):
         axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
                           "one-step prediction", fontsize=10)
         save_figure(fig, args.plot, dpi=120)
-    return 0
 
 
 def _fit_dict(check):
@@ -525,12 +580,38 @@ def _fit_text(check):
 
 
 def _select(args):
-    import time
-    import warnings
-    from concurrent.futures import ProcessPoolExecutor
+    _check_select_args(args)
+    data, names, file_dt = read_table(args.data, _decimal(args))
+    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    candidates = _candidates(args)
+    sel, caught = _run_selection(args, u, y, candidates, _dt(args.dt, file_dt))
+    _print_warnings((str(w.message) for w in caught),
+                    skip=lambda message: sel.best is None and message.startswith(
+                        "select_structure selected nothing"))   # the error below says it
+    print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
+    print(sel.to_markdown(top=args.top))
+    if sel.best is None:
+        print("no candidate simulated; see the reasons above.")
+        if args.csv:                    # the reasons, for the record
+            sel.to_csv(args.csv)
+        raise UsageError(_nothing_selected(sel))
+    print(f"best: {sel.best_row['candidate']} (held-back fit {sel.best_row['fit']:.1f} %), "
+          "refitted on all the data:")
+    print(sel.best.summary())
+    if args.save:
+        from .io.jsonio import save_result
 
-    from .analysis.selection import expand_candidates, select_structure
+        save_result(sel.best, args.save)
+    if args.csv:
+        sel.to_csv(args.csv)
+    if args.plot:
+        fig, _ = sel.plot()
+        save_figure(fig, args.plot, dpi=120)
+    return 0
 
+
+def _check_select_args(args):
+    """``--jobs``, ``--top`` and the output files, before the run."""
     if args.jobs < 1:
         raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
     if args.top < 1:
@@ -538,8 +619,12 @@ def _select(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_file_out(args.csv, "--csv", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
-    data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+
+
+def _candidates(args):
+    """The candidates of the grid ``--na``/``--nb``/``--f-basis``/``--g-basis``/``--orders``."""
+    from .analysis.selection import expand_candidates
+
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
     if args.nb is not None:
@@ -547,6 +632,17 @@ def _select(args):
     candidates = expand_candidates(grid)
     if args.nb is None:                 # nb = na
         candidates = [dict(c, nb=c["na"]) for c in candidates]
+    return candidates
+
+
+def _run_selection(args, u, y, candidates, dt):
+    """Fit the candidates (in ``--jobs`` processes): ``(selection, caught warnings)``."""
+    import time
+    import warnings
+    from concurrent.futures import ProcessPoolExecutor
+
+    from .analysis.selection import select_structure
+
     start = time.perf_counter()
     _stage(args, f"fitting {len(candidates)} candidate{'s' * (len(candidates) != 1)} "
            f"({args.method}) on {u.shape[0]} samples ...")
@@ -557,47 +653,28 @@ def _select(args):
                 warnings.simplefilter("always", category)
             sel = select_structure(u, y, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
-                                   operating_point=args.operating_point, dt=_dt(args.dt, file_dt),
+                                   operating_point=args.operating_point, dt=dt,
                                    executor=pool)
     finally:
         if pool is not None:
             pool.shutdown()
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
-    for message in dict.fromkeys(str(w.message) for w in caught):     # once each, in order
-        if sel.best is None and message.startswith("select_structure selected nothing"):
-            continue                    # the error below says it, in one line
-        print(f"fohw: warning: {message}", file=sys.stderr)
-    print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
-    print(sel.to_markdown(top=args.top))
-    if sel.best is None:
-        print("no candidate simulated; see the reasons above.")
-        if args.csv:                    # the reasons, for the record
-            sel.to_csv(args.csv)
-        failed = [r for r in sel.rows if r["status"] != "ok"]
-        n = len(sel.rows)
-        what = ("the winner could not be refitted" if len(failed) < n else
-                "the only candidate failed" if n == 1 else f"all {n} candidates failed")
-        first = ""
-        if failed and failed[0].get("reason"):
-            reason = str(failed[0]["reason"]).rstrip(".")
-            first = f" ({'the first: ' if n > 1 else ''}{reason[:200]}" \
-                    f"{' ...' if len(reason) > 200 else ''})"
-        raise UsageError(f"no model selected: {what}{first}; every reason is in the table on "
-                         "stdout, and nothing was saved.")
-    else:
-        print(f"best: {sel.best_row['candidate']} (held-back fit {sel.best_row['fit']:.1f} %), "
-              "refitted on all the data:")
-        print(sel.best.summary())
-        if args.save:
-            from .io.jsonio import save_result
+    return sel, caught
 
-            save_result(sel.best, args.save)
-    if args.csv:
-        sel.to_csv(args.csv)
-    if args.plot:
-        fig, _ = sel.plot()
-        save_figure(fig, args.plot, dpi=120)
-    return 0
+
+def _nothing_selected(sel):
+    """The error message when no model was selected: what failed, and the first reason."""
+    failed = [r for r in sel.rows if r["status"] != "ok"]
+    n = len(sel.rows)
+    what = ("the winner could not be refitted" if len(failed) < n else
+            "the only candidate failed" if n == 1 else f"all {n} candidates failed")
+    first = ""
+    if failed and failed[0].get("reason"):
+        reason = str(failed[0]["reason"]).rstrip(".")
+        first = f" ({'the first: ' if n > 1 else ''}{reason[:200]}" \
+                f"{' ...' if len(reason) > 200 else ''})"
+    return (f"no model selected: {what}{first}; every reason is in the table on stdout, and "
+            "nothing was saved.")
 
 
 def _load_model_or_result(path):

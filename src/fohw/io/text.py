@@ -402,108 +402,165 @@ def _read_lines(src, decimal):
     lines, so a 5-million-row file with one bad line costs the numbers' memory, not the text's.
     """
     src = _Source(src)
-    names, header_line, delimiter, n_comments = None, 0, "unset", 0
-    width, first_line, first, cols = None, 0, [], []
-    where = ""
-    n_rows = 0
-    empty = {}             # column -> (line, fields on that line) of its first empty cell below row 0
-    later = set()          # columns with a value below the first data line
+    rows = _Rows(src, decimal)
     with src.open() as fh:
         for lineno, raw in _lines(fh):
             text = _decode(src, lineno, raw).strip()
             if not text or text[0] in "#%":
-                n_comments += 1
+                rows.n_comments += 1
                 continue
-            if delimiter == "unset":
-                delimiter = _delimiter(text, decimal)
-            fields = _split(text, delimiter)
-            if n_rows == 0 and _header(fields, decimal) is not None:
-                if names is None:
-                    if _comma_separated_header(text, delimiter, decimal):
-                        raise _comma_header_error(src.name, lineno, text)
-                    names, header_line = _header(fields, decimal), lineno
-                    _check_names(src, lineno, names)
+            if rows.delimiter == "unset":
+                rows.delimiter = _delimiter(text, decimal)
+            fields = _split(text, rows.delimiter)
+            if rows.n_rows == 0 and _header(fields, decimal) is not None:
+                if rows.names is None:
+                    rows.read_header(lineno, text, fields)
                     continue
-                _check_separator(src, lineno, text, delimiter, header_line, decimal)
-                # a second line without numbers: decimal commas, or a second header
-                commas = [f for f in fields if parse_number(f.replace(",", ".")) is not None]
-                if commas and decimal == ".":
-                    raise _field_error(src.name, lineno, commas[0], fields.index(commas[0]),
-                                       decimal)
-                if not all(f.lower() in MISSING for f in fields):
-                    raise DataFileError(f"{src.name}: line {lineno} looks like a second header "
-                                        f"line (no field is a number) after the header on line "
-                                        f"{header_line}; fohw reads one header line: start the "
-                                        "others with '#'.")
-            if n_rows == 0:
-                if names is not None:
-                    _check_separator(src, lineno, text, delimiter, header_line, decimal)
-                width = max(len(fields), len(names) if names is not None else 0)
-                where = (f"the header on line {header_line}" if names is not None
-                         and len(names) >= len(fields) else f"line {lineno} (the first data line)")
-                first_line = lineno
-                cols = [array("d") for _ in range(width)]
-            elif len(fields) > width:
-                _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal, where,
-                                width, delimiter,
-                                _count_error(src.name, lineno, len(fields), width, where,
-                                             delimiter, decimal))
-            for j in range(width):
-                cell = fields[j] if j < len(fields) else ""
-                if n_rows == 0:
-                    first.append(cell)
-                if not cell:
-                    if n_rows > 0 and j not in empty:
-                        empty[j] = (lineno, len(fields))
-                        if j in later:                  # a signal column: certain now
-                            _raise_earliest(src, names, empty, later, lineno + 1, first_line,
-                                            first, decimal, where, width, delimiter, None)
-                    cols[j].append(np.nan)
-                    continue
-                x = parse_number(_decimal(cell, decimal))
-                if x is None or not np.isfinite(x):
-                    label = (names[j] if names is not None and j < len(names) and names[j]
-                             else j)
-                    error = _field_error(src.name, lineno, cell, label, decimal) if x is None \
-                        else DataFileError(
-                            f"{src.name}: line {lineno} holds a non-finite value: {cell!r} "
-                            f"(column {label!r}); fohw does not fill gaps.")
-                    if n_rows == 0:
-                        raise error
-                    later.add(j)
-                    _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal,
-                                    where, width, delimiter, error)
-                if n_rows > 0:
-                    later.add(j)
-                cols[j].append(x)
-            n_rows += 1
-    if n_rows == 0:
-        raise DataFileError(f"{src.name}: no data lines found.")
-    error = _first_empty_error(src, names, empty, later, first_line, first, decimal, where,
-                               width, delimiter, n_rows)
-    if error is not None:
-        raise error[1]
-    skipped = [_header_note(header_line, names)] if names else []
-    if n_comments:
-        skipped.append(f"{n_comments} comment or blank line(s)")
-    padded = (names + [""] * (width - len(names))) if names is not None else None
-    columns, col_names, scalars = [], [], {}
-    for j in range(width):
-        name = padded[j] if padded is not None else None
-        if not first[j] and j not in later:                    # empty on every line
-            if name:
-                raise DataFileError(f"{src.name}: column {name!r} has a name but no values.")
-            continue
-        if j not in later and n_rows > 1:                        # given once
-            scalars[name if name else j] = cols[j][0]
-            continue
-        columns.append(np.frombuffer(cols[j], dtype=np.float64))
-        col_names.append(name)
-    if any(not first[j] and j not in later and not (padded and padded[j]) for j in range(width)):
-        skipped.append("a trailing separator")
-    data = np.column_stack(columns) if columns else np.empty((n_rows, 0))
-    return Table(data=data, names=col_names if names is not None else None, scalars=scalars,
-                 path=src.name, skipped=skipped)
+                rows.refuse_second_header(lineno, text, fields)
+            rows.add(lineno, text, fields)
+    return rows.table()
+
+
+class _Rows:
+    """What :func:`_read_lines` has read so far.
+
+    The header, the columns' numbers, and the empty cells and late values that decide which
+    error (if any) is the earliest certain one.
+    """
+
+    def __init__(self, src, decimal):
+        self.src, self.decimal = src, decimal
+        self.names, self.header_line, self.delimiter, self.n_comments = None, 0, "unset", 0
+        self.width, self.first_line, self.first, self.cols = None, 0, [], []
+        self.where = ""
+        self.n_rows = 0
+        self.empty = {}    # column -> (line, fields on that line) of its first empty cell below row 0
+        self.later = set()     # columns with a value below the first data line
+
+    def read_header(self, lineno, text, fields):
+        """The header line (the first line without numbers, before any data line)."""
+        if _comma_separated_header(text, self.delimiter, self.decimal):
+            raise _comma_header_error(self.src.name, lineno, text)
+        self.names, self.header_line = _header(fields, self.decimal), lineno
+        _check_names(self.src, lineno, self.names)
+
+    def refuse_second_header(self, lineno, text, fields):
+        """A second line without numbers: decimal commas, or a second header (errors).
+
+        A line of missing values only (``NA,NA``) passes, to be refused as a data row.
+        """
+        src, decimal = self.src, self.decimal
+        _check_separator(src, lineno, text, self.delimiter, self.header_line, decimal)
+        commas = [f for f in fields if parse_number(f.replace(",", ".")) is not None]
+        if commas and decimal == ".":
+            raise _field_error(src.name, lineno, commas[0], fields.index(commas[0]), decimal)
+        if not all(f.lower() in MISSING for f in fields):
+            raise DataFileError(f"{src.name}: line {lineno} looks like a second header "
+                                f"line (no field is a number) after the header on line "
+                                f"{self.header_line}; fohw reads one header line: start the "
+                                "others with '#'.")
+
+    def add(self, lineno, text, fields):
+        """A data line: its cells added to the columns, or the earliest certain error raised."""
+        if self.n_rows == 0:
+            self.start(lineno, text, fields)
+        elif len(fields) > self.width:
+            self.raise_earliest(lineno, _count_error(self.src.name, lineno, len(fields),
+                                                     self.width, self.where, self.delimiter,
+                                                     self.decimal))
+        for j in range(self.width):
+            self.add_cell(lineno, fields, j)
+        self.n_rows += 1
+
+    def start(self, lineno, text, fields):
+        """The first data line sets the width (or the header does, if it is wider)."""
+        names = self.names
+        if names is not None:
+            _check_separator(self.src, lineno, text, self.delimiter, self.header_line,
+                             self.decimal)
+        self.width = max(len(fields), len(names) if names is not None else 0)
+        self.where = (f"the header on line {self.header_line}" if names is not None
+                      and len(names) >= len(fields) else f"line {lineno} (the first data line)")
+        self.first_line = lineno
+        self.cols = [array("d") for _ in range(self.width)]
+
+    def add_cell(self, lineno, fields, j):
+        """Cell ``j`` of a data line: a number, or an empty cell (NaN until the end decides)."""
+        cell = fields[j] if j < len(fields) else ""
+        if self.n_rows == 0:
+            self.first.append(cell)
+        if not cell:
+            if self.n_rows > 0 and j not in self.empty:
+                self.empty[j] = (lineno, len(fields))
+                if j in self.later:                  # a signal column: certain now
+                    self.raise_earliest(lineno + 1, None)
+            self.cols[j].append(np.nan)
+            return
+        x = parse_number(_decimal(cell, self.decimal))
+        if x is None or not np.isfinite(x):
+            error = self.value_error(lineno, cell, j, x)
+            if self.n_rows == 0:
+                raise error
+            self.later.add(j)
+            self.raise_earliest(lineno, error)
+        if self.n_rows > 0:
+            self.later.add(j)
+        self.cols[j].append(x)
+
+    def value_error(self, lineno, cell, j, x):
+        """The error of a cell that is not a number (``x`` None) or not finite."""
+        names = self.names
+        label = names[j] if names is not None and j < len(names) and names[j] else j
+        if x is None:
+            return _field_error(self.src.name, lineno, cell, label, self.decimal)
+        return DataFileError(f"{self.src.name}: line {lineno} holds a non-finite value: "
+                             f"{cell!r} (column {label!r}); fohw does not fill gaps.")
+
+    def raise_earliest(self, lineno, error):
+        _raise_earliest(self.src, self.names, self.empty, self.later, lineno, self.first_line,
+                        self.first, self.decimal, self.where, self.width, self.delimiter, error)
+
+    def table(self):
+        """The :class:`Table` of the whole file, or the earliest error the end makes certain."""
+        src, names, width, n_rows = self.src, self.names, self.width, self.n_rows
+        if n_rows == 0:
+            raise DataFileError(f"{src.name}: no data lines found.")
+        error = _first_empty_error(src, names, self.empty, self.later, self.first_line,
+                                   self.first, self.decimal, self.where, width, self.delimiter,
+                                   n_rows)
+        if error is not None:
+            raise error[1]
+        skipped = [_header_note(self.header_line, names)] if names else []
+        if self.n_comments:
+            skipped.append(f"{self.n_comments} comment or blank line(s)")
+        padded = (names + [""] * (width - len(names))) if names is not None else None
+        columns, col_names, scalars = self.columns(padded)
+        if any(not self.first[j] and j not in self.later and not (padded and padded[j])
+               for j in range(width)):
+            skipped.append("a trailing separator")
+        data = np.column_stack(columns) if columns else np.empty((n_rows, 0))
+        return Table(data=data, names=col_names if names is not None else None,
+                     scalars=scalars, path=src.name, skipped=skipped)
+
+    def columns(self, padded):
+        """``(signal columns, their names, values given once)``.
+
+        A named empty column is an error; an unnamed one (a trailing separator) is left out.
+        """
+        columns, col_names, scalars = [], [], {}
+        for j in range(self.width):
+            name = padded[j] if padded is not None else None
+            if not self.first[j] and j not in self.later:          # empty on every line
+                if name:
+                    raise DataFileError(f"{self.src.name}: column {name!r} has a name but no "
+                                        "values.")
+                continue
+            if j not in self.later and self.n_rows > 1:              # given once
+                scalars[name if name else j] = self.cols[j][0]
+                continue
+            columns.append(np.frombuffer(self.cols[j], dtype=np.float64))
+            col_names.append(name)
+        return columns, col_names, scalars
 
 
 def _first_empty_error(src, names, empty, later, first_line, first, decimal, where, width,
