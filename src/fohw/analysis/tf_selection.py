@@ -40,6 +40,9 @@ __all__ = ["select_fractional_tf"]
 #: Keywords every candidate must give (here or shared).
 REQUIRED = ("num_orders", "den_orders")
 
+#: Keywords that are one list per candidate (a number there is a grid written one level short).
+ORDER_LISTS = ("num_orders", "den_orders", "num", "den")
+
 #: Row ``status`` values: ``"ok"``, ``"diverged"`` (the free run left the finite numbers),
 #: ``"implausible"`` (it left the measured output's envelope), ``"failed"`` (the fit or the
 #: simulation raised), and for a winner whose refit on all the data was not kept,
@@ -84,6 +87,14 @@ def _check_keywords(own, common):
                        + (f"; did you mean {close[0]!r}?" if close else ""))
                 raise ParameterError(f"`candidates[{i}]` gives {key!r}: {why}.")
         cands.append(dict(common, **mine))
+        for key in ORDER_LISTS:
+            value = cands[-1].get(key)
+            if isinstance(value, numbers.Real):
+                where = f"`candidates[{i}]`" if key in mine else "the shared keywords"
+                raise ParameterError(
+                    f"{where} give {key}={value!r}, a number: orders and coefficients are a "
+                    f"list per candidate, so a grid of them is a list of lists, e.g. "
+                    f"{{{key!r}: [[0.5, 0.0], [1.0, 0.0]]}}.")
     for key in REQUIRED:
         missing = [i for i, c in enumerate(cands) if key not in c]
         if missing:
