@@ -494,6 +494,30 @@ API = [
     ("load_result", "issue 28 #10: a schedule the method does not have",
      lambda t: fohw.load_result(_result_file(t, schedule="recursive")),
      fohw.DataFileError, "field 'schedule' is 'recursive', but method 'varpro' has no schedule"),
+    # issue 28 (tfsel)
+    ("select_fractional_tf", "an empty grid {}",
+     lambda t: fohw.select_fractional_tf(U, U, {}, dt=0.1, num_orders=[0.0]),
+     fohw.ParameterError, "`candidates` is an empty grid {}"),
+    ("select_fractional_tf", "a grid of orders one level short (numbers, not lists)",
+     lambda t: fohw.select_fractional_tf(U, U, {"den_orders": [0.5, 0.0]}, dt=0.1,
+                                         num_orders=[0.0]),
+     fohw.ParameterError, "`candidates[0]` give den_orders=0.5, a number"),
+    ("select_fractional_tf", "a misspelt fit_fractional_tf keyword in a candidate",
+     lambda t: fohw.select_fractional_tf(U, U, [{"den_order": [0.5, 0.0]}], dt=0.1,
+                                         num_orders=[0.0]),
+     fohw.ParameterError, "`candidates[0]` gives 'den_order': not a keyword of "
+     "fohw.fit_fractional_tf; did you mean 'den_orders'?"),
+    ("select_fractional_tf", "den_orders given nowhere",
+     lambda t: fohw.select_fractional_tf(U, U, [{"free": None}], dt=0.1, num_orders=[0.0]),
+     fohw.ParameterError, "`den_orders` is required by fohw.fit_fractional_tf and missing"),
+    ("select_fractional_tf", "dt inside a candidate",
+     lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0], "dt": 0.2}], dt=0.1,
+                                         num_orders=[0.0]),
+     fohw.ParameterError, "`candidates[0]` gives 'dt': `dt` is shared"),
+    ("select_fractional_tf", "a held-back part of 1 sample",
+     lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0]}], dt=0.1,
+                                         num_orders=[0.0], validation=1),
+     fohw.ParameterError, "`validation` = 1 (an int: a number of samples)"),
 ]
 
 CLI = [

@@ -15,6 +15,7 @@ from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
+from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
 from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
@@ -83,6 +84,7 @@ __all__ = [
     "read_record",
     "Selection",
     "select_structure",
+    "select_fractional_tf",
     "Basis",
     "CRBResult",
     "ConvergenceWarning",

@@ -303,7 +303,8 @@ class Selection:
         ``lr_reference`` (the reference distribution and the nested candidate, or why the
         p-value was not computed).
     best : IdentificationResult or None
-        The winner refitted on all the data given as estimation data. ``None`` means nothing
+        The winner refitted on all the data given as estimation data (a
+        :class:`fohw.FractionalTFFit` from :func:`fohw.select_fractional_tf`). ``None`` means nothing
         was selected: every candidate failed, or every refit was rejected (a
         :class:`fohw.ConvergenceWarning` says so).
     best_index : int or None
@@ -370,6 +371,8 @@ class Selection:
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
             cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
+        if columns is None:        # rows of fohw.select_fractional_tf have no in_range, ...
+            cols = [c for c in cols if any(c in r for r in self.rows)]
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
         for r in rows:
@@ -434,8 +437,14 @@ def _cell(v):
     return str(v).replace("|", "/")
 
 
-def _split(u, y, validation):
-    """``(u_est, y_est, u_sim, y_score, score_from, description)``."""
+def split_validation(u, y, validation):
+    """``(u_est, y_est, u_sim, y_score, score_from, description)`` of ``validation``.
+
+    A fraction or a number of samples held back at the end (``score_from`` is where they
+    start), or a separate record ``(u_val, y_val)`` (``score_from`` 0); checked, with a
+    :class:`fohw.ParameterError` naming ``validation``. Shared with
+    :func:`fohw.select_fractional_tf`.
+    """
     n = len(y)
     if isinstance(validation, Record):
         validation = (validation.u, validation.y)
@@ -621,7 +630,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     own = expand_candidates(candidates)
     cands = check_candidates(own, common)
     factor = check_envelope(envelope)
-    u_est, y_est, u_sim, y_score, score_from, described = _split(u, y, validation)
+    u_est, y_est, u_sim, y_score, score_from, described = split_validation(u, y, validation)
     if score == "fit" and np.ptp(y_score) == 0:
         raise ParameterError(f"the held-back output ({described}) is constant ({float(y_score[0])!r}): "
                              "no candidate can be ranked by its fit %. Hold back a part where "

@@ -1,0 +1,71 @@
+"""select_fractional_tf: fractional transfer-function structures chosen by held-back free run."""
+
+import numpy as np
+import pytest
+
+import fohw
+
+DT = 0.05
+
+
+@pytest.fixture(scope="module")
+def record():
+    """1 / (2 s^0.6 + 1), white input, 1 % output noise; N = 240 (fast)."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(240)
+    y = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0]).simulate(u, dt=DT)
+    return u, y + 0.01 * rng.standard_normal(u.size)
+
+
+def test_true_structure_beats_integer_and_a_failed_candidate_is_a_row(record):
+    u, y = record
+    cands = [dict(den_orders=[1.0, 0.0], free=["b0", "a0"]),            # integer order 1
+             dict(den_orders=[0.5, 0.0]),                                 # the true structure
+             dict(den_orders=[0.5, 0.0], free=["b0", "a0", "a1"])]        # raises: scale free
+    sel = fohw.select_fractional_tf(u, y, cands, dt=DT, num_orders=[0.0])
+    status = [r["status"] for r in sel.rows]
+    assert status == ["ok", "ok", "failed"]
+    assert "every coefficient is free" in sel.rows[2]["reason"]
+    assert sel.best_index == 1
+    assert sel.rows[1]["fit"] > sel.rows[0]["fit"] + 10      # the integer order cannot bend
+    assert isinstance(sel.best, fohw.FractionalTFFit)
+    assert abs(sel.best.estimates["alpha0"] - 0.6) < 0.05    # refitted on all the data
+    assert sel.best.residuals.size == u.size
+    table = sel.to_markdown()
+    assert "| den_orders=[0.5, 0.0] | ok |" in table.splitlines()[2]
+    assert "in_range" not in table and "failed" in table
+
+
+def test_bic_prefers_the_true_structure_to_a_two_term_one(record):
+    # The two-term denominator nests the truth (alpha1 -> 0), so its held-back fit % equals
+    # the truth's within the noise; BIC charges its two extra parameters.
+    u, y = record
+    cands = [dict(den_orders=[1.0, 0.0], free=["b0", "a0"]), dict(den_orders=[0.5, 0.0]),
+             dict(den_orders=[1.5, 0.5, 0.0], order_grid=3)]
+    sel = fohw.select_fractional_tf(u, y, cands, dt=DT, num_orders=[0.0], score="bic",
+                                    refit=False)
+    assert [r["n_params"] for r in sel.rows] == [2, 3, 5]
+    assert sel.best_index == 1
+    assert sel.best is sel.results[1]
+
+
+def test_an_implausible_free_run_is_not_scored(record):
+    # 1 / (-s^alpha + 1), alpha in [0.9, 1.1], coefficients fixed: unstable, its free run
+    # grows like e^t (e^12 over the record), far outside 10 times the output's range.
+    u, y = record
+    cands = [dict(den_orders=[1.0, 0.0], den=[-1.0, 1.0], free=["alpha0"],
+                  bounds={"alpha0": (0.9, 1.1)}),
+             dict(den_orders=[1.0, 0.0], free=["b0", "a0"])]
+    sel = fohw.select_fractional_tf(u, y, cands, dt=DT, num_orders=[0.0])
+    assert sel.rows[0]["status"] == "implausible"
+    assert np.isnan(sel.rows[0]["fit"])
+    assert "implausible from sample k =" in sel.rows[0]["reason"]
+    assert sel.best_index == 1
+
+
+def test_nothing_selected_warns(record):
+    u, y = record
+    with pytest.warns(fohw.ConvergenceWarning, match="selected nothing: of 1 candidates, 1 failed"):
+        sel = fohw.select_fractional_tf(u, y, [dict(den_orders=[0.5, 0.0], free=[])], dt=DT,
+                                        num_orders=[0.0])
+    assert sel.best is None and sel.rows[0]["status"] == "failed"
