@@ -83,7 +83,10 @@ def linear_start(layout, lin):
 
 
 def fit_fractional_oe(u, y, n, f_basis, g_basis, lin):
-    """Output-error fit from two starts (varpro, and the linear OE model at alpha ~ 0); best SSE."""
+    """Output-error fit from the default chain of starts and from the linear OE model at alpha ~ 0.
+
+    The better simulation SSE is kept.
+    """
     struct = dict(na=n, nb=n, f_basis=f_basis, g_basis=g_basis, method="output_error",
                   alpha_bounds=(0.0, 2.0), n_init=N_INIT)
     layout = fohw.ThetaLayout(na=n, nb=n, n_g=len(fohw.as_basis(g_basis)),
@@ -293,7 +296,8 @@ def equal_order_section(u, y, fast):
     first, second = slice(0, 512), slice(512, len(y))
     out = ["", "### Equal orders", "",
            "Each row fitted on the first half; fractional models started from the linear OE "
-           "model of the same order (at alpha = 0.001) and from varpro, the better kept.", "",
+           "model of the same order (at alpha = 0.001) and from output_error's default chain "
+           "of starts (nested integer model, varpro, a scan of the order), the better kept.", "",
            "| order n = na = nb | model | parameters | alpha | fit % first half | fit % "
            "held-back half | gain over linear OE (first / held back) |",
            "|---:|---|---:|---:|---:|---:|---|"]
