@@ -24,6 +24,7 @@ or dask's ``Client.get_executor()`` for a cluster); the table is the same whatev
 
 from __future__ import annotations
 
+import collections
 import csv
 import difflib
 import inspect
@@ -74,11 +75,12 @@ STATUSES = ("ok", "diverged", "nan", "implausible", "failed", "unidentifiable", 
 REQUIRED = ("na", "f_basis", "g_basis")
 
 
-def expand_candidates(candidates):
+def expand_candidates(candidates, what="identify"):
     """A list of keyword dicts from a list of dicts or a grid (a dict of lists).
 
     ``{"na": [1, 2], "orders": [0, "mixed"]}`` gives the four combinations, in
-    :func:`itertools.product` order (the first key varies slowest).
+    :func:`itertools.product` order (the first key varies slowest). ``what`` names the function
+    whose keywords the candidates are, for the messages.
     """
     if isinstance(candidates, Mapping):
         keys = list(candidates)
@@ -98,12 +100,12 @@ def expand_candidates(candidates):
             values.append(list(v))
         return [dict(zip(keys, combo)) for combo in itertools.product(*values)]
     if isinstance(candidates, (str, bytes)) or not isinstance(candidates, Sequence):
-        raise ParameterError("`candidates` must be a list of dicts of identify keywords or a "
+        raise ParameterError(f"`candidates` must be a list of dicts of {what} keywords or a "
                              f"dict of lists (a grid); got {type(candidates).__name__}.")
     out = []
     for i, c in enumerate(candidates):
         if not isinstance(c, Mapping):
-            raise ParameterError(f"`candidates[{i}]` must be a dict of identify keywords; got "
+            raise ParameterError(f"`candidates[{i}]` must be a dict of {what} keywords; got "
                                  f"{type(c).__name__}.")
         out.append(dict(c))
     if not out:
@@ -655,15 +657,18 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
     if selection.best is None:
-        counts = {}
-        for r in rows:
-            counts[r["status"]] = counts.get(r["status"], 0) + 1
-        text = ", ".join(f"{v} {k}" for k, v in counts.items())
-        warnings.warn(ConvergenceWarning(
-            f"select_structure selected nothing: of {len(rows)} candidates, {text}; "
-            "Selection.rows give each one's status and reason (Selection.best is None)."),
-            stacklevel=2)
+        warn_nothing_selected("select_structure", rows)
     return selection
+
+
+def warn_nothing_selected(who, rows):
+    """A ConvergenceWarning, from the caller of ``who``, counting the rows' statuses."""
+    counts = collections.Counter(r["status"] for r in rows)
+    text = ", ".join(f"{v} {k}" for k, v in counts.items())
+    warnings.warn(ConvergenceWarning(
+        f"{who} selected nothing: of {len(rows)} candidates, {text}; "
+        "Selection.rows give each one's status and reason (Selection.best is None)."),
+        stacklevel=3)
 
 
 def _cheap_davies(full):

@@ -24,15 +24,14 @@ import inspect
 import numbers
 import time
 import warnings
-from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from .._validation import check_array, check_same_length, check_scalar
 from ..estimators.tf_fit import fit_fractional_tf
-from ..exceptions import ConvergenceWarning, ParameterError, SimulationDivergedError
+from ..exceptions import ParameterError, SimulationDivergedError
 from .metrics import aic, bic, fit_percent, rmse
-from .selection import SCORES, Selection, expand_candidates, split_validation
+from .selection import SCORES, Selection, expand_candidates, split_validation, warn_nothing_selected
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
 __all__ = ["select_fractional_tf"]
@@ -49,23 +48,6 @@ ORDER_LISTS = ("num_orders", "den_orders", "num", "den")
 #: ``"refit_failed"``, ``"refit_diverged"``, ``"refit_implausible"``.
 STATUSES = ("ok", "diverged", "implausible", "failed", "refit_failed", "refit_diverged",
             "refit_implausible")
-
-
-def _candidates(candidates):
-    if isinstance(candidates, Mapping):
-        return expand_candidates(candidates)
-    if isinstance(candidates, (str, bytes)) or not isinstance(candidates, Sequence):
-        raise ParameterError("`candidates` must be a list of dicts of fit_fractional_tf keywords "
-                             f"or a dict of lists (a grid); got {type(candidates).__name__}.")
-    out = []
-    for i, c in enumerate(candidates):
-        if not isinstance(c, Mapping):
-            raise ParameterError(f"`candidates[{i}]` must be a dict of fit_fractional_tf "
-                                 f"keywords; got {type(c).__name__}.")
-        out.append(dict(c))
-    if not out:
-        raise ParameterError("`candidates` is empty.")
-    return out
 
 
 def _check_keywords(own, common):
@@ -252,7 +234,7 @@ def select_fractional_tf(u, y, candidates, *, dt, validation=0.25, score="fit", 
         raise ParameterError(f"`score` must be one of {sorted(SCORES)}; got {score!r}.")
     if not isinstance(refit, (bool, np.bool_)):
         raise ParameterError(f"`refit` must be True or False; got {refit!r}.")
-    own = _candidates(candidates)
+    own = expand_candidates(candidates, what="fit_fractional_tf")
     cands = _check_keywords(own, common)
     factor = check_envelope(envelope)
     u_est, y_est, u_sim, y_score, score_from, described = split_validation(u, y, validation)
@@ -273,14 +255,7 @@ def select_fractional_tf(u, y, candidates, *, dt, validation=0.25, score="fit", 
                           validation=described, seconds=time.perf_counter() - t0)
     _pick(selection, cands, u, y, dt, bool(refit) and score_from > 0, factor)
     if selection.best is None:
-        counts = {}
-        for r in rows:
-            counts[r["status"]] = counts.get(r["status"], 0) + 1
-        text = ", ".join(f"{v} {k}" for k, v in counts.items())
-        warnings.warn(ConvergenceWarning(
-            f"select_fractional_tf selected nothing: of {len(rows)} candidates, {text}; "
-            "Selection.rows give each one's status and reason (Selection.best is None)."),
-            stacklevel=2)
+        warn_nothing_selected("select_fractional_tf", rows)
     return selection
 
 
