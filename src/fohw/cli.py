@@ -462,7 +462,7 @@ def _identify(args):
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     options = _method_options(args)
     res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
-    _print_warnings(str(w.message) for w in caught)
+    _print_warnings(caught)
     _print_identified(args, res, check)
     _save_identified(args, res, check)
     return 0
@@ -508,11 +508,13 @@ def _fit_and_check(args, u, y, options, dt):
     return res, check, caught
 
 
-def _print_warnings(messages, skip=None):
-    """Each warning message once, in order, as ``fohw: warning: ...`` on stderr."""
-    for message in dict.fromkeys(messages):
-        if skip is not None and skip(message):
-            continue
+def _print_warnings(caught, skip=()):
+    """Each caught warning's message once, in order, as ``fohw: warning: ...`` on stderr.
+
+    Warnings of the categories in ``skip`` are left out.
+    """
+    for message in dict.fromkeys(str(w.message) for w in caught
+                                 if not issubclass(w.category, tuple(skip))):
         print(f"fohw: warning: {message}", file=sys.stderr)
 
 
@@ -585,9 +587,10 @@ def _select(args):
     u, y = _pick_columns(data, names, args.columns, 2, args.data)
     candidates = _candidates(args)
     sel, caught = _run_selection(args, u, y, candidates, _dt(args.dt, file_dt))
-    _print_warnings((str(w.message) for w in caught),
-                    skip=lambda message: sel.best is None and message.startswith(
-                        "select_structure selected nothing"))   # the error below says it
+    from .exceptions import NothingSelectedWarning
+
+    # with nothing selected, the error below says it in one line
+    _print_warnings(caught, skip=(NothingSelectedWarning,) if sel.best is None else ())
     print(f"{len(sel.rows)} candidates; {sel.validation}; {sel.seconds:.1f} s")
     print(sel.to_markdown(top=args.top))
     if sel.best is None:

@@ -15,6 +15,7 @@ __all__ = [
     "NotFittedError",
     "EstimationDivergedError",
     "ConvergenceWarning",
+    "NothingSelectedWarning",
     "RankDeficiencyWarning",
     "ExtrapolationWarning",
     "DataWarning",
@@ -93,6 +94,10 @@ class EstimationDivergedError(FohwError, ArithmeticError):
 
 class ConvergenceWarning(UserWarning):
     """An iterative estimator stopped at ``max_iter`` before meeting its tolerance."""
+
+
+class NothingSelectedWarning(ConvergenceWarning):
+    """A structure selection scored no candidate it could keep (``Selection.best`` is None)."""
 
 
 class RankDeficiencyWarning(UserWarning):

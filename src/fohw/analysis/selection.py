@@ -42,7 +42,12 @@ import numpy as np
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
 from .._validation import check_array, check_same_length
-from ..exceptions import ConvergenceWarning, ExtrapolationWarning, ParameterError, SimulationDivergedError
+from ..exceptions import (
+    ExtrapolationWarning,
+    NothingSelectedWarning,
+    ParameterError,
+    SimulationDivergedError,
+)
 from ..record import Record
 from .lrtest import cancelled_orders, lr_test, null_orders
 from .metrics import aic, bic, fit_percent, rmse
@@ -662,10 +667,10 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
 
 
 def warn_nothing_selected(who, rows):
-    """A ConvergenceWarning, from the caller of ``who``, counting the rows' statuses."""
+    """A NothingSelectedWarning, from the caller of ``who``, counting the rows' statuses."""
     counts = collections.Counter(r["status"] for r in rows)
     text = ", ".join(f"{v} {k}" for k, v in counts.items())
-    warnings.warn(ConvergenceWarning(
+    warnings.warn(NothingSelectedWarning(
         f"{who} selected nothing: of {len(rows)} candidates, {text}; "
         "Selection.rows give each one's status and reason (Selection.best is None)."),
         stacklevel=3)
