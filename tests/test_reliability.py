@@ -9,6 +9,7 @@ and kills, warnings instead of silent wrong answers, and the command line's loop
 import io
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -43,9 +44,10 @@ def run_cli(args):
 def not_stages(err):
     """The lines of stderr that are not stage messages (``fohw: identifying ...``, ``fohw: done
     in 0.3 s``): errors, warnings, the Ctrl-C line."""
-    keep = ("fohw: error:", "fohw: warning:", "fohw: interrupted")
-    return [line for line in err.splitlines() if line.startswith(keep)
-            or not line.startswith("fohw: ")]
+    stage = re.compile(r"fohw: (identifying with \S+ on \d+ samples \.\.\.|fitting \d+ "
+                       r"candidates? \(.*\) on \d+ samples \.\.\.|simulating \d+ samples "
+                       r"\.\.\.|done in .+)$")
+    return [line for line in err.splitlines() if not stage.match(line)]
 
 
 @pytest.fixture(scope="module")

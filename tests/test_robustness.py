@@ -133,6 +133,10 @@ def test_output_error_reports_alpha_at_bound():
                         **STRUCT)
     assert res.alpha == 0.3 and res.alpha_at_bound
     assert "upper bound of alpha_bounds = (0, 0.3)" in res.message
+    default = fohw.identify(d.u, d.y, method="output_error", alpha_bounds=(0.0, 0.3), **STRUCT)
+    assert default.alpha == 0.0 and default.alpha_at_bound        # the chain: the lower bound,
+    assert "alpha ended at the lower bound 0" in default.message        # and lower SSE
+    assert default.details["simulation_sse"] < res.details["simulation_sse"]
     free = fohw.identify(d.u, d.y, method="output_error", **STRUCT)
     assert not free.alpha_at_bound and free.alpha == pytest.approx(0.6, abs=1e-6)
 
