@@ -566,6 +566,9 @@ API = [
     ("compare", "both `initial` and `history`",
      lambda t: fohw.compare(_result(), U, Y, initial="rest", history=(U, Y)),
      fohw.ParameterError, "not both; got both `initial` ('rest') and `history`"),
+    ("simulate", "`initial` with a HammersteinWiener (it carries its own levels)",
+     lambda t: fohw.simulate(M(), U, initial="rest"), fohw.ParameterError,
+     "`initial` is for an identification result; got it with a HammersteinWiener"),
 ]
 
 CLI = [

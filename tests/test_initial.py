@@ -143,6 +143,10 @@ def test_a_past_estimate_fit_asks_which_state():
                  lambda: fohw.simulate(est, d.u), lambda: est.validate(d.u, d.y)):
         with pytest.raises(fohw.ParameterError, match="initial='fitted'.*initial='rest'"):
             call()
+    np.testing.assert_array_equal(fohw.simulate(est, d.u, initial="fitted"),
+                                  est.simulate(d.u, initial="fitted"))
+    with pytest.raises(fohw.ParameterError, match="`initial` is for an identification result"):
+        fohw.simulate(est.model, d.u, initial="rest")
     # a measured history is an explicit choice (the fit's levels precede it, as before)
     hist = est.simulate(d.u[200:], history=(d.u[:200], d.y[:200]))
     np.testing.assert_array_equal(hist, est.simulate(d.u[200:],
