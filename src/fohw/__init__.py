@@ -51,6 +51,7 @@ from .model.basis import Basis, as_basis, polynomial_basis
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
+from .model.initial import InitialState, initial_state
 from .model.orders import Orders
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
@@ -134,6 +135,8 @@ __all__ = [
     "save_result",
     "polynomial_basis",
     "simulate",
+    "InitialState",
+    "initial_state",
     "FractionalTF",
     "FractionalTFFit",
     "fit_fractional_tf",

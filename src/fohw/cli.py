@@ -10,8 +10,10 @@
   [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
   structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
-  [--output FILE]`` — simulate a saved model (``fohw.save_model``), or the result of
-  ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an input.
+  [--initial rest|fitted] [--output FILE]`` — simulate a saved model (``fohw.save_model``), or
+  the result of ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an
+  input, from the initial state ``--initial`` (needed for a result fitted with
+  ``past="estimate"``).
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``) or a simulated one (``paper_example [--samples N] [--seed S]``) as a file to try
   the commands on; without NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
@@ -406,6 +408,11 @@ def _add_simulate_parser(sub):
     sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
     sim.add_argument("--noise-std", type=float, default=0.0)
     sim.add_argument("--seed", type=int, default=None)
+    sim.add_argument("--initial", choices=("rest", "fitted"), default=None,
+                     help="the state before the input: rest (the operating point) or fitted "
+                     "(the levels a past='estimate' fit estimated before its estimation record, "
+                     "right for that record). Default: rest, and a saved model's own levels; "
+                     "a result fitted with past='estimate' needs it")
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
     _add_quiet(sim)
 
@@ -501,7 +508,7 @@ def _fit_and_check(args, u, y, options, dt):
         check = None
         if res.model is not None:
             try:
-                check = compare(res, u, y)
+                check = compare(res, u, y, initial="fitted")      # its own estimation record
             except FohwError as exc:        # e.g. a constant output: no fit index
                 warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
@@ -700,12 +707,19 @@ def _simulate(args):
 
     import numpy as np
 
+    from .model.initial import initial_state, simulate_from
     from .model.simulation import equation_noise, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.input, _decimal(args))
     (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    if kind == "result" and args.initial is None and loaded.structure.past == "estimate":
+        raise UsageError(f"{args.model} was fitted with past='estimate': its levels (u_past, "
+                         f"y_past) = ({loaded.past[0]:.6g}, {loaded.past[1]:.6g}) are those "
+                         "before its estimation record. Say which initial state to start "
+                         "from: --initial fitted (those levels: for the estimation record "
+                         "itself) or --initial rest (the operating point).")
     start = time.perf_counter()
     _stage(args, f"simulating {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
@@ -713,9 +727,12 @@ def _simulate(args):
             warnings.simplefilter("always", category)
         if kind == "result":        # the predictor that was fitted: theta itself, as identify's
             noise = equation_noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
-            y = loaded.simulate(u, noise=noise)
-        else:
+            y = loaded.simulate(u, initial=args.initial, noise=noise)
+        elif args.initial is None:
             y = simulate(loaded, u, noise_std=args.noise_std, random_state=args.seed)
+        else:
+            y = simulate_from(loaded, u, initial_state(loaded, u, None, args.initial),
+                              noise_std=args.noise_std, random_state=args.seed)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)

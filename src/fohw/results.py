@@ -22,9 +22,9 @@ from ._validation import RANGE_TOLERANCE, check_array, check_scalar, input_in_ra
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
+from .model.initial import initial_state, simulate_from
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
-from .model.simulation import simulate
 from .model.structure import Structure
 from .model.system import HammersteinWiener
 from .presentation import ResultPresentation
@@ -558,20 +558,35 @@ class IdentificationResult(ResultPresentation):
         yhat = builder.matrix(self.nonlinear) @ self.linear
         return yhat + y0 if y0 else yhat
 
-    def simulate(self, u, *, history=None, **kwargs):
+    def simulate(self, u, *, initial=None, y=None, history=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.
 
-        Uses ``theta`` itself (and the offset, orders and past levels), i.e. exactly the model
-        that was fitted; for the rank-one ``a, b, p, q`` of Eqs. (39)–(40) use
-        ``fohw.simulate(result.model, u)``.
+        Uses ``theta`` itself (and the offset and orders), i.e. exactly the model that was
+        fitted, from the initial state ``initial``; for the rank-one ``a, b, p, q`` of
+        Eqs. (39)–(40) use ``fohw.simulate(result.model, u)``.
 
         Parameters
         ----------
         u : array_like
             Input.
+        initial : str, tuple or InitialState, optional
+            What the signals did before ``u`` began (:mod:`fohw.model.initial` says what each
+            choice assumes and costs): ``"rest"`` (the operating point; the default of a fit
+            with ``past="rest"``); ``"fitted"`` (the levels estimated with a
+            ``past="estimate"`` fit, which belong to the estimation record: right for that
+            record, where it reproduces the fit); ``"estimate"`` or ``("estimate", n)`` (the
+            levels, and ``n`` free past outputs, of *this* record fitted to its output ``y``);
+            a measured history ``(u_hist, y_hist)`` just before ``u``; or an
+            :class:`fohw.InitialState` (e.g. ``fohw.compare(...).initial``). A fit with
+            ``past="estimate"`` has no default: without ``initial`` (or ``history``) it raises
+            a ParameterError that lists the choices.
+        y : array_like, optional
+            The measured output of the record, for ``initial="estimate"`` only.
         history : (u_past, y_past), optional
-            Measured data just before ``u`` (e.g. the estimation record, to simulate the
-            validation record that follows it): the GL memory starts from them.
+            The older spelling of ``initial=(u_past, y_past)``: measured data just before
+            ``u`` (e.g. the estimation record, to simulate the validation record that follows
+            it); the GL memory starts from them, after the fit's own levels if it has any.
+            Not together with ``initial``.
         **kwargs
             ``noise``, ``noise_std``, ``random_state``, ``divergence_threshold``
             (:func:`fohw.simulate`).
@@ -580,6 +595,9 @@ class IdentificationResult(ResultPresentation):
         ------
         SimulationDivergedError
             The identified model is unstable on this input.
+        ParameterError
+            No ``initial`` for a ``past="estimate"`` fit; a bad ``initial``; ``y`` without
+            ``initial="estimate"`` or the reverse; both ``initial`` and ``history``.
 
         Warns
         -----
@@ -588,6 +606,7 @@ class IdentificationResult(ResultPresentation):
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
         u = check_array(u, "u")
+        state = self.initial_state(u, y, initial, history=history)
         if self.input_range is not None:
             u_arr = u
             if not input_in_range(u_arr, self.input_range):
@@ -597,8 +616,15 @@ class IdentificationResult(ResultPresentation):
                     f"[{lo:.4g}, {hi:.4g}] the model was estimated on (by more than "
                     f"{RANGE_TOLERANCE:.0%} of its span); the basis functions extrapolate "
                     "there, so check the simulation before trusting it."), stacklevel=2)
-        return simulate(self.structure, u, params=np.r_[self.linear, self.nonlinear],
-                        operating_point=self.operating_point, history=history, **kwargs)
+        return simulate_from(self, u, state, **kwargs)
+
+    def initial_state(self, u, y=None, initial=None, *, history=None):
+        """The state a free run on the record ``(u, y)`` starts from: :func:`fohw.initial_state`.
+
+        ``initial`` as for :meth:`simulate`; ``y`` only for ``"estimate"``, whose fitted levels
+        (and window) the returned :class:`fohw.InitialState` holds.
+        """
+        return initial_state(self, u, y, initial, history=history)
 
     def validate(self, u, y, **kwargs):
         """Free-run simulation and one-step prediction on a record: :func:`fohw.compare`."""

@@ -51,7 +51,8 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
              divergence_threshold: float | None = None,
-             history: tuple[ArrayLike, ArrayLike] | None = None) -> np.ndarray:
+             history: tuple[ArrayLike, ArrayLike] | None = None,
+             initial: Any = None) -> np.ndarray:
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
     Parameters
@@ -90,6 +91,9 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         Measured input and output just before ``u`` (same units): the simulation continues
         from them, its GL memory holding that history, in free run from the first sample of
         ``u``. The model's past levels (if any) apply before the history.
+    initial : str, tuple or InitialState, optional
+        With an identification result only: its initial state, as ``result.simulate(u,
+        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit).
 
     Returns
     -------
@@ -141,6 +145,10 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     True
     """
     kinds = "a HammersteinWiener, an identification result or a Structure with `params`"
+    if initial is not None and not callable(getattr(model, "initial_state", None)):
+        raise ParameterError(f"`initial` is for an identification result; got it with a "
+                             f"{type(model).__name__} (fohw.compare takes `initial` for a "
+                             "HammersteinWiener too).")
     if isinstance(model, HammersteinWiener):
         _only_for_structure(params, operating_point, "a HammersteinWiener")
         return _simulate_model(model, u, noise=noise, noise_std=noise_std,
@@ -163,7 +171,7 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
                       divergence_threshold=divergence_threshold, history=history)
         own = getattr(model, "simulate", None)
         if callable(own):          # a result: its own checks (input range), then this engine
-            return own(u, **kwargs)
+            return own(u, **kwargs) if initial is None else own(u, initial=initial, **kwargs)
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
