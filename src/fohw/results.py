@@ -56,7 +56,8 @@ class Status(enum.IntEnum):
 #: The method-specific outputs fohw's estimators put in :attr:`IdentificationResult.details`;
 #: the five histories and profiles are also read as attributes of the result.
 DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
-               "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed")
+               "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed",
+               "identity_sse")
 
 
 def _readonly(a):
@@ -213,7 +214,8 @@ class IdentificationResult(ResultPresentation):
         Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
         ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
         ``alpha_profile`` (see the properties of those names), ``simulation_sse`` (the
-        simulation-error sum of squares of ``"output_error"``) and ``start`` (which start an
+        simulation-error sum of squares of ``"output_error"``), ``identity_sse`` (that of the
+        fit without the series output map, which the fit with it starts from) and ``start`` (which start an
         ``"output_error"`` or ``"structured"`` fit began from).
 
     Notes

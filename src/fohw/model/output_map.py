@@ -676,7 +676,7 @@ OutputMapLike = Union[None, str, int, SeriesMap]
 
 
 def as_output_map(spec, name="output_map"):
-    """``None`` or an :class:`SeriesMap` from what :func:`fohw.identify` accepts.
+    """``None`` or a :class:`SeriesMap` from what :func:`fohw.identify` accepts.
 
     Parameters
     ----------
@@ -703,14 +703,14 @@ def as_output_map(spec, name="output_map"):
         if spec == "piecewise_linear":
             return PiecewiseLinear()
         raise ParameterError(f"`{name}` must be None, one of {OUTPUT_MAP_NAMES}, an int (a "
-                             f"polynomial degree) or an SeriesMap; got {spec!r}.")
+                             f"polynomial degree) or a SeriesMap; got {spec!r}.")
     if isinstance(spec, (int, np.integer)) and not isinstance(spec, (bool, np.bool_)):
         if spec < 1:
             raise ParameterError(f"`{name}` as a polynomial degree must be at least 1; got "
                                  f"{int(spec)}.")
         return PolynomialMap(int(spec))
     raise ParameterError(f"`{name}` must be None, one of {OUTPUT_MAP_NAMES}, an int (a "
-                         f"polynomial degree) or an SeriesMap; got {spec!r}.")
+                         f"polynomial degree) or a SeriesMap; got {spec!r}.")
 
 
 def output_map_from_dict(d, output_map=None, *, name="output_map"):
