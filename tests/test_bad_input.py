@@ -651,6 +651,18 @@ CLI = [
     ("fohw identify", "@NAME that does not ship with fohw",
      lambda t: ["identify", "@tanks", "--na", "1", "--nb", "1"],
      "no record of that name ships with fohw; use one of @cascaded_tanks, @robot_arm"),
+    # issue 24 (outmap)
+    ("fohw identify", "--output-map with an unknown name",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "saturate"],
+     "an output map is one of saturation, deadzone, piecewise_linear, none or a polynomial "
+     "degree from 1 to 100; got 'saturate'"),
+    ("fohw identify", "--output-map 0",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "0"],
+     "a polynomial degree from 1 to 100; got '0'"),
+    ("fohw identify", "--output-map with the default method varpro",
+     lambda t: ["identify", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--nb",
+                "1", "--output-map", "saturation", "-q"],
+     "method 'varpro' cannot fit a series `output_map`"),
 ]
 
 

@@ -294,3 +294,29 @@ def test_as_output_map_spellings():
         warnings.simplefilter("error")
         assert "output_map=deadzone" in fohw.Structure.make(
             na=1, nb=1, f_basis=1, g_basis=1, output_map="deadzone").describe()
+
+
+def test_cli_identify_and_select_with_an_output_map(tmp_path, capsys):
+    from fohw.cli import main as cli
+
+    _, _, u, _, y = _tanks_like("saturation", n=400, seed=4)
+    data = tmp_path / "d.txt"
+    np.savetxt(data, np.column_stack([u, y]))
+    assert cli(["identify", str(data), "--na", "1", "--nb", "1", "--method", "output_error",
+                "--output-map", "saturation", "--save", str(tmp_path / "r.json"), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "h_lower" in out and "h_upper" in out
+    back = fohw.load_result(tmp_path / "r.json")
+    assert back.structure.output_map == Saturation()
+    assert cli(["select", str(data), "--na", "1", "--method", "output_error",
+                "--output-map", "none,saturation", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "output_map=None" in out and "output_map=saturation" in out
+
+
+def test_select_structure_over_output_maps():
+    _, _, u, _, y = _tanks_like("saturation", n=800, seed=5)
+    sel = fohw.select_structure(u, y, {"output_map": [None, "saturation", "deadzone"]}, na=1,
+                                f_basis=1, g_basis=1, method="output_error")
+    assert [r["status"] for r in sel.rows] == ["ok"] * 3
+    assert sel.best.structure.output_map == Saturation()      # the truth is a saturation
