@@ -326,6 +326,10 @@ class IdentificationResult(ResultPresentation):
     def model(self) -> HammersteinWiener | None:
         """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40).
 
+        With a series output map it is the model of ``z``, before ``h`` (a
+        :class:`fohw.HammersteinWiener` has no output map): ``result.simulate`` applies ``h``,
+        ``fohw.simulate(result.model, u)`` does not.
+
         ``None`` if that is undefined (an ``a_i`` or ``b_i`` exactly zero; ``message`` says so).
         """
         return recover_model(self.structure, self.theta, self.orders, offset=self.offset,
@@ -574,6 +578,9 @@ class IdentificationResult(ResultPresentation):
         """One-step-ahead prediction ``yhat[k] = phi[k] @ [theta, c] + y0`` (Eq. 19).
 
         ``u`` and ``y`` in the data's units; the operating point is removed and added back.
+        With a series output map ``h`` the prediction is ``h(phi[k] @ [theta, c] + y0)``, the
+        regressors built from the measured ``y`` in place of the unmeasured ``z`` (exact only
+        where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
         u = check_array(u, "u")
@@ -581,7 +588,11 @@ class IdentificationResult(ResultPresentation):
         builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
                                    structure=self.structure)
         yhat = builder.matrix(self.nonlinear) @ self.linear
-        return yhat + y0 if y0 else yhat
+        yhat = yhat + y0 if y0 else yhat
+        hmap = self.structure.output_map
+        if hmap is not None:
+            yhat = hmap.evaluate(yhat, list(self.output_map_params.values()))
+        return yhat
 
     def simulate(self, u, *, history=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.

@@ -50,8 +50,15 @@ MAX_MAP_DEGREE = 100
 DEFAULT_BREAKPOINTS = 5
 
 
-def _limit(value, name):
-    return None if value is None else check_scalar(value, name)
+def _limit(value, name, infinite):
+    """A fixed limit (a finite number, or the one infinity ``infinite`` that means none), or None."""
+    if value is None:
+        return None
+    if isinstance(value, str) and value in ("inf", "-inf"):      # the JSON form of infinity
+        value = float(value)
+    if isinstance(value, (float, np.floating)) and value == infinite:
+        return float(value)
+    return check_scalar(value, name)
 
 
 class SeriesMap:
@@ -155,8 +162,8 @@ class _TwoLimits(SeriesMap):
     """Saturation and dead zone: two limits, each free (None) or fixed (a number)."""
 
     def __init__(self, lower=None, upper=None):
-        self.lower = _limit(lower, f"{self.kind} lower")
-        self.upper = _limit(upper, f"{self.kind} upper")
+        self.lower = _limit(lower, f"{self.kind} lower", -np.inf)
+        self.upper = _limit(upper, f"{self.kind} upper", np.inf)
         if self.lower is not None and self.upper is not None and not self.lower < self.upper:
             raise ParameterError(f"the {self.kind} limits must satisfy lower < upper; got lower = "
                                  f"{self.lower!r}, upper = {self.upper!r}.")
@@ -192,7 +199,9 @@ class _TwoLimits(SeriesMap):
         return f"{self.kind}(lower={one(self.lower)}, upper={one(self.upper)})"
 
     def to_dict(self):
-        return {"kind": self.kind, "lower": self.lower, "upper": self.upper}
+        def one(v):                    # JSON holds no infinity: "-inf" / "inf"
+            return v if v is None or np.isfinite(v) else str(v)
+        return {"kind": self.kind, "lower": one(self.lower), "upper": one(self.upper)}
 
 
 class Saturation(_TwoLimits):
@@ -203,6 +212,8 @@ class Saturation(_TwoLimits):
     lower, upper : float or None
         Fixed limits, or None for a free limit (estimated; named ``h_lower``, ``h_upper``).
         The start puts a free limit at the measured output's smallest or largest value.
+        ``lower=-numpy.inf`` (or ``upper=numpy.inf``) is a one-sided saturation, e.g. a level
+        sensor that saturates at its top only: ``Saturation(lower=-numpy.inf)``.
 
     Examples
     --------

@@ -119,6 +119,11 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     once per process, for simulations of at least ``2**18`` samples or once that many have
     run; docs/performance.md, measured on an idle 2-core machine).
 
+    A structure with a series output map (:attr:`Structure.output_map`) gives
+    ``h(z; h_*)``, ``z`` the recursion's output in the data's units (the operating point added
+    back), with the map's parameters last in ``params``; a measured ``history`` enters the
+    recursion through the map's inverse.
+
     A model is simulated through its rank-one blocks (``gbar`` fed back once); a result or a
     structure through theta's blocks, one signal per basis function or per output term,
     whichever is fewer. The two agree to rounding for a theta of the form ``[q ⊗ a, p ⊗ b]``.
