@@ -15,6 +15,9 @@ first when numba is installed (as ``bench_simulator.py`` does):
 * **saturation**, **piecewise linear**: the same Structure with a series output map
   (limits at the 5th and 95th percentiles of the output; 5 breakpoints), i.e. one more
   elementwise pass over the output;
+* **series HW**: the classical series Hammerstein–Wiener model u -> f -> linear fractional
+  block -> h (the paper's a, b, p, alpha with g the identity, one fed-back signal as in the
+  paper's model) with the saturation;
 * **floor**: the divide and conquer with a leaf that does nothing (the FFT merges alone:
   ``bench_simulator.merges``) for the model's one fed-back signal, the floor the issue measures
   against (target: within 3x); **structure floor**: the same for the Structure's own
@@ -129,7 +132,13 @@ def main(argv=None):
         ys = fohw.simulate(sat, u, params=np.r_[params, lo, hi], noise=v)
         z = fohw.simulate(s, u, params=params, noise=v)
         assert np.array_equal(ys, np.clip(z, lo, hi))
+        hw = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=1, output_map="saturation")
+        hw_params = np.r_[model.a, model.b, model.p[1] * model.b, model.alpha]
+        z_hw = fohw.simulate(hw.inner, u, params=hw_params, noise=v)
+        hw_lim = np.percentile(z_hw, [5, 95])
         fns = {"paper": lambda: fohw.simulate(model, u, noise=v),
+               "series HW": lambda: fohw.simulate(hw, u, params=np.r_[hw_params, hw_lim],
+                                                  noise=v),
                "structure": lambda: fohw.simulate(s, u, params=params, noise=v),
                "saturation": lambda: fohw.simulate(sat, u, params=np.r_[params, lo, hi], noise=v),
                "piecewise linear": lambda: fohw.simulate(pwl, u, params=np.r_[params, eta_pwl],
@@ -145,16 +154,19 @@ def main(argv=None):
         rows.append((n, repeats, med, la0, la1))
         print(f"N={n:.0e}  x{repeats}  load {la0:.2f}->{la1:.2f}  "
               + "  ".join(f"{k} {t:.4f} s" for k, t in med.items()), flush=True)
-    print("\n| N | x | paper [s] | structure [s] | saturation [s] | piecewise linear [s] | "
-          "floor [s] | structure floor [s] | paper/floor | saturation/structure floor | "
-          "pwl/structure floor | saturation/structure | paper/baseline |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("\n| N | x | paper [s] | series HW [s] | structure [s] | saturation [s] | "
+          "piecewise linear [s] | floor [s] | structure floor [s] | paper/floor | "
+          "series HW/floor | saturation/structure floor | pwl/structure floor | "
+          "saturation/structure | paper/baseline |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for n, repeats, m, _, _ in rows:
         base = m.get("paper (baseline src)")
         sf = m["structure floor"]
-        print(f"| {n:.0e} | {repeats} | {m['paper']:.4f} | {m['structure']:.4f} | "
+        print(f"| {n:.0e} | {repeats} | {m['paper']:.4f} | {m['series HW']:.4f} | "
+              f"{m['structure']:.4f} | "
               f"{m['saturation']:.4f} | {m['piecewise linear']:.4f} | {m['floor']:.4f} | "
-              f"{sf:.4f} | {m['paper'] / m['floor']:.2f} | {m['saturation'] / sf:.2f} | "
+              f"{sf:.4f} | {m['paper'] / m['floor']:.2f} | {m['series HW'] / m['floor']:.2f} | "
+              f"{m['saturation'] / sf:.2f} | "
               f"{m['piecewise linear'] / sf:.2f} | {m['saturation'] / m['structure']:.3f} | "
               + (f"{m['paper'] / base:.3f}" if base else "-") + " |")
     print(f"\nleaf size {leaf}; medians of x interleaved repeats in this run; load average at "

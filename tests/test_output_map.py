@@ -320,3 +320,39 @@ def test_select_structure_over_output_maps():
                                 f_basis=1, g_basis=1, method="output_error")
     assert [r["status"] for r in sel.rows] == ["ok"] * 3
     assert sel.best.structure.output_map == Saturation()      # the truth is a saturation
+
+
+def test_compare_and_predict_apply_the_map():
+    _, truth, u, y_true, y = _tanks_like("saturation", seed=6)
+    res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                        output_map="saturation")
+    v = fohw.compare(res, u, y)
+    np.testing.assert_array_equal(v.simulated, res.simulate(u))
+    assert v.rmse_simulation < 0.03                            # the noise is 0.02
+    lo, hi = res.output_map_params.values()
+    yhat = res.predict(u, y)
+    assert lo - 1e-12 <= yhat.min() and yhat.max() <= hi + 1e-12
+
+
+def test_a_given_start_of_the_series_structure_is_searched_from():
+    _, _, u, _, y = _tanks_like("saturation", seed=7)
+    first = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                          output_map="saturation")
+    again = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                          output_map="saturation", start=first)
+    assert again.details["start"] == "the given start" and "identity_sse" not in again.details
+    assert again.details["simulation_sse"] <= first.details["simulation_sse"]
+
+
+def test_a_file_with_map_parameters_but_no_map_is_refused(tmp_path):
+    import json
+
+    _, _, u, _, y = _tanks_like("saturation", seed=2)
+    res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                        output_map="saturation")
+    fohw.save_result(res, tmp_path / "r.json")
+    d = json.loads((tmp_path / "r.json").read_text())
+    del d["structure"]["output_map"]
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match="output_map_params"):
+        fohw.load_result(tmp_path / "bad.json")
