@@ -569,6 +569,38 @@ API = [
     ("simulate", "`initial` with a HammersteinWiener (it carries its own levels)",
      lambda t: fohw.simulate(M(), U, initial="rest"), fohw.ParameterError,
      "`initial` is for an identification result; got it with a HammersteinWiener"),
+    # issue 24 (outmap)
+    ("identify", "output_map: saturation limits out of order",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.Saturation(lower=2.0, upper=1.0)),
+     fohw.ParameterError, "the saturation limits must satisfy lower < upper; got lower = 2.0"),
+    ("identify", "output_map: a dead zone wider than the data",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.DeadZone(lower=-5.0, upper=5.0)),
+     fohw.ParameterError, "is wider than the data"),
+    ("identify", "output_map: an unknown name",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map="saturate"),
+     fohw.ParameterError, "`output_map` must be None, one of ('saturation', 'deadzone', "
+     "'piecewise_linear'), an int (a polynomial degree) or a SeriesMap; got 'saturate'"),
+    ("identify", "output_map: polynomial degree 0",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=0),
+     fohw.ParameterError, "`output_map` as a polynomial degree must be at least 1; got 0"),
+    ("identify", "output_map with an equation-error method",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, output_map="saturation"),
+     fohw.ParameterError, "method 'varpro' cannot fit a series `output_map`"),
+    ("identify", "output_map: fixed saturation limits that leave the data at one limit",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.Saturation(lower=3.0)),
+     fohw.ParameterError, "entirely at one limit"),
+    ("simulate", "output_map without an inverse and a measured history",
+     lambda t: fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, output_map=3),
+                             U, params=[0.5, 1.0, 0.4, 0.0, 0.0], history=(U, U)),
+     fohw.ParameterError, "has no inverse"),
+    ("PolynomialMap", "monotone with an even degree",
+     lambda t: fohw.PolynomialMap(4, monotone=True), fohw.ParameterError,
+     "a monotone polynomial output map has an odd degree"),
 ]
 
 CLI = [
@@ -679,6 +711,18 @@ CLI = [
     ("fohw simulate", "--initial estimate (needs the output: fohw.compare)",
      lambda t: ["simulate", "--model", "m.json", "--input", "x.dat", "--initial", "estimate"],
      "argument --initial: invalid choice: 'estimate'"),
+    # issue 24 (outmap)
+    ("fohw identify", "--output-map with an unknown name",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "saturate"],
+     "an output map is one of saturation, deadzone, piecewise_linear, none or a polynomial "
+     "degree from 1 to 100; got 'saturate'"),
+    ("fohw identify", "--output-map 0",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "0"],
+     "a polynomial degree from 1 to 100; got '0'"),
+    ("fohw identify", "--output-map with the default method varpro",
+     lambda t: ["identify", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--nb",
+                "1", "--output-map", "saturation", "-q"],
+     "method 'varpro' cannot fit a series `output_map`"),
 ]
 
 

@@ -53,6 +53,7 @@ from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
+from .model.output_map import CustomMap, DeadZone, PiecewiseLinear, PolynomialMap, Saturation
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
@@ -150,4 +151,9 @@ __all__ = [
     "OutputMap",
     "fit_fractional_hw",
     "fractional_hw_crb",
+    "Saturation",
+    "DeadZone",
+    "PiecewiseLinear",
+    "PolynomialMap",
+    "CustomMap",
 ]

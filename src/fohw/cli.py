@@ -1,14 +1,15 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
 * ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
-  [--offset] [--operating-point mean] [--dt 4] [--decimal-comma] [--option NAME=VALUE]
-  [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
+  [--offset] [--operating-point mean] [--dt 4] [--output-map saturation] [--decimal-comma]
+  [--option NAME=VALUE] [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
   whitespace-separated file (the sampling time a ``Ts`` column gives is the default ``--dt``);
   prints a summary and the free-run fit on the record (or, with ``--json``, both as JSON).
 * ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
-  [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
-  structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
+  [--output-map none,saturation] [--operating-point mean] [--dt 4] [--jobs 2] [--csv F]
+  [--plot F] [--save F]`` — choose a structure by free-run simulation on a held-back part
+  (:func:`fohw.select_structure`).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
   [--initial rest|fitted] [--output FILE]`` — simulate a saved model (``fohw.save_model``), or
   the result of ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an
@@ -179,6 +180,30 @@ def _basis_arg(text):
         raise argparse.ArgumentTypeError(f"a basis is a polynomial degree from 1 to "
                                          f"{MAX_POLYNOMIAL_DEGREE}; got {degree}")
     return degree
+
+
+def _output_map_arg(text):
+    """``--output-map``: a series output map by name, or a polynomial degree."""
+    from .model.output_map import MAX_MAP_DEGREE, OUTPUT_MAP_NAMES
+
+    if text == "none":
+        return None
+    if text in OUTPUT_MAP_NAMES:
+        return text
+    try:
+        degree = int(text)
+    except ValueError:
+        degree = None
+    if degree is None or not 1 <= degree <= MAX_MAP_DEGREE:
+        raise argparse.ArgumentTypeError(f"an output map is one of {', '.join(OUTPUT_MAP_NAMES)}, "
+                                         f"none or a polynomial degree from 1 to "
+                                         f"{MAX_MAP_DEGREE}; got {text!r}")
+    return degree
+
+
+def _output_map_list(text):
+    """``fohw select --output-map none,saturation``: output maps to try."""
+    return [_output_map_arg(t.strip()) for t in text.split(",")]
 
 
 def _check_file_out(path, flag, inputs=()):
@@ -352,6 +377,9 @@ def _add_identify_parser(sub):
     _add_dt(ide)
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
                      help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
+    ide.add_argument("--output-map", type=_output_map_arg, default=None,
+                     help="a series output block y = h(z) in the data's units: saturation, "
+                     "deadzone, piecewise_linear or a polynomial degree (method output_error)")
     ide.add_argument("--schedule", choices=SCHEDULES, default=None,
                      help="hybrid and single-innovation methods: Table 1 or Steps 1-9")
     ide.add_argument("--innovation-length", type=int, default=None, help="hybrid, rls: P")
@@ -387,6 +415,9 @@ def _add_select_parser(sub):
     sel.add_argument("--validation", type=_validation_arg, default=0.25,
                      help="held-back part: a fraction (default 0.25) or a number of samples")
     sel.add_argument("--offset", action="store_true", help="a constant term in every model")
+    sel.add_argument("--output-map", type=_output_map_list, default=None,
+                     help="series output maps to try, e.g. 'none,saturation' (method "
+                     "output_error; default: none)")
     sel.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting")
     _add_dt(sel)
@@ -502,7 +533,8 @@ def _fit_and_check(args, u, y, options, dt):
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=dt)
+                       offset=args.offset, operating_point=args.operating_point, dt=dt,
+                       output_map=args.output_map)
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -637,6 +669,8 @@ def _candidates(args):
 
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
+    if args.output_map is not None:
+        grid["output_map"] = args.output_map
     if args.nb is not None:
         grid["nb"] = args.nb
     candidates = expand_candidates(grid)

@@ -56,7 +56,8 @@ class Status(enum.IntEnum):
 #: The method-specific outputs fohw's estimators put in :attr:`IdentificationResult.details`;
 #: the five histories and profiles are also read as attributes of the result.
 DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
-               "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed")
+               "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed",
+               "identity_sse")
 
 
 def _readonly(a):
@@ -204,18 +205,24 @@ class IdentificationResult(ResultPresentation):
         input that goes beyond it by more than 5 % of its span.
     options : mapping
         The settings of the run (innovation length, bounds, …), nothing it computed.
+    output_map_params : mapping
+        The estimated parameters of the structure's series output map ``y = h(z)``,
+        ``{name: value}`` in :attr:`~fohw.model.output_map.SeriesMap.names` order (``h_lower``,
+        …; data units);
+        empty without an output map.
     details : mapping
         Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
         ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
         ``alpha_profile`` (see the properties of those names), ``simulation_sse`` (the
-        simulation-error sum of squares of ``"output_error"``) and ``start`` (which start an
+        simulation-error sum of squares of ``"output_error"``), ``identity_sse`` (that of the
+        fit without the series output map, which the fit with it starts from) and ``start`` (which start an
         ``"output_error"`` or ``"structured"`` fit began from).
 
     Notes
     -----
     ``covariance`` and :meth:`standard_errors` are ordered as :attr:`estimate_names`: the
     linear parameters (theta's, then ``offset``) and the nonlinear ones (the free orders, then
-    ``u_past``, ``y_past``).
+    ``u_past``, ``y_past``, then the output map's ``h_*``).
     """
 
     method: str
@@ -238,6 +245,7 @@ class IdentificationResult(ResultPresentation):
     input_range: tuple | None = None
     options: Mapping = field(default_factory=dict)
     details: Mapping = field(default_factory=dict)
+    output_map_params: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         def put(name, value):
@@ -275,6 +283,13 @@ class IdentificationResult(ResultPresentation):
             raise DimensionError(f"`covariance` must have shape ({d}, {d}) (the estimates "
                                  f"{', '.join(self.estimate_names)}); got {self.covariance.shape}.")
         put("options", types.MappingProxyType(dict(self.options)))
+        names = () if s.output_map is None else s.output_map.names
+        given = dict(self.output_map_params)
+        if list(given) != list(names):
+            raise ParameterError(f"`output_map_params` must give the output map's parameters "
+                                 f"{list(names)} in that order; got {list(given)}.")
+        put("output_map_params", types.MappingProxyType(
+            {n: check_scalar(v, f"output_map_params[{n!r}]") for n, v in given.items()}))
         put("details", types.MappingProxyType(
             {k: _readonly(v) if isinstance(v, np.ndarray) else v
              for k, v in self.details.items()}))
@@ -283,7 +298,7 @@ class IdentificationResult(ResultPresentation):
         # the mappings are read-only views, which pickle cannot store: rebuild from plain dicts
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         values.update(orders=dict(self.orders), options=dict(self.options),
-                      details=dict(self.details))
+                      details=dict(self.details), output_map_params=dict(self.output_map_params))
         return (_rebuild, (type(self), values))
 
     # ---- derived facts ------------------------------------------------------------------------
@@ -310,6 +325,10 @@ class IdentificationResult(ResultPresentation):
     @cached_property
     def model(self) -> HammersteinWiener | None:
         """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40).
+
+        With a series output map it is the model of ``z``, before ``h`` (a
+        :class:`fohw.HammersteinWiener` has no output map): ``result.simulate`` applies ``h``,
+        ``fohw.simulate(result.model, u)`` does not.
 
         ``None`` if that is undefined (an ``a_i`` or ``b_i`` exactly zero; ``message`` says so).
         """
@@ -369,10 +388,11 @@ class IdentificationResult(ResultPresentation):
 
     @property
     def nonlinear(self) -> np.ndarray:
-        """The nonlinear parameters: the free orders, then ``u_past``, ``y_past`` if estimated."""
+        """The nonlinear parameters: the free orders, ``u_past``, ``y_past`` if estimated, ``h_*``."""
         values = list(self.orders.values())
         if self.structure.past == "estimate":
             values += list(self.past)
+        values += list(self.output_map_params.values())
         return np.array(values, dtype=np.float64)
 
     @property
@@ -417,6 +437,9 @@ class IdentificationResult(ResultPresentation):
             return None if x is None else float(x)
 
         settings = {str(k): _setting_to_json(v) for k, v in self.options.items()}
+        extra = ({} if self.structure.output_map is None
+                 else {"output_map_params": {k: float(v) for k, v in
+                                             self.output_map_params.items()}})
         return {
             "method": self.method, "structure": self.structure.to_dict(),
             "theta": _array_to_dict(self.theta), "orders": dict(self.orders),
@@ -430,11 +453,12 @@ class IdentificationResult(ResultPresentation):
             "input_range": None if self.input_range is None else list(self.input_range),
             "options": {k: v for k, v in settings.items() if v is not ...},
             "details": {str(k): _detail_to_json(v) for k, v in self.details.items()},
-        }
+        } | extra
 
     @classmethod
-    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> IdentificationResult:
-        """Inverse of :meth:`to_dict` (custom bases passed again, checked by their names).
+    def from_dict(cls, d, *, f_basis=None, g_basis=None,
+                  output_map=None) -> IdentificationResult:
+        """Inverse of :meth:`to_dict` (custom bases and maps passed again, checked by their names).
 
         Raises
         ------
@@ -442,6 +466,8 @@ class IdentificationResult(ResultPresentation):
             A field is missing, unknown or inconsistent with another (the message names it).
         """
         names = {f.name for f in dataclasses.fields(cls)}
+        if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
+            names.discard("output_map_params")
         if not isinstance(d, Mapping) or set(d) != names:
             missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)
             unknown = sorted(set(d) - names) if isinstance(d, Mapping) else []
@@ -449,7 +475,10 @@ class IdentificationResult(ResultPresentation):
                                  f"missing {missing}, unknown {unknown}.")
         values = dict(d)
         values["structure"] = Structure.from_dict(d["structure"], f_basis=f_basis,
-                                                  g_basis=g_basis)
+                                                  g_basis=g_basis, output_map=output_map)
+        if "output_map_params" in d and not isinstance(d["output_map_params"], Mapping):
+            raise ParameterError(f"`output_map_params` must be a mapping of names to values; got "
+                                 f"{d['output_map_params']!r}.")
         values["theta"] = _array_from_dict(d["theta"], "theta")
         if d["covariance"] is not None:
             values["covariance"] = _array_from_dict(d["covariance"], "covariance")
@@ -549,6 +578,9 @@ class IdentificationResult(ResultPresentation):
         """One-step-ahead prediction ``yhat[k] = phi[k] @ [theta, c] + y0`` (Eq. 19).
 
         ``u`` and ``y`` in the data's units; the operating point is removed and added back.
+        With a series output map ``h`` the prediction is ``h(phi[k] @ [theta, c] + y0)``, the
+        regressors built from the measured ``y`` in place of the unmeasured ``z`` (exact only
+        where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
         u = check_array(u, "u")
@@ -556,7 +588,11 @@ class IdentificationResult(ResultPresentation):
         builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
                                    structure=self.structure)
         yhat = builder.matrix(self.nonlinear) @ self.linear
-        return yhat + y0 if y0 else yhat
+        yhat = yhat + y0 if y0 else yhat
+        hmap = self.structure.output_map
+        if hmap is not None:
+            yhat = hmap.evaluate(yhat, list(self.output_map_params.values()))
+        return yhat
 
     def simulate(self, u, *, initial=None, y=None, history=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.

@@ -123,6 +123,9 @@ def _describe(value):
         return f"{value:g}"
     if isinstance(value, (str, numbers.Number, type(None))):
         return str(value)
+    describe = getattr(value, "describe", None)    # a series output map
+    if callable(describe):
+        return describe()
     names = getattr(value, "names", None)          # a Basis
     if names is not None:
         return "(" + ", ".join(names) + ")"
