@@ -518,6 +518,35 @@ API = [
      lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0]}], dt=0.1,
                                          num_orders=[0.0], validation=1),
      fohw.ParameterError, "`validation` = 1 (an int: a number of samples)"),
+    # issue 24 (nk)
+    ("identify", "nk = -1",
+     lambda t: fohw.identify(U, U, nk=-1, **S), fohw.ParameterError,
+     "`nk` (the input delay in samples) must be an integer >= 0 (0: direct feedthrough); got -1"),
+    ("identify", "nk = 1.5",
+     lambda t: fohw.identify(U, U, nk=1.5, **S), fohw.ParameterError,
+     "`nk` (the input delay in samples) must be an integer >= 0 (0: direct feedthrough); got 1.5"),
+    ("identify", "nk = True (a bool is not a delay)",
+     lambda t: fohw.identify(U, U, nk=True, **S), fohw.ParameterError,
+     "must be an integer >= 0 (0: direct feedthrough); got True"),
+    ("identify", "nk = '0' (a string)",
+     lambda t: fohw.identify(U, U, nk="0", **S), fohw.ParameterError,
+     "must be an integer >= 0 (0: direct feedthrough); got '0'"),
+    ("identify", "nk = 49 on a record of 50 samples with nb = 2",
+     lambda t: fohw.identify(U, U, nk=49, **S), fohw.DimensionError,
+     "na=2, nb=2, nk=49 (need at least 51)"),
+    ("identify", "orders with input lags from 0, but nk left at 1",
+     lambda t: fohw.identify(U, U, orders=fohw.Orders.preset("commensurate", na=2, nb=2, nk=0),
+                             **S), fohw.ParameterError,
+     "input lags 0..1, but na = 2, nb = 2 and nk = 1"),
+    ("identify", "method='hybrid' with nk = 0 (the paper's model has nk = 1)",
+     lambda t: fohw.identify(U, U, nk=0, method="hybrid", **S), fohw.ParameterError,
+     "method 'hybrid' implements the paper's commensurate model"),
+    ("Orders", "an output term at lag 0",
+     lambda t: fohw.Orders([(0, "alpha")], [(0, "alpha")]), fohw.ParameterError,
+     "the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
+    ("HammersteinWiener", "nk = -2",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 0.5, nk=-2),
+     fohw.ParameterError, "`nk` (the input delay in samples) must be an integer >= 0"),
 ]
 
 CLI = [
@@ -619,6 +648,16 @@ CLI = [
     ("fohw identify", "@NAME that does not ship with fohw",
      lambda t: ["identify", "@tanks", "--na", "1", "--nb", "1"],
      "no record of that name ships with fohw; use one of @cascaded_tanks, @robot_arm"),
+    # issue 24 (nk)
+    ("fohw identify", "--nk 1.5", lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1",
+                                            "--nk", "1.5"],
+     "argument --nk: invalid int value: '1.5'"),
+    ("fohw identify", "--nk -1",
+     lambda t: ["identify", _bad_file(t, "u y\n" + "".join(f"{v} {v}\n" for v in U)),
+                "--na", "1", "--nb", "1", "--nk", "-1", "-q"],
+     "`nk` (the input delay in samples) must be an integer >= 0"),
+    ("fohw select", "--nk -1", lambda t: ["select", "x.dat", "--na", "1", "--nk", "-1"],
+     "argument --nk: expected comma-separated integers >= 0; got '-1'"),
 ]
 
 

@@ -26,6 +26,7 @@ EXAMPLES = {
                           "cascaded_tanks_selection.png", "cascaded_tanks.png"],
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
+    "input_lessons.py": ["input_lessons.md"],
 }
 
 

@@ -1,11 +1,11 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
-* ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
-  [--offset] [--operating-point mean] [--dt 4] [--decimal-comma] [--option NAME=VALUE]
+* ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 [--nk 0] --f-basis 2 --g-basis 3
+  [--method varpro] [--offset] [--operating-point mean] [--dt 4] [--decimal-comma] [--option NAME=VALUE]
   [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
   whitespace-separated file (the sampling time a ``Ts`` column gives is the default ``--dt``);
   prints a summary and the free-run fit on the record (or, with ``--json``, both as JSON).
-* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
+* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] [--nk 0,1] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
   [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
   structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
@@ -257,6 +257,17 @@ def _int_list(text):
     return values
 
 
+def _delay_list(text):
+    try:
+        values = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
+            from None
+    if any(v < 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 0; got {text!r}")
+    return values
+
+
 def _positive_int(text):
     try:
         value = int(text)
@@ -339,6 +350,8 @@ def _add_identify_parser(sub):
                    "the file writes 0,5 for 0.5 (columns then separated by ';' or whitespace)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
     ide.add_argument("--nb", type=int, required=True, help="input lags")
+    ide.add_argument("--nk", type=int, default=1, help="input delay in samples (default 1; 0: "
+                     "direct feedthrough): input lags nk..nk+nb-1")
     ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
     ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
     ide.add_argument("--method", choices=METHODS, default="varpro",
@@ -373,9 +386,11 @@ def _add_select_parser(sub):
     _add_data_file(sel, "input and output columns, e.g. '0,1' or 'uEst,yEst' (default: as for "
                    "identify)", "as for identify")
     for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
+                       ("--nk", "input delays (default 1; 0: direct feedthrough)"),
                        ("--f-basis", "input polynomial degrees"),
                        ("--g-basis", "output polynomial degrees")):
-        sel.add_argument(flag, type=_int_list, default=None if flag == "--nb" else [1],
+        sel.add_argument(flag, type=_delay_list if flag == "--nk" else _int_list,
+                         default=None if flag in ("--nb", "--nk") else [1],
                          help=f"{what}: a comma-separated list, e.g. 1,2,3")
     sel.add_argument("--orders", type=_orders_list, default=["commensurate"],
                      help="classes of orders, e.g. '0,commensurate,mixed,per_lag' "
@@ -495,7 +510,8 @@ def _fit_and_check(args, u, y, options, dt):
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=dt)
+                       offset=args.offset, operating_point=args.operating_point, dt=dt,
+                       nk=args.nk)
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -625,13 +641,15 @@ def _check_select_args(args):
 
 
 def _candidates(args):
-    """The candidates of the grid ``--na``/``--nb``/``--f-basis``/``--g-basis``/``--orders``."""
+    """The candidates of the grid ``--na``/``--nb``/``--nk``/``--f-basis``/``--g-basis``/``--orders``."""
     from .analysis.selection import expand_candidates
 
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
     if args.nb is not None:
         grid["nb"] = args.nb
+    if args.nk is not None:
+        grid["nk"] = args.nk
     candidates = expand_candidates(grid)
     if args.nb is None:                 # nb = na
         candidates = [dict(c, nb=c["na"]) for c in candidates]

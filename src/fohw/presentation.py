@@ -44,7 +44,9 @@ class ResultPresentation:
         lines = [f"fohw identification: method={self.method!r}"
                  + (f", schedule={self.schedule!r}" if self.schedule else ""),
                  f"  samples N = {self.n_samples}, na = {self.structure.na}, "
-                 f"nb = {self.structure.nb}, f_basis = {self.f_basis!r}, "
+                 f"nb = {self.structure.nb}, "
+                 + (f"nk = {self.structure.nk}, " if self.structure.nk != 1 else "")
+                 + f"f_basis = {self.f_basis!r}, "
                  f"g_basis = {self.g_basis!r}"]
         if not self.structure.is_paper_model:
             lines.append(f"  model: {self.structure.describe()}")

@@ -405,6 +405,11 @@ class IdentificationResult(ResultPresentation):
         """Input lag order."""
         return self.layout.nb
 
+    @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 for the paper's model; 0: direct feedthrough)."""
+        return self.structure.nk
+
     # ---- serialisation ----------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """A JSON-ready dict with one entry per field (:func:`fohw.save_result` writes it).
@@ -631,6 +636,6 @@ def recover_model(structure, theta, orders, *, offset=0.0, past=(0.0, 0.0),
         return HammersteinWiener.from_theta(
             theta, dict(orders), na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
             g_basis=structure.g_basis, orders=structure.orders, dt=structure.dt,
-            offset=offset, past=past, operating_point=operating_point), ""
+            offset=offset, past=past, operating_point=operating_point, nk=structure.nk), ""
     except ParameterError as exc:
         return None, f" No model: {exc}"

@@ -119,7 +119,7 @@ def refit(result, u, y, *, orders=None, start=None):
         return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
                         method=result.method, orders=orders, offset=s.offset,
                         operating_point=result.operating_point, past=s.past, dt=s.dt,
-                        alpha_bounds=bounds, options=options)
+                        alpha_bounds=bounds, options=options, nk=s.nk)
 
 
 def order_bounds(result, name):

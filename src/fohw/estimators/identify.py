@@ -40,7 +40,8 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
              past: str = "rest", dt: float = 1.0,
              alpha_bounds: PairLike | Mapping[str, PairLike] = (0.0, 1.0),
              options: Mapping[str, Any] | MethodOptions | None = None,
-             executor: Executor | None = None, **method_options: Any) -> IdentificationResult:
+             executor: Executor | None = None, nk: int = 1,
+             **method_options: Any) -> IdentificationResult:
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters
@@ -48,7 +49,8 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     u, y : array_like, shape (N,)
         Input and output records (zero before ``k = 0``).
     na, nb : int
-        Output and input lag orders.
+        Output and input lag orders: output terms at lags ``1 … na``, input terms at lags
+        ``nk … nk + nb - 1``.
     f_basis, g_basis : Basis, int or callables
         Input and output basis functions (an int is a polynomial degree).
     method : str, optional
@@ -111,6 +113,12 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     options : mapping or MethodOptions, optional
         The method's options, as a mapping (``options={"innovation_length": 3}``) or an instance
         of its options class.
+    nk : int, optional
+        Input delay in samples, an integer ``>= 0`` (MATLAB's ``nk``). Default 1: the paper's
+        input lags ``1 … nb``. ``nk = 0`` is direct feedthrough (a term ``b0`` of the present
+        input, as a D term of a state-space model); ``nk = 3`` a dead time of 3 samples
+        (terms ``b3 … b{nb+2}``). The input coefficients are named by their lag. The paper's
+        methods (``"hybrid"``, the baselines, ``"rls"``) implement ``nk = 1`` only.
     executor : concurrent.futures.Executor, optional
         Where ``method="output_error"`` runs its local searches (its option ``n_starts``): a
         :class:`~concurrent.futures.ProcessPoolExecutor` or dask's ``Client.get_executor()``;
@@ -174,4 +182,4 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     opts = declared.options.build(method, options, others=OPTIONS)
     return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
                       orders=orders, offset=offset, operating_point=operating_point, past=past,
-                      dt=dt, alpha_bounds=alpha_bounds, executor=executor)
+                      dt=dt, alpha_bounds=alpha_bounds, executor=executor, nk=nk)

@@ -57,7 +57,7 @@ class Problem:
 
 
 def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=False,
-            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0)):
+            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0), nk=1):
     """Check a record and a model class; warn about the data once; return the :class:`Problem`.
 
     The keywords are those of :func:`fohw.identify`.
@@ -70,7 +70,7 @@ def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=Fal
         raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
     structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
                                f_basis=f_basis, g_basis=g_basis, orders=orders,
-                               offset=bool(offset), past=past, dt=dt)
+                               offset=bool(offset), past=past, dt=dt, nk=nk)
     bounds = _order_bounds(structure, alpha_bounds)
     u_dev = u - point[0] if point[0] else u
     y_dev = y - point[1] if point[1] else y

@@ -5,9 +5,13 @@ and ``B(z) = sum_i b_i z^{-gamma_i}`` (its "nonhomogeneous" case, Eq. 7), and th
 itself to one order factor, ``z^{-i + alpha} x = Delta^alpha x(k - i)`` (Eqs. 8–9, 16). fohw
 implements the general class: each term of the output branch is ``a_t (Delta^{nu_t} gbar(y))
 (k - i_t)`` and each term of the input branch ``b_t (Delta^{nu_t} fbar(u))(k - i_t)``, for a lag
-``i_t >= 1`` and an order ``nu_t``. An order is a fixed number in ``[0, 2]`` (0 included: the
-memoryless term ``x(k - i)`` that carries a static gain) or the *name* of a free order to be
-estimated; terms that name the same free order share it (tied orders).
+``i_t`` and an order ``nu_t``. Output lags are ``>= 1`` (the recursion needs them); input lags
+are ``>= 0``: the input terms of the presets sit at lags ``nk … nk + nb - 1`` for an input
+delay ``nk >= 0`` (default 1, the paper's lags ``1 … nb``; ``nk = 0`` is direct feedthrough,
+a term ``b0`` acting on ``fbar(u)(k)``), and the input coefficients are named by their lag
+(``b0, b1`` for ``nk = 0, nb = 2``; ``b3, b4`` for ``nk = 3``). An order is a fixed number in
+``[0, 2]`` (0 included: the memoryless term ``x(k - i)`` that carries a static gain) or the
+*name* of a free order to be estimated; terms that name the same free order share it (tied orders).
 
 Presets (``orders=`` in :func:`fohw.identify` and :class:`fohw.HammersteinWiener`):
 
@@ -15,7 +19,8 @@ Presets (``orders=`` in :func:`fohw.identify` and :class:`fohw.HammersteinWiener
     The paper's model, Eq. (16): every term ``Delta^alpha x(k - i)``, one free order ``alpha``.
 ``"per_lag"``
     The paper's nonhomogeneous model, Eq. (14): a free order for every term, ``alpha_a1 …
-    alpha_a{na}`` (output branch) and ``alpha_b1 … alpha_b{nb}`` (input branch).
+    alpha_a{na}`` (output branch) and ``alpha_b1 … alpha_b{nb}`` (input branch; named by the
+    lag, ``alpha_b{nk} …`` for an input delay ``nk``).
 ``"mixed"``
     Order 0 *and* a free order ``alpha`` at every lag of both branches: a static gain beside
     fractional dynamics. The commensurate model has no static gain for ``alpha > 0``
@@ -26,7 +31,8 @@ a number
 
 Anything else is written per lag: ``Orders.from_lags(a=[(0, "alpha"), (0, "alpha")],
 b=[(0, "alpha")])``, or the same as a dict, ``orders={"a": [...], "b": [...]}``: one entry per
-lag, each an order or a tuple of orders (one term per order).
+lag, each an order or a tuple of orders (one term per order); the input entries start at lag
+``nk`` (``Orders.from_lags(a, b, nk=0)``).
 """
 
 from __future__ import annotations
@@ -36,10 +42,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Union
 
+import numpy as np
+
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError
 
-__all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE", "OrdersLike"]
+__all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE", "OrdersLike", "check_nk"]
 
 #: The orders a term may have (fixed or free): ``[0, 2]``.
 ORDER_RANGE = (0.0, 2.0)
@@ -49,7 +57,11 @@ PRESETS = ("commensurate", "per_lag", "mixed")
 
 @dataclass(frozen=True)
 class Term:
-    """One term of a branch: lag ``i >= 1`` and an order (a fixed number or a free order's name)."""
+    """One term of a branch: a lag and an order (a fixed number or a free order's name).
+
+    The lag is ``>= 1`` in the output branch and ``>= 0`` in the input branch (``0``: direct
+    feedthrough).
+    """
 
     lag: int
     order: float | str
@@ -62,6 +74,17 @@ class Term:
     def label(self) -> str:
         """The order as text: its name, or the fixed number (``0``, ``0.5``)."""
         return self.order if self.free else f"{self.order:g}"
+
+
+def check_nk(nk, name="nk"):
+    """The input delay ``nk`` as an int ``>= 0`` (no bool, no float, no string)."""
+    if isinstance(nk, (bool, np.bool_)) or not isinstance(nk, (numbers.Integral, np.integer)):
+        raise ParameterError(f"`{name}` (the input delay in samples) must be an integer >= 0 "
+                             f"(0: direct feedthrough); got {nk!r}.")
+    if nk < 0:
+        raise ParameterError(f"`{name}` (the input delay in samples) must be an integer >= 0 "
+                             f"(0: direct feedthrough); got {int(nk)}.")
+    return int(nk)
 
 
 def _order(value, where):
@@ -95,8 +118,9 @@ class Orders:
     ----------
     a, b : sequence of Term or (lag, order)
         Terms of the output branch (coefficients ``a``, acting on ``gbar(y)``) and of the input
-        branch (``b``, on ``fbar(u)``), in the order of the coefficients. Lags are ``>= 1``;
-        an order is a number in ``[0, 2]`` or a free order's name. A ``(lag, order)`` pair may
+        branch (``b``, on ``fbar(u)``), in the order of the coefficients. Output lags are
+        ``>= 1``, input lags ``>= 0`` (lag 0: direct feedthrough); an order is a number in
+        ``[0, 2]`` or a free order's name. A ``(lag, order)`` pair may
         appear once per branch.
 
     Attributes
@@ -114,6 +138,9 @@ class Orders:
     >>> o = fohw.Orders.from_lags(a=[0.5], b=[(0, "nu"), "nu"])
     >>> o.free, o.a_names, o.b_names
     (('nu',), ('a1',), ('b1_0', 'b1_nu', 'b2'))
+    >>> d = fohw.Orders.preset("commensurate", na=1, nb=2, nk=0)
+    >>> d.b_names, d.nk, d.nb
+    (('b0', 'b1'), 0, 2)
     """
 
     def __init__(self, a, b):
@@ -140,9 +167,10 @@ class Orders:
                 except (TypeError, ValueError):
                     raise ParameterError(f"`orders`: term {n} of branch {branch!r} must be a "
                                          f"(lag, order) pair; got {item!r}.") from None
-            if isinstance(lag, bool) or not isinstance(lag, numbers.Integral) or lag < 1:
+            least = 1 if branch == "a" else 0
+            if isinstance(lag, bool) or not isinstance(lag, numbers.Integral) or lag < least:
                 raise ParameterError(f"`orders`: the lag of term {n} of branch {branch!r} must "
-                                     f"be an integer >= 1; got {lag!r}.")
+                                     f"be an integer >= {least}; got {lag!r}.")
             lag = int(lag)
             order = _order(order, f"`orders`: the order of term {n} of branch {branch!r}")
             if (lag, order) in seen:
@@ -154,90 +182,117 @@ class Orders:
 
     # ---- construction -------------------------------------------------------------------------
     @classmethod
-    def preset(cls, name, *, na, nb):
-        """One of :data:`PRESETS` for ``na`` output and ``nb`` input lags."""
+    def preset(cls, name, *, na, nb, nk=1):
+        """One of :data:`PRESETS` for ``na`` output and ``nb`` input lags, input delay ``nk``.
+
+        The input terms sit at lags ``nk … nk + nb - 1`` (default ``nk = 1``: ``1 … nb``).
+        """
         na = check_int(na, "na", minimum=1)
         nb = check_int(nb, "nb", minimum=1)
+        nk = check_nk(nk)
+        b_lags = range(nk, nk + nb)
         if name == "commensurate":
             return cls([(i, "alpha") for i in range(1, na + 1)],
-                       [(i, "alpha") for i in range(1, nb + 1)])
+                       [(i, "alpha") for i in b_lags])
         if name == "per_lag":
             return cls([(i, f"alpha_a{i}") for i in range(1, na + 1)],
-                       [(i, f"alpha_b{i}") for i in range(1, nb + 1)])
+                       [(i, f"alpha_b{i}") for i in b_lags])
         if name == "mixed":
             return cls([(i, o) for i in range(1, na + 1) for o in (0.0, "alpha")],
-                       [(i, o) for i in range(1, nb + 1) for o in (0.0, "alpha")])
+                       [(i, o) for i in b_lags for o in (0.0, "alpha")])
         raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
                              f"dict of per-lag orders; got {name!r}.")
 
     @classmethod
-    def fixed(cls, value, *, na, nb):
+    def fixed(cls, value, *, na, nb, nk=1):
         """Every term ``Delta^value x(k - i)``, no free order (``value = 0``: integer order)."""
         na = check_int(na, "na", minimum=1)
         nb = check_int(nb, "nb", minimum=1)
-        return cls([(i, value) for i in range(1, na + 1)], [(i, value) for i in range(1, nb + 1)])
+        nk = check_nk(nk)
+        return cls([(i, value) for i in range(1, na + 1)],
+                   [(i, value) for i in range(nk, nk + nb)])
 
     @classmethod
-    def from_lags(cls, a, b):
-        """Terms written per lag: entry ``i - 1`` holds the order(s) of lag ``i``.
+    def from_lags(cls, a, b, *, nk=1):
+        """Terms written per lag: entry ``i - 1`` of ``a`` holds the order(s) of lag ``i``.
 
-        Each entry is an order (one term) or a tuple/list of orders (a term per order).
+        Each entry is an order (one term) or a tuple/list of orders (a term per order). The
+        entries of ``b`` start at the input delay ``nk``: entry ``j`` holds lag ``nk + j``.
         """
-        def expand(spec, branch):
+        nk = check_nk(nk)
+
+        def expand(spec, branch, first):
             if isinstance(spec, (str, bytes)) or not isinstance(spec, Sequence) or not spec:
                 raise ParameterError(f"`orders`: {branch!r} needs one entry per lag; got "
                                      f"{spec!r}.")
             out = []
-            for i, entry in enumerate(spec, start=1):
+            for i, entry in enumerate(spec, start=first):
                 group = entry if isinstance(entry, (tuple, list)) else (entry,)
                 if not group:
                     raise ParameterError(f"`orders`: lag {i} of {branch!r} has no order.")
                 out += [(i, o) for o in group]
             return out
-        return cls(expand(a, "a"), expand(b, "b"))
+        return cls(expand(a, "a", 1), expand(b, "b", nk))
 
     @classmethod
-    def resolve(cls, spec, *, na, nb):
+    def resolve(cls, spec, *, na, nb, nk=1):
         """An :class:`Orders` from what a user passed as ``orders`` (with the lag orders).
 
-        ``na`` and ``nb`` are the numbers of lags; a resolved :class:`Orders` or dict must use
-        exactly lags ``1..na`` and ``1..nb``.
+        ``na`` and ``nb`` are the numbers of lags and ``nk`` the input delay; a resolved
+        :class:`Orders` or dict must use output lags up to ``na`` and input lags from ``nk`` to
+        ``nk + nb - 1``.
         """
+        nk = check_nk(nk)
         if spec is None:
             spec = "commensurate"
         if isinstance(spec, str):
-            return cls.preset(spec, na=na, nb=nb)
+            return cls.preset(spec, na=na, nb=nb, nk=nk)
         if isinstance(spec, numbers.Real) and not isinstance(spec, bool):
-            return cls.fixed(spec, na=na, nb=nb)
+            return cls.fixed(spec, na=na, nb=nb, nk=nk)
         if isinstance(spec, Mapping):
             extra = set(spec) - {"a", "b"}
             if extra or not {"a", "b"} <= set(spec):
                 raise ParameterError(f"`orders` as a dict needs exactly the keys 'a' and 'b' "
                                      f"(per-lag orders of each branch); got {sorted(spec)}.")
-            spec = cls.from_lags(spec["a"], spec["b"])
+            spec = cls.from_lags(spec["a"], spec["b"], nk=nk)
         if not isinstance(spec, Orders):
             raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
                                  f"dict of per-lag orders; got {spec!r}.")
-        if spec.na != na or spec.nb != nb:
-            raise ParameterError(f"`orders` uses lags up to {spec.na} (output) and {spec.nb} "
-                                 f"(input), but na = {na} and nb = {nb}.")
+        if spec.na != na or spec.nb != nb or spec.nk != nk:
+            if spec.nk == 1 and nk == 1:
+                raise ParameterError(f"`orders` uses lags up to {spec.na} (output) and "
+                                     f"{spec.nb} (input), but na = {na} and nb = {nb}.")
+            raise ParameterError(f"`orders` uses output lags up to {spec.na} and input lags "
+                                 f"{spec.nk}..{spec.max_input_lag}, but na = {na}, nb = {nb} "
+                                 f"and nk = {nk} (input lags {nk}..{nk + nb - 1}).")
         return spec
 
     @classmethod
-    def infer(cls, spec, n_a, n_b):
-        """An :class:`Orders` for a model with ``n_a`` and ``n_b`` coefficients (terms)."""
+    def infer(cls, spec, n_a, n_b, nk=None):
+        """An :class:`Orders` for a model with ``n_a`` and ``n_b`` coefficients (terms).
+
+        ``nk`` is the input delay of a preset or of per-lag orders (``None``: 1); an
+        :class:`Orders` carries its own lags (a given ``nk`` must agree with its smallest
+        input lag).
+        """
+        given = nk is not None
+        nk = check_nk(nk) if given else 1
         if spec is None or spec in ("commensurate", "per_lag") or (
                 isinstance(spec, numbers.Real) and not isinstance(spec, bool)):
-            return cls.resolve(spec, na=n_a, nb=n_b)
+            return cls.resolve(spec, na=n_a, nb=n_b, nk=nk)
         if spec == "mixed":
             if n_a % 2 or n_b % 2:
                 raise ParameterError("`orders='mixed'` has two terms per lag (orders 0 and "
                                      f"alpha), so `a` and `b` need even lengths; got {n_a} and "
                                      f"{n_b}.")
-            return cls.preset("mixed", na=n_a // 2, nb=n_b // 2)
+            return cls.preset("mixed", na=n_a // 2, nb=n_b // 2, nk=nk)
         if isinstance(spec, Mapping):
-            spec = cls.from_lags(spec["a"], spec["b"]) if {"a", "b"} == set(spec) else spec
-        orders = cls.resolve(spec, na=getattr(spec, "na", 1), nb=getattr(spec, "nb", 1))
+            spec = cls.from_lags(spec["a"], spec["b"], nk=nk) if {"a", "b"} == set(spec) \
+                else spec
+        orders = cls.resolve(spec, na=getattr(spec, "na", 1), nb=getattr(spec, "nb", 1),
+                             nk=getattr(spec, "nk", nk))
+        if given and orders.nk != nk:
+            raise ParameterError(f"`orders` has input lags from {orders.nk}, but nk = {nk}.")
         if (len(orders.output), len(orders.input)) != (n_a, n_b):
             raise ParameterError(f"`orders` has {len(orders.output)} output and "
                                  f"{len(orders.input)} input terms, but `a` and `b` have {n_a} "
@@ -252,8 +307,23 @@ class Orders:
 
     @property
     def nb(self) -> int:
-        """Largest input lag."""
+        """Number of input lags, ``nk … nk + nb - 1`` (the largest input lag when ``nk = 1``)."""
+        return self.max_input_lag - self.nk + 1
+
+    @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 for the paper's model, 0: direct feedthrough)."""
+        return min(t.lag for t in self.input)
+
+    @property
+    def max_input_lag(self) -> int:
+        """Largest input lag, ``nk + nb - 1``."""
         return max(t.lag for t in self.input)
+
+    @property
+    def max_lag(self) -> int:
+        """Largest lag of either branch: a record must be longer than this."""
+        return max(self.na, self.max_input_lag)
 
     @property
     def is_commensurate(self) -> bool:

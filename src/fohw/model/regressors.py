@@ -182,6 +182,8 @@ class RegressorBuilder:
         The model class (:class:`fohw.Structure`); default the paper's commensurate model.
     structure : Structure, optional
         Instead of ``na … dt``.
+    nk : int, optional
+        Input delay (default 1; 0: direct feedthrough): input lags ``nk … nk + nb - 1``.
 
     Notes
     -----
@@ -205,7 +207,7 @@ class RegressorBuilder:
     """
 
     def __init__(self, u, y, *, na=None, nb=None, f_basis=None, g_basis=None, orders=None,
-                 offset=False, past="rest", dt=1.0, structure=None):
+                 offset=False, past="rest", dt=1.0, structure=None, nk=1):
         u = check_array(u, "u")
         y = check_array(y, "y")
         check_same_length(u, y, "u", "y")
@@ -213,13 +215,15 @@ class RegressorBuilder:
             na = check_int(na, "na", minimum=1)
             nb = check_int(nb, "nb", minimum=1)
             structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
-                                       orders=orders, offset=offset, past=past, dt=dt)
+                                       orders=orders, offset=offset, past=past, dt=dt, nk=nk)
         self.structure = structure
         na, nb = structure.na, structure.nb
         n = y.shape[0]
-        if n <= max(na, nb):
+        if n <= structure.max_lag:
+            delay = f", nk={structure.nk}" if structure.nk != 1 else ""
             raise DimensionError(f"the record must be longer than the lags: got {n} samples for "
-                                 f"na={na}, nb={nb} (need at least {max(na, nb) + 1}).")
+                                 f"na={na}, nb={nb}{delay} (need at least "
+                                 f"{structure.max_lag + 1}).")
         self.f_basis, self.g_basis = structure.f_basis, structure.g_basis
         self.layout = structure.layout
         self.n_samples = n
@@ -457,7 +461,7 @@ class RegressorBuilder:
 def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, na: int, nb: int,
                        f_basis: BasisLike, g_basis: BasisLike, orders: OrdersLike | None = None,
                        offset: bool = False, past: str | PairLike = "rest",
-                       dt: float = 1.0) -> np.ndarray:
+                       dt: float = 1.0, nk: int = 1) -> np.ndarray:
     """Information matrix of a fractional-order Hammerstein–Wiener record.
 
     Parameters
@@ -474,6 +478,9 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     orders, offset, past, dt : optional
         The model class (:class:`fohw.Orders`, :class:`fohw.Structure`); default the paper's
         commensurate model.
+    nk : int, optional
+        Input delay (default 1): the input columns are ``(Delta^nu f_j(u))[k - i]`` for
+        ``i = nk … nk + nb - 1``; ``nk = 0`` includes the present input (direct feedthrough).
 
     Returns
     -------
@@ -500,4 +507,4 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     True
     """
     return RegressorBuilder(u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis, orders=orders,
-                            offset=offset, past=past, dt=dt).matrix(alpha)
+                            offset=offset, past=past, dt=dt, nk=nk).matrix(alpha)

@@ -90,9 +90,14 @@ class Structure:
                                                     lower_inclusive=False))
 
     @classmethod
-    def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0):
-        """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …)."""
-        return cls(Orders.resolve(orders, na=na, nb=nb), f_basis, g_basis, offset, past, dt)
+    def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0,
+             nk=1):
+        """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …).
+
+        ``nk`` is the input delay: the input terms sit at lags ``nk … nk + nb - 1``.
+        """
+        return cls(Orders.resolve(orders, na=na, nb=nb, nk=nk), f_basis, g_basis, offset, past,
+                   dt)
 
     @cached_property
     def layout(self) -> ThetaLayout:
@@ -108,12 +113,22 @@ class Structure:
 
     @property
     def nb(self) -> int:
-        """Largest input lag."""
+        """Number of input lags (``nk … nk + nb - 1``)."""
         return self.orders.nb
 
     @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 in the paper; 0: direct feedthrough)."""
+        return self.orders.nk
+
+    @property
+    def max_lag(self) -> int:
+        """Largest lag of either branch: a record must be longer."""
+        return self.orders.max_lag
+
+    @property
     def is_paper_model(self) -> bool:
-        """The paper's Eq. (16): commensurate orders, no offset, rest before 0, ``dt = 1``."""
+        """The paper's Eq. (16): commensurate orders (input lags from 1), no offset, rest, ``dt = 1``."""
         return (self.orders.is_commensurate and not self.offset and self.past == "rest"
                 and self.dt == 1.0)
 
@@ -249,6 +264,8 @@ class Structure:
     def describe(self) -> str:
         """One line: the terms and their orders, offset, past and dt."""
         parts = [repr(self.orders)]
+        if self.nk != 1:
+            parts.append(f"nk={self.nk}")
         if self.offset:
             parts.append("offset")
         if self.past != "rest":
