@@ -104,6 +104,28 @@ def test_simulate_equals_the_literal_equation_with_delay_at_every_sample(case):
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("nk", [0, 2])
+def test_past_levels_and_history_with_a_delay_follow_the_reference(nk):
+    import reference
+
+    model = fohw.HammersteinWiener([0.3, 0.2], [1.0, 0.5], [1.0, 0.3], [1.0, -0.2], 0.4, nk=nk,
+                                   offset=0.2, past=(0.3, -0.1), operating_point=(0.5, 1.0))
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-1, 1, 70) + 0.5
+    v = 0.05 * rng.standard_normal(70)
+    np.testing.assert_allclose(fohw.simulate(model, u, noise=v),
+                               reference.simulate_general(model, u, v), rtol=0, atol=1e-12)
+    hist = (rng.uniform(-1, 1, 30) + 0.5, rng.uniform(-1, 1, 30) + 1.0)
+    np.testing.assert_allclose(fohw.simulate(model, u, history=hist),
+                               reference.simulate_general(model, u, np.zeros(70), history=hist),
+                               rtol=0, atol=1e-12)
+    # and the information matrix with estimated past levels reproduces the record
+    y = fohw.simulate(model, u, noise=v)
+    b = fohw.RegressorBuilder(u - 0.5, y - 1.0, structure=model.structure)
+    np.testing.assert_allclose(y - 1.0 - b.matrix(model.nonlinear) @ model.linear, v,
+                               rtol=0, atol=1e-12)
+
+
 def test_feedthrough_reaches_the_output_at_the_same_sample_and_delay_shifts_it():
     # An impulse at k = 5 appears at y[5] with nk = 0, at y[8] with nk = 3, not before.
     u = np.zeros(30)
