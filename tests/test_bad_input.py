@@ -23,6 +23,7 @@ S = dict(na=2, nb=2, f_basis=2, g_basis=3)
 U = np.random.default_rng(0).uniform(-1, 1, 50)
 Y = np.zeros(50)
 M = fohw.datasets.paper_model
+_U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
 
 
@@ -547,6 +548,44 @@ API = [
     ("HammersteinWiener", "nk = -2",
      lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 0.5, nk=-2),
      fohw.ParameterError, "`nk` (the input delay in samples) must be an integer >= 0"),
+    # issue 24 (miso)
+    ("identify", "u with 2 columns, nb with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=[2, 2, 2], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nb` gives 3 value(s), one per input, but there are 2 input(s) "
+     "(columns of `u`)"),
+    ("identify", "u with 2 columns, nk with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, nk=[0, 1, 1], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nk` gives 3 value(s), one per input, but there are 2 input(s)"),
+    ("identify", "u with 2 columns, f_basis with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=[2, 1, 1], g_basis=1),
+     fohw.DimensionError, "`f_basis` gives 3 bases (one per input), but there are 2 inputs"),
+    ("identify", "1-D u, nb with 2 entries",
+     lambda t: fohw.identify(U, U, na=2, nb=[2, 2], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nb` gives 2 value(s), one per input, but there is 1 input(s)"),
+    ("identify", "1-D u, f_basis with 2 degrees",
+     lambda t: fohw.identify(U, U, na=2, nb=2, f_basis=[2, 1], g_basis=1),
+     fohw.DimensionError, "`f_basis` gives 2 bases (one per input), but `u` has 1 column"),
+    ("identify", "method='rls' with 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, method="rls"),
+     fohw.ParameterError, "implements the paper's single-input model; `u` has 2 columns"),
+    ("identify", "past='estimate' with 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, past="estimate"),
+     fohw.ParameterError, "`past` = 'estimate' is for a single input"),
+    ("identify", "inputs naming 1 of 2 columns",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, inputs=("a",)),
+     fohw.DimensionError, "`inputs` must name the 2 columns of `u`; got ('a',)"),
+    ("identify", "an input name with a dot",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, inputs=("a.b", "c")),
+     fohw.ParameterError, "each input's name is a non-empty string without '.'; got 'a.b'"),
+    ("identify", "operating_point with 3 input levels for 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1,
+                             operating_point=((1.0, 2.0, 3.0), 0.0)),
+     fohw.DimensionError, "`operating_point[0]` must give 2 input levels (one per input); got 3"),
+    ("simulate", "a 2-input structure, 1-D u",
+     lambda t: fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1,
+                                                 inputs=("a", "b")), U,
+                             params=[0.1, 1.0, 1.0, 0.5]),
+     fohw.DimensionError, "`u` must be 2-D"),
 ]
 
 CLI = [
@@ -651,13 +690,20 @@ CLI = [
     # issue 24 (nk)
     ("fohw identify", "--nk 1.5", lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1",
                                             "--nk", "1.5"],
-     "argument --nk: invalid int value: '1.5'"),
+     "argument --nk: expected an integer >= 0 (or one per input); got '1.5'"),
     ("fohw identify", "--nk -1",
-     lambda t: ["identify", _bad_file(t, "u y\n" + "".join(f"{v} {v}\n" for v in U)),
-                "--na", "1", "--nb", "1", "--nk", "-1", "-q"],
-     "`nk` (the input delay in samples) must be an integer >= 0"),
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "-1"],
+     "argument --nk: expected an integer >= 0 (or one per input); got -1"),
     ("fohw select", "--nk -1", lambda t: ["select", "x.dat", "--na", "1", "--nk", "-1"],
      "argument --nk: expected comma-separated integers >= 0; got '-1'"),
+    # issue 24 (miso)
+    ("fohw identify", "--columns of 2 inputs, --nb with 3 entries",
+     lambda t: ["identify", _bad_file(t, "a b y\n" + "".join(f"{v} {-v} {v}\n" for v in U)),
+                "--columns", "a,b,y", "--na", "1", "--nb", "1,1,1", "-q"],
+     "`nb` gives 3 value(s), one per input, but there are 2 input(s) (columns of `u`)"),
+    ("fohw identify", "--nk 0,-1",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "0,-1"],
+     "argument --nk: expected an integer >= 0 (or one per input); got -1"),
 ]
 
 

@@ -179,6 +179,25 @@ def _basis_arg(text):
     return degree
 
 
+def _per_input(check):
+    """An argparse type: one value, or a comma-separated list of one per input."""
+    def parse(text):
+        values = [check(v.strip()) for v in text.split(",")]
+        return values[0] if len(values) == 1 else values
+    return parse
+
+
+def _count_arg(text, minimum, what):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}{what}; got "
+                                         f"{text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}{what}; got {value}")
+    return value
+
+
 def _check_file_out(path, flag, inputs=()):
     """Check an output file before the run.
 
@@ -346,13 +365,17 @@ def _add_identify_parser(sub):
 
     ide = sub.add_parser("identify", help="identify a model from a data file")
     _add_data_file(ide, "input and output columns, e.g. '0,1' or 'u,y' (default: the columns "
-                   "named u and y, or the two columns of a two-column file)",
+                   "named u and y, or the two columns of a two-column file); several inputs "
+                   "then the output, e.g. 'u1,u2,y'",
                    "the file writes 0,5 for 0.5 (columns then separated by ';' or whitespace)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
-    ide.add_argument("--nb", type=int, required=True, help="input lags")
-    ide.add_argument("--nk", type=int, default=1, help="input delay in samples (default 1; 0: "
-                     "direct feedthrough): input lags nk..nk+nb-1")
-    ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
+    ide.add_argument("--nb", type=_per_input(lambda t: _count_arg(t, 1, " (or one per input)")),
+                     required=True, help="input lags (several inputs: one per input, e.g. 2,3)")
+    ide.add_argument("--nk", type=_per_input(lambda t: _count_arg(t, 0, " (or one per input)")),
+                     default=1, help="input delay in samples (default 1; 0: direct "
+                     "feedthrough): input lags nk..nk+nb-1; several inputs: one per input")
+    ide.add_argument("--f-basis", type=_per_input(_basis_arg), default=1,
+                     help="input polynomial degree (several inputs: one per input, e.g. 2,1)")
     ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
     ide.add_argument("--method", choices=METHODS, default="varpro",
                      help="estimator (default varpro; the paper's method is 'hybrid')")
@@ -474,7 +497,16 @@ def _identify(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
     data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    count = max(2, len(args.columns.split(","))) if args.columns else 2
+    *inputs, y = _pick_columns(data, names, args.columns, count, args.data)
+    u, args.inputs = inputs[0], None
+    if count > 2:                       # several inputs, then the output
+        import numpy as np
+
+        u = np.column_stack(inputs)
+        given = [p.strip() for p in args.columns.split(",")][:-1]
+        if names is not None and all(p in names for p in given):
+            args.inputs = tuple(given)
     options = _method_options(args)
     res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
     _print_warnings(caught)
@@ -511,7 +543,7 @@ def _fit_and_check(args, u, y, options, dt):
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
                        offset=args.offset, operating_point=args.operating_point, dt=dt,
-                       nk=args.nk)
+                       nk=args.nk, inputs=getattr(args, "inputs", None))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None

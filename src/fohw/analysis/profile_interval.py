@@ -90,8 +90,10 @@ def check_data(result, u, y, name):
 def orders_with(orders, fixed):
     """``orders`` with the free orders in ``fixed`` (``{name: value}``) replaced by numbers."""
     def branch(terms):
-        return [(t.lag, fixed.get(t.order, t.order) if t.free else t.order) for t in terms]
-    return Orders(branch(orders.output), branch(orders.input))
+        return [(t.lag, fixed.get(t.order, t.order) if t.free else t.order, t.input)
+                for t in terms]
+    return Orders([t[:2] for t in branch(orders.output)], branch(orders.input),
+                  inputs=orders.inputs or None)
 
 
 def refit(result, u, y, *, orders=None, start=None):

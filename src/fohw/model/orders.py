@@ -45,7 +45,7 @@ from typing import Union
 import numpy as np
 
 from .._validation import check_int, check_scalar
-from ..exceptions import ParameterError
+from ..exceptions import DimensionError, ParameterError
 
 __all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE", "OrdersLike", "check_nk"]
 
@@ -60,11 +60,13 @@ class Term:
     """One term of a branch: a lag and an order (a fixed number or a free order's name).
 
     The lag is ``>= 1`` in the output branch and ``>= 0`` in the input branch (``0``: direct
-    feedthrough).
+    feedthrough). ``input`` is the index of the input an input term acts on (0 for the first
+    or only input; several inputs: :class:`Orders` notes).
     """
 
     lag: int
     order: float | str
+    input: int = 0
 
     @property
     def free(self) -> bool:
@@ -121,7 +123,15 @@ class Orders:
         branch (``b``, on ``fbar(u)``), in the order of the coefficients. Output lags are
         ``>= 1``, input lags ``>= 0`` (lag 0: direct feedthrough); an order is a number in
         ``[0, 2]`` or a free order's name. A ``(lag, order)`` pair may
-        appear once per branch.
+        appear once per branch (once per input). With several inputs an input term is
+        ``(lag, order, input)`` (the input's index, from 0), the terms of input 0 first, then
+        those of input 1, and so on: input ``i`` has its own lags, delay and orders, and
+        ``theta = [q ⊗ a, p_1 ⊗ b_1, …, p_m ⊗ b_m]``.
+    inputs : sequence of str, optional
+        Names of the inputs when there are several (default ``u1, u2, …``; a DataFrame's
+        column names with :func:`fohw.identify`). Their coefficients are named
+        ``<input>.b<lag>`` (``u2.b1``, ``u2.p2b1``) and per-lag free orders
+        ``alpha_<input>.b<lag>``. One input: no names, today's ``b1``.
 
     Attributes
     ----------
@@ -141,16 +151,56 @@ class Orders:
     >>> d = fohw.Orders.preset("commensurate", na=1, nb=2, nk=0)
     >>> d.b_names, d.nk, d.nb
     (('b0', 'b1'), 0, 2)
+    >>> two = fohw.Orders.preset("commensurate", na=1, nb=[1, 2], nk=[0, 1],
+    ...                          inputs=("heat", "flow"))
+    >>> two.b_names, two.nk, two.nb
+    (('heat.b0', 'flow.b1', 'flow.b2'), (0, 1), (1, 2))
     """
 
-    def __init__(self, a, b):
+    def __init__(self, a, b, *, inputs=None):
         self.output = self._terms(a, "a")
         self.input = self._terms(b, "b")
+        used = [t.input for t in self.input]
+        m = max(used) + 1
+        if used != sorted(used) or set(used) != set(range(m)):
+            raise ParameterError(f"`orders`: the input terms must be grouped by input, 0, 1, …, "
+                                 f"each input with at least one term; got inputs {used}.")
+        self.inputs = self._input_names(inputs, m)
         free = []
         for t in self.output + self.input:
             if t.free and t.order not in free:
                 free.append(t.order)
         self.free = tuple(free)
+
+    @staticmethod
+    def _input_names(inputs, m):
+        if inputs is None:
+            return tuple(f"u{i}" for i in range(1, m + 1)) if m > 1 else ()
+        if isinstance(inputs, (str, bytes)) or not isinstance(inputs, Sequence):
+            raise ParameterError(f"`inputs` must be a sequence of names, one per input; got "
+                                 f"{inputs!r}.")
+        names = tuple(inputs)
+        if m == 1 and len(names) <= 1:
+            return ()
+        if len(names) != m:
+            raise DimensionError(f"`inputs` names {len(names)} inputs, but the input terms act "
+                                 f"on {m}.")
+        for name in names:
+            if not isinstance(name, str) or not name.strip() or "." in name:
+                raise ParameterError(f"`inputs`: each input's name is a non-empty string "
+                                     f"without '.'; got {name!r}.")
+        if len(set(names)) != len(names):
+            raise ParameterError(f"`inputs`: the names must be distinct; got {list(names)}.")
+        return names
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs (1: the paper's single-input model)."""
+        return self.input[-1].input + 1
+
+    def input_terms(self, i):
+        """The input terms of input ``i`` (in coefficient order)."""
+        return tuple(t for t in self.input if t.input == i)
 
     @staticmethod
     def _terms(spec, branch):
@@ -159,67 +209,110 @@ class Orders:
                                  f"(lag, order) terms; got {spec!r}.")
         terms, seen = [], set()
         for n, item in enumerate(spec):
+            index = 0
             if isinstance(item, Term):
-                lag, order = item.lag, item.order
+                lag, order, index = item.lag, item.order, item.input
             else:
                 try:
-                    lag, order = item
+                    if branch == "b" and isinstance(item, Sequence) and len(item) == 3:
+                        lag, order, index = item
+                    else:
+                        lag, order = item
                 except (TypeError, ValueError):
                     raise ParameterError(f"`orders`: term {n} of branch {branch!r} must be a "
                                          f"(lag, order) pair; got {item!r}.") from None
+            if isinstance(index, bool) or not isinstance(index, numbers.Integral) or index < 0:
+                raise ParameterError(f"`orders`: the input of term {n} of branch {branch!r} "
+                                     f"must be an integer >= 0; got {index!r}.")
             least = 1 if branch == "a" else 0
             if isinstance(lag, bool) or not isinstance(lag, numbers.Integral) or lag < least:
                 raise ParameterError(f"`orders`: the lag of term {n} of branch {branch!r} must "
                                      f"be an integer >= {least}; got {lag!r}.")
             lag = int(lag)
             order = _order(order, f"`orders`: the order of term {n} of branch {branch!r}")
-            if (lag, order) in seen:
+            if (lag, order, index) in seen:
+                where = f" of input {index}" if index else ""
                 raise ParameterError(f"`orders`: branch {branch!r} has the term (lag {lag}, "
-                                     f"order {order!r}) twice.")
-            seen.add((lag, order))
-            terms.append(Term(lag, order))
+                                     f"order {order!r}){where} twice.")
+            seen.add((lag, order, index))
+            terms.append(Term(lag, order, int(index)))
         return tuple(terms)
 
     # ---- construction -------------------------------------------------------------------------
     @classmethod
-    def preset(cls, name, *, na, nb, nk=1):
+    def preset(cls, name, *, na, nb, nk=1, inputs=None):
         """One of :data:`PRESETS` for ``na`` output and ``nb`` input lags, input delay ``nk``.
 
         The input terms sit at lags ``nk … nk + nb - 1`` (default ``nk = 1``: ``1 … nb``).
+        With several inputs (``inputs``: their names), ``nb`` and ``nk`` are one per input or
+        one for all; ``"commensurate"`` and ``"mixed"`` share the one ``alpha`` across inputs.
         """
         na = check_int(na, "na", minimum=1)
-        nb = check_int(nb, "nb", minimum=1)
-        nk = check_nk(nk)
-        b_lags = range(nk, nk + nb)
+        lags = cls._input_lags(nb, nk, inputs)
+        names = cls._input_names(inputs, len(lags))
         if name == "commensurate":
             return cls([(i, "alpha") for i in range(1, na + 1)],
-                       [(i, "alpha") for i in b_lags])
+                       [(i, "alpha", m) for m, r in enumerate(lags) for i in r], inputs=names)
         if name == "per_lag":
+            def b_name(m, i):
+                return f"alpha_{names[m]}.b{i}" if names else f"alpha_b{i}"
             return cls([(i, f"alpha_a{i}") for i in range(1, na + 1)],
-                       [(i, f"alpha_b{i}") for i in b_lags])
+                       [(i, b_name(m, i), m) for m, r in enumerate(lags) for i in r],
+                       inputs=names)
         if name == "mixed":
             return cls([(i, o) for i in range(1, na + 1) for o in (0.0, "alpha")],
-                       [(i, o) for i in b_lags for o in (0.0, "alpha")])
+                       [(i, o, m) for m, r in enumerate(lags) for i in r for o in (0.0, "alpha")],
+                       inputs=names)
         raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
                              f"dict of per-lag orders; got {name!r}.")
 
-    @classmethod
-    def fixed(cls, value, *, na, nb, nk=1):
-        """Every term ``Delta^value x(k - i)``, no free order (``value = 0``: integer order)."""
-        na = check_int(na, "na", minimum=1)
-        nb = check_int(nb, "nb", minimum=1)
-        nk = check_nk(nk)
-        return cls([(i, value) for i in range(1, na + 1)],
-                   [(i, value) for i in range(nk, nk + nb)])
+    @staticmethod
+    def _input_lags(nb, nk, inputs):
+        """``range(nk_i, nk_i + nb_i)`` per input; ``nb``, ``nk`` one per input or one for all."""
+        m = 1 if inputs is None else max(len(inputs), 1)
+        out = []
+        for value, name, check in ((nb, "nb", lambda v, n: check_int(v, n, minimum=1)),
+                                   (nk, "nk", check_nk)):
+            if isinstance(value, Sequence) and not isinstance(value, (str, bytes)) \
+                    or isinstance(value, np.ndarray):
+                values = list(value)
+                if len(values) != m:
+                    raise DimensionError(f"`{name}` gives {len(values)} value(s), one per input, "
+                                         f"but there {'is' if m == 1 else 'are'} {m} input(s) "
+                                         f"(columns of `u`).")
+                out.append([check(v, f"{name}[{i}]") for i, v in enumerate(values)])
+            else:
+                out.append([check(value, name)] * m)
+        return [range(k, k + b) for b, k in zip(*out)]
 
     @classmethod
-    def from_lags(cls, a, b, *, nk=1):
+    def fixed(cls, value, *, na, nb, nk=1, inputs=None):
+        """Every term ``Delta^value x(k - i)``, no free order (``value = 0``: integer order)."""
+        na = check_int(na, "na", minimum=1)
+        lags = cls._input_lags(nb, nk, inputs)
+        return cls([(i, value) for i in range(1, na + 1)],
+                   [(i, value, m) for m, r in enumerate(lags) for i in r],
+                   inputs=cls._input_names(inputs, len(lags)))
+
+    @classmethod
+    def from_lags(cls, a, b, *, nk=1, inputs=None):
         """Terms written per lag: entry ``i - 1`` of ``a`` holds the order(s) of lag ``i``.
 
         Each entry is an order (one term) or a tuple/list of orders (a term per order). The
         entries of ``b`` start at the input delay ``nk``: entry ``j`` holds lag ``nk + j``.
+        With several inputs (``inputs``: their names), ``b`` holds one such list per input
+        and ``nk`` is one per input or one for all.
         """
-        nk = check_nk(nk)
+        if inputs is not None and len(inputs) > 1:
+            m = len(inputs)
+            if isinstance(b, (str, bytes)) or not isinstance(b, Sequence) or len(b) != m:
+                raise ParameterError(f"`orders`: with {m} inputs, 'b' needs one list of per-lag "
+                                     f"orders per input; got {b!r}.")
+            delays = [r.start for r in cls._input_lags(1, nk, inputs)]
+            single = [cls.from_lags(a, bi, nk=k) for bi, k in zip(b, delays)]
+            return cls(single[0].output, [(t.lag, t.order, i) for i, o in enumerate(single)
+                                          for t in o.input], inputs=inputs)
+        nk = check_nk(nk[0] if isinstance(nk, Sequence) and len(nk) == 1 else nk)
 
         def expand(spec, branch, first):
             if isinstance(spec, (str, bytes)) or not isinstance(spec, Sequence) or not spec:
@@ -235,29 +328,41 @@ class Orders:
         return cls(expand(a, "a", 1), expand(b, "b", nk))
 
     @classmethod
-    def resolve(cls, spec, *, na, nb, nk=1):
+    def resolve(cls, spec, *, na, nb, nk=1, inputs=None):
         """An :class:`Orders` from what a user passed as ``orders`` (with the lag orders).
 
         ``na`` and ``nb`` are the numbers of lags and ``nk`` the input delay; a resolved
         :class:`Orders` or dict must use output lags up to ``na`` and input lags from ``nk`` to
-        ``nk + nb - 1``.
+        ``nk + nb - 1``. Several inputs: ``inputs`` names them, ``nb`` and ``nk`` are one per
+        input or one for all.
         """
-        nk = check_nk(nk)
+        if inputs is not None and len(inputs) > 1:
+            lags = cls._input_lags(nb, nk, inputs)
+            nb, nk = tuple(len(r) for r in lags), tuple(r.start for r in lags)
+        else:                                          # one input: a list has one entry
+            (lags,) = cls._input_lags(nb, nk, None)
+            nb, nk = len(lags), lags.start
         if spec is None:
             spec = "commensurate"
         if isinstance(spec, str):
-            return cls.preset(spec, na=na, nb=nb, nk=nk)
+            return cls.preset(spec, na=na, nb=nb, nk=nk, inputs=inputs)
         if isinstance(spec, numbers.Real) and not isinstance(spec, bool):
-            return cls.fixed(spec, na=na, nb=nb, nk=nk)
+            return cls.fixed(spec, na=na, nb=nb, nk=nk, inputs=inputs)
         if isinstance(spec, Mapping):
             extra = set(spec) - {"a", "b"}
             if extra or not {"a", "b"} <= set(spec):
                 raise ParameterError(f"`orders` as a dict needs exactly the keys 'a' and 'b' "
                                      f"(per-lag orders of each branch); got {sorted(spec)}.")
-            spec = cls.from_lags(spec["a"], spec["b"], nk=nk)
+            spec = cls.from_lags(spec["a"], spec["b"], nk=nk, inputs=inputs)
         if not isinstance(spec, Orders):
             raise ParameterError(f"`orders` must be one of {PRESETS}, a number, an Orders or a "
                                  f"dict of per-lag orders; got {spec!r}.")
+        default = tuple(f"u{i}" for i in range(1, len(inputs) + 1)) if inputs else ()
+        if inputs is not None and len(inputs) > 1 and spec.inputs != tuple(inputs) and not (
+                tuple(inputs) == default and spec.n_inputs == len(inputs)):
+            # (an Orders names its inputs; the data's default names u1, u2, ... give way)
+            raise ParameterError(f"`orders` has the inputs {list(spec.inputs) or 1}, but the "
+                                 f"data have {list(inputs)}.")
         if spec.na != na or spec.nb != nb or spec.nk != nk:
             if spec.nk == 1 and nk == 1:
                 raise ParameterError(f"`orders` uses lags up to {spec.na} (output) and "
@@ -306,13 +411,24 @@ class Orders:
         return max(t.lag for t in self.output)
 
     @property
-    def nb(self) -> int:
-        """Number of input lags, ``nk … nk + nb - 1`` (the largest input lag when ``nk = 1``)."""
+    def nb(self):
+        """Number of input lags, ``nk … nk + nb - 1`` (the largest input lag when ``nk = 1``).
+
+        A tuple, one per input, when there are several.
+        """
+        if self.n_inputs > 1:
+            return tuple(max(t.lag for t in g) - min(t.lag for t in g) + 1
+                         for g in map(self.input_terms, range(self.n_inputs)))
         return self.max_input_lag - self.nk + 1
 
     @property
-    def nk(self) -> int:
-        """Input delay: the smallest input lag (1 for the paper's model, 0: direct feedthrough)."""
+    def nk(self):
+        """Input delay: the smallest input lag (1 for the paper's model, 0: direct feedthrough).
+
+        A tuple, one per input, when there are several.
+        """
+        if self.n_inputs > 1:
+            return tuple(min(t.lag for t in self.input_terms(i)) for i in range(self.n_inputs))
         return min(t.lag for t in self.input)
 
     @property
@@ -328,7 +444,7 @@ class Orders:
     @property
     def is_commensurate(self) -> bool:
         """The paper's Eq. (16): lags ``1..na`` and ``1..nb`` once each, one shared free order."""
-        return (len(self.free) == 1
+        return (len(self.free) == 1 and self.n_inputs == 1
                 and [t.lag for t in self.output] == list(range(1, len(self.output) + 1))
                 and [t.lag for t in self.input] == list(range(1, len(self.input) + 1))
                 and all(t.order == self.free[0] for t in self.output + self.input))
@@ -350,8 +466,16 @@ class Orders:
 
     @property
     def b_names(self) -> tuple[str, ...]:
-        """Names of the input-branch coefficients (as :attr:`a_names`)."""
-        return self._names(self.input, "b")
+        """Names of the input-branch coefficients (as :attr:`a_names`; ``u2.b1`` with inputs)."""
+        return tuple((f"{prefix}." if prefix else "") + name
+                     for prefix, names in self.input_groups() for name in names)
+
+    def input_groups(self):
+        """``[(input name or "", coefficient names without it), …]``, one per input."""
+        if self.n_inputs == 1:
+            return [("", self._names(self.input, "b"))]
+        return [(name, self._names(self.input_terms(i), "b"))
+                for i, name in enumerate(self.inputs)]
 
     def values(self, free_values, *, check=True):
         """``(output orders, input orders)``: a number per term, given the free orders' values.
@@ -392,29 +516,43 @@ class Orders:
                 for n, v in zip(self.free, values)}
 
     def to_dict(self) -> dict:
-        """JSON-ready: ``{"a": [[lag, order], …], "b": […]}``."""
+        """JSON-ready: ``{"a": [[lag, order], …], "b": […]}``.
+
+        Several inputs: input terms ``[lag, order, input]`` and ``"inputs"``: their names (a
+        single-input description is unchanged).
+        """
+        if self.n_inputs > 1:
+            return {"a": [[t.lag, t.order] for t in self.output],
+                    "b": [[t.lag, t.order, t.input] for t in self.input],
+                    "inputs": list(self.inputs)}
         return {"a": [[t.lag, t.order] for t in self.output],
                 "b": [[t.lag, t.order] for t in self.input]}
 
     @classmethod
     def from_dict(cls, d):
         """Inverse of :meth:`to_dict` (terms are checked as by the constructor)."""
-        if not isinstance(d, Mapping) or set(d) != {"a", "b"}:
+        if not isinstance(d, Mapping) or set(d) not in ({"a", "b"}, {"a", "b", "inputs"}):
             raise ParameterError("`orders` must be described as {'a': [[lag, order], ...], "
-                                 f"'b': [...]}}; got {d!r}.")
-        return cls(d["a"], d["b"])
+                                 f"'b': [...]}} (and 'inputs' for several); got {d!r}.")
+        orders = cls(d["a"], d["b"], inputs=d.get("inputs"))
+        if "inputs" in d and orders.n_inputs == 1:
+            raise ParameterError(f"`orders`: 'inputs' is written for several inputs only; got "
+                                 f"{d['inputs']!r} for one.")
+        return orders
 
     def __eq__(self, other):
         return (isinstance(other, Orders) and self.output == other.output
-                and self.input == other.input)
+                and self.input == other.input and self.inputs == other.inputs)
 
     def __hash__(self):
-        return hash((self.output, self.input))
+        return hash((self.output, self.input, self.inputs))
 
     def __repr__(self):
-        def fmt(terms):
-            return "[" + ", ".join(f"({t.lag}, {t.label()})" for t in terms) + "]"
-        return f"Orders(a={fmt(self.output)}, b={fmt(self.input)})"
+        def fmt(terms, named):
+            return "[" + ", ".join(
+                f"({t.lag}, {t.label()}" + (f", {self.inputs[t.input]})" if named else ")")
+                for t in terms) + "]"
+        return f"Orders(a={fmt(self.output, False)}, b={fmt(self.input, bool(self.inputs))})"
 
 
 #: A class of orders as the public API accepts it: a preset name (``"commensurate"``,

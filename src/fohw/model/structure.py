@@ -35,7 +35,7 @@ import numpy as np
 
 from .._validation import check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .basis import Basis, as_basis
+from .basis import Basis, InputBases, as_basis, as_input_bases
 from .orders import Orders
 from .params import ThetaLayout
 
@@ -80,7 +80,14 @@ class Structure:
     def __post_init__(self):
         if not isinstance(self.orders, Orders):
             raise ParameterError(f"`orders` must be an Orders; got {type(self.orders).__name__}.")
-        object.__setattr__(self, "f_basis", as_basis(self.f_basis, "f_basis"))
+        if self.orders.n_inputs > 1:
+            object.__setattr__(self, "f_basis", as_input_bases(self.f_basis, self.orders.inputs))
+            if self.past != "rest":
+                raise ParameterError(f"`past` = {self.past!r} is for a single input; a model "
+                                     f"with several inputs ({list(self.orders.inputs)}) starts "
+                                     "from rest (past='rest').")
+        else:
+            object.__setattr__(self, "f_basis", as_basis(self.f_basis, "f_basis"))
         object.__setattr__(self, "g_basis", as_basis(self.g_basis, "g_basis"))
         if not isinstance(self.offset, bool):
             raise ParameterError(f"`offset` must be True or False; got {self.offset!r}.")
@@ -91,20 +98,37 @@ class Structure:
 
     @classmethod
     def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0,
-             nk=1):
+             nk=1, inputs=None):
         """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …).
 
-        ``nk`` is the input delay: the input terms sit at lags ``nk … nk + nb - 1``.
+        ``nk`` is the input delay: the input terms sit at lags ``nk … nk + nb - 1``. Several
+        inputs: ``inputs`` names them, and ``nb``, ``nk`` and ``f_basis`` are one per input
+        (a list) or one for all.
         """
-        return cls(Orders.resolve(orders, na=na, nb=nb, nk=nk), f_basis, g_basis, offset, past,
-                   dt)
+        return cls(Orders.resolve(orders, na=na, nb=nb, nk=nk, inputs=inputs), f_basis, g_basis,
+                   offset, past, dt)
 
     @cached_property
     def layout(self) -> ThetaLayout:
         """The theta layout, with the term names of :attr:`orders`."""
+        groups = None
+        if self.orders.n_inputs > 1:
+            groups = tuple((name, names, len(part)) for (name, names), part
+                           in zip(self.orders.input_groups(), self.f_basis.parts))
         return ThetaLayout(na=len(self.orders.output), nb=len(self.orders.input),
                            n_g=len(self.g_basis), n_f=len(self.f_basis),
-                           a_names=self.orders.a_names, b_names=self.orders.b_names)
+                           a_names=self.orders.a_names, b_names=self.orders.b_names,
+                           b_groups=groups)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs (1: the paper's single-input model)."""
+        return self.orders.n_inputs
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Names of the inputs when there are several (``()`` for one)."""
+        return self.orders.inputs
 
     @property
     def na(self) -> int:
@@ -248,8 +272,12 @@ class Structure:
         if not isinstance(d, dict) or set(d) != keys:
             raise ParameterError(f"`structure` must have exactly the fields {sorted(keys)}; got "
                                  f"{sorted(d) if isinstance(d, dict) else d!r}.")
-        return cls(Orders.from_dict(d["orders"]),
-                   Basis.from_dict(d["f_basis"], f_basis, name="f_basis"),
+        orders = Orders.from_dict(d["orders"])
+        if orders.n_inputs > 1:
+            fb = InputBases.from_dict(d["f_basis"], orders.inputs, f_basis, name="f_basis")
+        else:
+            fb = Basis.from_dict(d["f_basis"], f_basis, name="f_basis")
+        return cls(orders, fb,
                    Basis.from_dict(d["g_basis"], g_basis, name="g_basis"),
                    offset=d["offset"], past=d["past"], dt=d["dt"])
 
