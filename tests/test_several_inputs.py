@@ -270,3 +270,12 @@ def test_output_error_on_two_inputs_reaches_the_bound():
     assert np.mean(list(ratio.values())) < 1.44, ratio
     hi = stats.chi2.ppf(1 - 0.001 / len(ratio), seeds) / seeds
     assert max(ratio.values()) < hi, ratio
+
+
+def test_profile_interval_of_a_two_input_fit():
+    s, u, y = record(800, noise_std=0.02)
+    r = fohw.identify(u, y, **SPEC, orders=ORDERS)
+    iv = fohw.profile_interval(r, "beta", u=u, y=y)
+    assert iv.low < 0.8 < iv.high
+    with pytest.raises(fohw.ParameterError, match="or several inputs"):
+        r.linear_block()

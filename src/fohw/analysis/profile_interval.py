@@ -27,7 +27,7 @@ import numpy as np
 import scipy.optimize
 import scipy.stats
 
-from .._validation import check_array, check_int, check_same_length, check_scalar
+from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.orders import Orders
@@ -73,7 +73,7 @@ def check_data(result, u, y, name):
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
-    u = check_array(u, "u")
+    u = check_inputs(u, result.structure.n_inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if u.shape[0] != result.n_samples:

@@ -294,8 +294,9 @@ def linear_block(model):
     """
     inner = getattr(model, "model", model)
     if inner is None:
-        raise ParameterError("the result has no recovered model (an a_i or b_i is exactly zero; see "
-                             "result.message): its linear block is undefined.")
+        raise ParameterError("the result has no recovered model (an a_i or b_i is exactly zero, "
+                             "or several inputs; see result.message): its linear block is "
+                             "undefined.")
     if not hasattr(inner, "structure") or not hasattr(inner, "a"):
         raise ParameterError(f"`model` must be a HammersteinWiener or an identification result; got "
                              f"{type(model).__name__}.")
