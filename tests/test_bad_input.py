@@ -23,6 +23,7 @@ S = dict(na=2, nb=2, f_basis=2, g_basis=3)
 U = np.random.default_rng(0).uniform(-1, 1, 50)
 Y = np.zeros(50)
 M = fohw.datasets.paper_model
+_U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
 
 
@@ -601,6 +602,73 @@ API = [
     ("PolynomialMap", "monotone with an even degree",
      lambda t: fohw.PolynomialMap(4, monotone=True), fohw.ParameterError,
      "a monotone polynomial output map has an odd degree"),
+    # issue 24 (nk)
+    ("identify", "nk = -1",
+     lambda t: fohw.identify(U, U, nk=-1, **S), fohw.ParameterError,
+     "`nk` (the input delay in samples) must be an integer >= 0 (0: direct feedthrough); got -1"),
+    ("identify", "nk = 1.5",
+     lambda t: fohw.identify(U, U, nk=1.5, **S), fohw.ParameterError,
+     "`nk` (the input delay in samples) must be an integer >= 0 (0: direct feedthrough); got 1.5"),
+    ("identify", "nk = True (a bool is not a delay)",
+     lambda t: fohw.identify(U, U, nk=True, **S), fohw.ParameterError,
+     "must be an integer >= 0 (0: direct feedthrough); got True"),
+    ("identify", "nk = '0' (a string)",
+     lambda t: fohw.identify(U, U, nk="0", **S), fohw.ParameterError,
+     "must be an integer >= 0 (0: direct feedthrough); got '0'"),
+    ("identify", "nk = 49 on a record of 50 samples with nb = 2",
+     lambda t: fohw.identify(U, U, nk=49, **S), fohw.DimensionError,
+     "na=2, nb=2, nk=49 (need at least 51)"),
+    ("identify", "orders with input lags from 0, but nk left at 1",
+     lambda t: fohw.identify(U, U, orders=fohw.Orders.preset("commensurate", na=2, nb=2, nk=0),
+                             **S), fohw.ParameterError,
+     "input lags 0..1, but na = 2, nb = 2 and nk = 1"),
+    ("identify", "method='hybrid' with nk = 0 (the paper's model has nk = 1)",
+     lambda t: fohw.identify(U, U, nk=0, method="hybrid", **S), fohw.ParameterError,
+     "method 'hybrid' implements the paper's commensurate model"),
+    ("Orders", "an output term at lag 0",
+     lambda t: fohw.Orders([(0, "alpha")], [(0, "alpha")]), fohw.ParameterError,
+     "the lag of term 0 of branch 'a' must be an integer >= 1; got 0"),
+    ("HammersteinWiener", "nk = -2",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 0.5, nk=-2),
+     fohw.ParameterError, "`nk` (the input delay in samples) must be an integer >= 0"),
+    # issue 24 (miso)
+    ("identify", "u with 2 columns, nb with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=[2, 2, 2], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nb` gives 3 value(s), one per input, but there are 2 input(s) "
+     "(columns of `u`)"),
+    ("identify", "u with 2 columns, nk with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, nk=[0, 1, 1], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nk` gives 3 value(s), one per input, but there are 2 input(s)"),
+    ("identify", "u with 2 columns, f_basis with 3 entries",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=[2, 1, 1], g_basis=1),
+     fohw.DimensionError, "`f_basis` gives 3 bases (one per input), but there are 2 inputs"),
+    ("identify", "1-D u, nb with 2 entries",
+     lambda t: fohw.identify(U, U, na=2, nb=[2, 2], f_basis=1, g_basis=1),
+     fohw.DimensionError, "`nb` gives 2 value(s), one per input, but there is 1 input(s)"),
+    ("identify", "1-D u, f_basis with 2 degrees",
+     lambda t: fohw.identify(U, U, na=2, nb=2, f_basis=[2, 1], g_basis=1),
+     fohw.DimensionError, "`f_basis` gives 2 bases (one per input), but `u` has 1 column"),
+    ("identify", "method='rls' with 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, method="rls"),
+     fohw.ParameterError, "implements the paper's single-input model; `u` has 2 columns"),
+    ("identify", "past='estimate' with 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, past="estimate"),
+     fohw.ParameterError, "`past` = 'estimate' is for a single input"),
+    ("identify", "inputs naming 1 of 2 columns",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, inputs=("a",)),
+     fohw.DimensionError, "`inputs` must name the 2 columns of `u`; got ('a',)"),
+    ("identify", "an input name with a dot",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1, inputs=("a.b", "c")),
+     fohw.ParameterError, "each input's name is a non-empty string without '.'; got 'a.b'"),
+    ("identify", "operating_point with 3 input levels for 2 inputs",
+     lambda t: fohw.identify(_U2, U, na=2, nb=2, f_basis=1, g_basis=1,
+                             operating_point=((1.0, 2.0, 3.0), 0.0)),
+     fohw.DimensionError, "`operating_point[0]` must give 2 input levels (one per input); got 3"),
+    ("simulate", "a 2-input structure, 1-D u",
+     lambda t: fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1,
+                                                 inputs=("a", "b")), U,
+                             params=[0.1, 1.0, 1.0, 0.5]),
+     fohw.DimensionError, "`u` must be 2-D"),
 ]
 
 CLI = [
@@ -723,6 +791,23 @@ CLI = [
      lambda t: ["identify", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--nb",
                 "1", "--output-map", "saturation", "-q"],
      "method 'varpro' cannot fit a series `output_map`"),
+    # issue 24 (nk)
+    ("fohw identify", "--nk 1.5", lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1",
+                                            "--nk", "1.5"],
+     "argument --nk: expected an integer >= 0 (or one per input); got '1.5'"),
+    ("fohw identify", "--nk -1",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "-1"],
+     "argument --nk: expected an integer >= 0 (or one per input); got -1"),
+    ("fohw select", "--nk -1", lambda t: ["select", "x.dat", "--na", "1", "--nk", "-1"],
+     "argument --nk: expected comma-separated integers >= 0; got '-1'"),
+    # issue 24 (miso)
+    ("fohw identify", "--columns of 2 inputs, --nb with 3 entries",
+     lambda t: ["identify", _bad_file(t, "a b y\n" + "".join(f"{v} {-v} {v}\n" for v in U)),
+                "--columns", "a,b,y", "--na", "1", "--nb", "1,1,1", "-q"],
+     "`nb` gives 3 value(s), one per input, but there are 2 input(s) (columns of `u`)"),
+    ("fohw identify", "--nk 0,-1",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "0,-1"],
+     "argument --nk: expected an integer >= 0 (or one per input); got -1"),
 ]
 
 

@@ -28,6 +28,7 @@ EXAMPLES = {
                                  "cascaded_tanks_series.png"],
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
+    "input_lessons.py": ["input_lessons.md"],
 }
 
 

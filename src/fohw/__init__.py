@@ -47,7 +47,7 @@ from .exceptions import (
 )
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
-from .model.basis import Basis, as_basis, polynomial_basis
+from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
@@ -89,6 +89,7 @@ __all__ = [
     "select_structure",
     "select_fractional_tf",
     "Basis",
+    "InputBases",
     "CRBResult",
     "ConvergenceWarning",
     "NothingSelectedWarning",

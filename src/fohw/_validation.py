@@ -108,10 +108,23 @@ def check_array(x, name: str, *, ndim: int | None = 1, min_length: int = 1) -> n
 
 
 def check_same_length(x: np.ndarray, y: np.ndarray, xname: str, yname: str) -> None:
-    """Raise if two 1-D signals differ in length."""
-    if x.shape[-1] != y.shape[-1]:
+    """Raise if two signals differ in length (samples along the first axis)."""
+    if x.shape[0] != y.shape[0]:
         raise DimensionError(f"`{xname}` and `{yname}` must have the same length; got "
-                             f"{x.shape[-1]} and {y.shape[-1]}.")
+                             f"{x.shape[0]} and {y.shape[0]}.")
+
+
+def check_inputs(u, n_inputs: int, name: str = "u") -> np.ndarray:
+    """The input record: 1-D for one input (as :func:`check_array`), ``(N, m)`` for ``m > 1``."""
+    if n_inputs == 1:
+        if np.ndim(u) == 2 and np.shape(u)[1] == 1:            # one column: the one input
+            return check_array(np.asarray(u)[:, 0], name)
+        return check_array(u, name)
+    arr = check_array(u, name, ndim=2)
+    if arr.shape[1] != n_inputs:
+        raise DimensionError(f"`{name}` must have {n_inputs} columns (one per input); got shape "
+                             f"({_shape_text(arr)}).")
+    return arr
 
 
 def check_alpha(alpha, name: str = "alpha", *, lower: float = 0.0, upper: float = 2.0,
@@ -176,6 +189,11 @@ RANGE_TOLERANCE = 0.05
 def input_in_range(u, u_range, tolerance=RANGE_TOLERANCE) -> bool:
     """Whether ``u`` stays within ``u_range = (lo, hi)`` widened by ``tolerance`` of its span."""
     u = np.asarray(u)
+    if u.ndim == 2:                      # several inputs: ranges ((lo_1, ...), (hi_1, ...))
+        lo, hi = (np.asarray(r, dtype=float) for r in u_range)
+        slack = tolerance * (hi - lo)
+        return bool(u.size == 0 or (np.all(u.min(axis=0) >= lo - slack)
+                                    and np.all(u.max(axis=0) <= hi + slack)))
     lo, hi = u_range
     slack = tolerance * (hi - lo)
     return bool(u.size == 0 or (u.min() >= lo - slack and u.max() <= hi + slack))

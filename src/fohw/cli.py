@@ -1,11 +1,12 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
-* ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
-  [--offset] [--operating-point mean] [--dt 4] [--output-map saturation] [--decimal-comma]
-  [--option NAME=VALUE] [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
-  whitespace-separated file (the sampling time a ``Ts`` column gives is the default ``--dt``);
-  prints a summary and the free-run fit on the record (or, with ``--json``, both as JSON).
-* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
+* ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 [--nk 0] --f-basis 2 --g-basis 3
+  [--method varpro] [--offset] [--operating-point mean] [--dt 4] [--output-map saturation]
+  [--decimal-comma] [--option NAME=VALUE] [--json] [--plot FILE] [--save FILE]`` — identify
+  from a comma-, semicolon- or whitespace-separated file (the sampling time a ``Ts`` column
+  gives is the default ``--dt``); prints a summary and the free-run fit on the record (or,
+  with ``--json``, both as JSON).
+* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] [--nk 0,1] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
   [--output-map none,saturation] [--operating-point mean] [--dt 4] [--jobs 2] [--csv F]
   [--plot F] [--save F]`` — choose a structure by free-run simulation on a held-back part
@@ -206,6 +207,25 @@ def _output_map_list(text):
     return [_output_map_arg(t.strip()) for t in text.split(",")]
 
 
+def _per_input(check):
+    """An argparse type: one value, or a comma-separated list of one per input."""
+    def parse(text):
+        values = [check(v.strip()) for v in text.split(",")]
+        return values[0] if len(values) == 1 else values
+    return parse
+
+
+def _count_arg(text, minimum, what):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}{what}; got "
+                                         f"{text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}{what}; got {value}")
+    return value
+
+
 def _check_file_out(path, flag, inputs=()):
     """Check an output file before the run.
 
@@ -281,6 +301,17 @@ def _int_list(text):
             from None
     if any(v < 1 for v in values):
         raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 1; got {text!r}")
+    return values
+
+
+def _delay_list(text):
+    try:
+        values = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
+            from None
+    if any(v < 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 0; got {text!r}")
     return values
 
 
@@ -362,11 +393,17 @@ def _add_identify_parser(sub):
 
     ide = sub.add_parser("identify", help="identify a model from a data file")
     _add_data_file(ide, "input and output columns, e.g. '0,1' or 'u,y' (default: the columns "
-                   "named u and y, or the two columns of a two-column file)",
+                   "named u and y, or the two columns of a two-column file); several inputs "
+                   "then the output, e.g. 'u1,u2,y'",
                    "the file writes 0,5 for 0.5 (columns then separated by ';' or whitespace)")
     ide.add_argument("--na", type=int, required=True, help="output lags")
-    ide.add_argument("--nb", type=int, required=True, help="input lags")
-    ide.add_argument("--f-basis", type=_basis_arg, default=1, help="input polynomial degree")
+    ide.add_argument("--nb", type=_per_input(lambda t: _count_arg(t, 1, " (or one per input)")),
+                     required=True, help="input lags (several inputs: one per input, e.g. 2,3)")
+    ide.add_argument("--nk", type=_per_input(lambda t: _count_arg(t, 0, " (or one per input)")),
+                     default=1, help="input delay in samples (default 1; 0: direct "
+                     "feedthrough): input lags nk..nk+nb-1; several inputs: one per input")
+    ide.add_argument("--f-basis", type=_per_input(_basis_arg), default=1,
+                     help="input polynomial degree (several inputs: one per input, e.g. 2,1)")
     ide.add_argument("--g-basis", type=_basis_arg, default=1, help="output polynomial degree")
     ide.add_argument("--method", choices=METHODS, default="varpro",
                      help="estimator (default varpro; the paper's method is 'hybrid')")
@@ -403,9 +440,11 @@ def _add_select_parser(sub):
     _add_data_file(sel, "input and output columns, e.g. '0,1' or 'uEst,yEst' (default: as for "
                    "identify)", "as for identify")
     for flag, what in (("--na", "output lags"), ("--nb", "input lags (default: equal to na)"),
+                       ("--nk", "input delays (default 1; 0: direct feedthrough)"),
                        ("--f-basis", "input polynomial degrees"),
                        ("--g-basis", "output polynomial degrees")):
-        sel.add_argument(flag, type=_int_list, default=None if flag == "--nb" else [1],
+        sel.add_argument(flag, type=_delay_list if flag == "--nk" else _int_list,
+                         default=None if flag in ("--nb", "--nk") else [1],
                          help=f"{what}: a comma-separated list, e.g. 1,2,3")
     sel.add_argument("--orders", type=_orders_list, default=["commensurate"],
                      help="classes of orders, e.g. '0,commensurate,mixed,per_lag' "
@@ -497,7 +536,16 @@ def _identify(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
     data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    count = max(2, len(args.columns.split(","))) if args.columns else 2
+    *inputs, y = _pick_columns(data, names, args.columns, count, args.data)
+    u, args.inputs = inputs[0], None
+    if count > 2:                       # several inputs, then the output
+        import numpy as np
+
+        u = np.column_stack(inputs)
+        given = [p.strip() for p in args.columns.split(",")][:-1]
+        if names is not None and all(p in names for p in given):
+            args.inputs = tuple(given)
     options = _method_options(args)
     res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
     _print_warnings(caught)
@@ -534,7 +582,8 @@ def _fit_and_check(args, u, y, options, dt):
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
                        offset=args.offset, operating_point=args.operating_point, dt=dt,
-                       output_map=args.output_map)
+                       output_map=args.output_map,
+                       nk=args.nk, inputs=getattr(args, "inputs", None))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -664,7 +713,7 @@ def _check_select_args(args):
 
 
 def _candidates(args):
-    """The candidates of the grid ``--na``/``--nb``/``--f-basis``/``--g-basis``/``--orders``."""
+    """The candidates of the grid ``--na``/``--nb``/``--nk``/``--f-basis``/``--g-basis``/``--orders``."""
     from .analysis.selection import expand_candidates
 
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
@@ -673,6 +722,8 @@ def _candidates(args):
         grid["output_map"] = args.output_map
     if args.nb is not None:
         grid["nb"] = args.nb
+    if args.nk is not None:
+        grid["nk"] = args.nk
     candidates = expand_candidates(grid)
     if args.nb is None:                 # nb = na
         candidates = [dict(c, nb=c["na"]) for c in candidates]

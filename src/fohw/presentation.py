@@ -44,11 +44,18 @@ class ResultPresentation:
         lines = [f"fohw identification: method={self.method!r}"
                  + (f", schedule={self.schedule!r}" if self.schedule else ""),
                  f"  samples N = {self.n_samples}, na = {self.structure.na}, "
-                 f"nb = {self.structure.nb}, f_basis = {self.f_basis!r}, "
+                 f"nb = {self.structure.nb}, "
+                 + (f"nk = {self.structure.nk}, " if self.structure.nk != 1 else "")
+                 + f"f_basis = {self.f_basis!r}, "
                  f"g_basis = {self.g_basis!r}"]
         if not self.structure.is_paper_model:
             lines.append(f"  model: {self.structure.describe()}")
-        if self.operating_point != (0.0, 0.0):
+        u0, y0 = self.operating_point
+        if isinstance(u0, tuple):                    # several inputs
+            if any(u0) or y0:
+                lines.append("  operating point (u0, y0) = ((" + ", ".join(f"{x:.6g}" for x in u0)
+                             + f"), {y0:.6g}), removed before fitting")
+        elif self.operating_point != (0.0, 0.0):
             lines.append(f"  operating point (u0, y0) = ({self.operating_point[0]:.6g}, "
                          f"{self.operating_point[1]:.6g}), removed before fitting")
         lines += [f"  status = {self.status.name} ({int(self.status)}), iterations = {self.nit}, "

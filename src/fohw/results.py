@@ -18,13 +18,14 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validation import RANGE_TOLERANCE, check_array, check_scalar, input_in_range
+from ._validation import RANGE_TOLERANCE, check_array, check_inputs, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
+from .model.simulation import check_input_point
 from .model.structure import Structure
 from .model.system import HammersteinWiener
 from .presentation import ResultPresentation
@@ -271,10 +272,19 @@ class IdentificationResult(ResultPresentation):
         if s.past == "rest" and self.past != (0.0, 0.0):
             raise ParameterError(f"`past` is {self.past}, but the structure has past='rest': "
                                  "it must be (0, 0).")
-        put("operating_point", _pair(self.operating_point, "operating_point"))
+        if s.n_inputs > 1:
+            put("operating_point", check_input_point(self.operating_point, s.n_inputs))
+        else:
+            put("operating_point", _pair(self.operating_point, "operating_point"))
         if self.input_range is not None:
-            put("input_range", _pair(self.input_range, "input_range"))
-            if self.input_range[0] > self.input_range[1]:
+            if s.n_inputs > 1:
+                lo, hi = (check_input_point((r, 0.0), s.n_inputs)[0] for r in self.input_range)
+                put("input_range", (lo, hi))
+                reversed_ = any(a > b for a, b in zip(lo, hi))
+            else:
+                put("input_range", _pair(self.input_range, "input_range"))
+                reversed_ = self.input_range[0] > self.input_range[1]
+            if reversed_:
                 raise ParameterError(f"`input_range` must be (smallest, largest) input; got "
                                      f"{self.input_range} (reversed).")
         put("covariance", _readonly(self.covariance))
@@ -424,6 +434,11 @@ class IdentificationResult(ResultPresentation):
     def nb(self) -> int:
         """Input lag order."""
         return self.layout.nb
+
+    @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 for the paper's model; 0: direct feedthrough)."""
+        return self.structure.nk
 
     # ---- serialisation ----------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -583,10 +598,10 @@ class IdentificationResult(ResultPresentation):
         where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
-        u = check_array(u, "u")
+        u = check_inputs(u, self.structure.n_inputs)
         y = check_array(y, "y")
-        builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
-                                   structure=self.structure)
+        builder = RegressorBuilder(u - np.asarray(u0) if np.any(u0) else u,
+                                   y - y0 if y0 else y, structure=self.structure)
         yhat = builder.matrix(self.nonlinear) @ self.linear
         yhat = yhat + y0 if y0 else yhat
         hmap = self.structure.output_map
@@ -641,11 +656,18 @@ class IdentificationResult(ResultPresentation):
             ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
-        u = check_array(u, "u")
+        u = check_inputs(u, self.structure.n_inputs)
         state = self.initial_state(u, y, initial, history=history)
         if self.input_range is not None:
             u_arr = u
-            if not input_in_range(u_arr, self.input_range):
+            if u_arr.ndim == 2 and not input_in_range(u_arr, self.input_range):
+                warnings.warn(ExtrapolationWarning(
+                    f"an input leaves the range the model was estimated on (by more than "
+                    f"{RANGE_TOLERANCE:.0%} of its span): it spans {u_arr.min(axis=0)} to "
+                    f"{u_arr.max(axis=0)}, estimated on {self.input_range[0]} to "
+                    f"{self.input_range[1]}; the basis functions extrapolate there, so check "
+                    "the simulation before trusting it."), stacklevel=2)
+            elif u_arr.ndim == 1 and not input_in_range(u_arr, self.input_range):
                 lo, hi = self.input_range
                 warnings.warn(ExtrapolationWarning(
                     f"the input spans [{u_arr.min():.4g}, {u_arr.max():.4g}], beyond the range "
@@ -689,10 +711,14 @@ def _rebuild(cls, values):
 def recover_model(structure, theta, orders, *, offset=0.0, past=(0.0, 0.0),
                   operating_point=(0.0, 0.0)):
     """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
+    if structure.n_inputs > 1:
+        return None, (f" No HammersteinWiener model: it has one input and this result has "
+                      f"{structure.n_inputs} ({', '.join(structure.inputs)}); "
+                      "result.simulate uses the fitted theta itself.")
     try:
         return HammersteinWiener.from_theta(
             theta, dict(orders), na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
             g_basis=structure.g_basis, orders=structure.orders, dt=structure.dt,
-            offset=offset, past=past, operating_point=operating_point), ""
+            offset=offset, past=past, operating_point=operating_point, nk=structure.nk), ""
     except ParameterError as exc:
         return None, f" No model: {exc}"

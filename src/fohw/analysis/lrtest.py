@@ -151,19 +151,26 @@ def null_orders(orders):
     unidentified = []
 
     def branch(terms):
-        fixed0 = {t.lag for t in terms if not t.free and t.order == 0.0}
+        fixed0 = {(t.lag, t.input) for t in terms if not t.free and t.order == 0.0}
         out = []
         for t in terms:
-            if t.free and t.lag in fixed0:
+            if t.free and (t.lag, t.input) in fixed0:
                 if t.order not in unidentified:
                     unidentified.append(t.order)
                 continue
-            out.append((t.lag, 0.0 if t.free else t.order))
+            out.append((t.lag, 0.0 if t.free else t.order, t.input))
         return out
 
-    restricted = Orders(branch(orders.output), branch(orders.input))
+    restricted = Orders([t[:2] for t in branch(orders.output)], branch(orders.input),
+                        inputs=orders.inputs or None)
     boundary = tuple(n for n in orders.free if n not in unidentified)
     return restricted, boundary, tuple(unidentified)
+
+
+def _prefixed(prefix, name):
+    """Theta's name of basis ``prefix`` (``p2``) of a term: ``p2b1``, or ``u2.p2b1``."""
+    head, dot, tail = name.rpartition(".")
+    return f"{head}{dot}{prefix}{tail}"
 
 
 def cancelled_orders(result, *, ratio=20.0, small=0.05):
@@ -181,19 +188,21 @@ def cancelled_orders(result, *, ratio=20.0, small=0.05):
     notes = []
     for letter, terms, term_names in (("a", s.orders.output, s.orders.a_names),
                                       ("b", s.orders.input, s.orders.b_names)):
-        zero = {t.lag: nm for t, nm in zip(terms, term_names) if not t.free and t.order == 0.0}
+        zero = {(t.lag, t.input): nm for t, nm in zip(terms, term_names)
+                if not t.free and t.order == 0.0}
         for t, nm in zip(terms, term_names):
-            if not t.free or t.lag not in zero or result.orders[t.order] >= small:
+            key = (t.lag, t.input)
+            if not t.free or key not in zero or result.orders[t.order] >= small:
                 continue
             prefixes = [""] + [f"{'q' if letter == 'a' else 'p'}{j}" for j in range(2, 10)]
             for pre in prefixes:
-                if pre + nm not in theta:
+                name_nu, name_0 = _prefixed(pre, nm), _prefixed(pre, zero[key])
+                if name_nu not in theta:
                     continue
-                c_nu, c_0 = theta[pre + nm], theta[pre + zero[t.lag]]
+                c_nu, c_0 = theta[name_nu], theta[name_0]
                 if abs(c_nu) > ratio * max(abs(c_nu + c_0), np.finfo(float).tiny) \
                         and np.sign(c_nu) != np.sign(c_0):
-                    notes.append((t.order, f"{pre + nm} = {c_nu:.3g}, {pre + zero[t.lag]} = "
-                                           f"{c_0:.3g}"))
+                    notes.append((t.order, f"{name_nu} = {c_nu:.3g}, {name_0} = {c_0:.3g}"))
     out = {}
     for order, pair in notes:
         out.setdefault(order, []).append(pair)

@@ -44,6 +44,8 @@ def _run_task(make_data, methods, seed, setting):
         return [dict(seed=seed, **setting, method=name, error=str(exc)) for name in methods]
     model = data.model
     struct = dict(na=model.na, nb=model.nb, f_basis=model.f_basis, g_basis=model.g_basis)
+    if model.nk != 1:
+        struct["nk"] = model.nk
     theta = model.theta
     for name, options in methods.items():
         t0 = time.perf_counter()

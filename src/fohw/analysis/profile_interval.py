@@ -27,7 +27,7 @@ import numpy as np
 import scipy.optimize
 import scipy.stats
 
-from .._validation import check_array, check_int, check_same_length, check_scalar
+from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.orders import Orders
@@ -73,7 +73,7 @@ def check_data(result, u, y, name):
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
-    u = check_array(u, "u")
+    u = check_inputs(u, result.structure.n_inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if u.shape[0] != result.n_samples:
@@ -90,8 +90,10 @@ def check_data(result, u, y, name):
 def orders_with(orders, fixed):
     """``orders`` with the free orders in ``fixed`` (``{name: value}``) replaced by numbers."""
     def branch(terms):
-        return [(t.lag, fixed.get(t.order, t.order) if t.free else t.order) for t in terms]
-    return Orders(branch(orders.output), branch(orders.input))
+        return [(t.lag, fixed.get(t.order, t.order) if t.free else t.order, t.input)
+                for t in terms]
+    return Orders([t[:2] for t in branch(orders.output)], branch(orders.input),
+                  inputs=orders.inputs or None)
 
 
 def refit(result, u, y, *, orders=None, start=None):
@@ -119,7 +121,7 @@ def refit(result, u, y, *, orders=None, start=None):
         return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
                         method=result.method, orders=orders, offset=s.offset,
                         operating_point=result.operating_point, past=s.past, dt=s.dt,
-                        alpha_bounds=bounds, options=options)
+                        alpha_bounds=bounds, options=options, nk=s.nk)
 
 
 def order_bounds(result, name):

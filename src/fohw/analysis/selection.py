@@ -41,7 +41,8 @@ import numpy as np
 
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
-from .._validation import check_array, check_same_length
+from .._validation import check_array, check_inputs, check_same_length
+from ..estimators.problem import split_inputs
 from ..exceptions import (
     ExtrapolationWarning,
     NothingSelectedWarning,
@@ -160,17 +161,32 @@ def unidentifiable(res, u_est):
     """
     reasons = []
     f_basis = res.structure.f_basis
-    m = len(f_basis.names)
-    levels = np.unique(np.asarray(u_est, dtype=float))
-    if m >= levels.size:
-        reasons.append(f"the input basis {_describe(f_basis)} has {m} columns and the "
-                       f"estimation input takes only {levels.size} distinct level(s) "
-                       f"({', '.join(f'{v:.4g}' for v in levels[:5])}): with the constant, "
-                       f"{m + 1} columns on {levels.size} levels are linearly dependent, so the "
-                       "input map is not identified (use a basis of at most "
-                       f"{max(levels.size - 1, 0)} column(s), or an input with more levels)")
+    u_est = np.asarray(u_est, dtype=float)
+    if u_est.ndim == 2:                       # several inputs: each basis on its own input
+        for i, part in enumerate(f_basis.parts):
+            why = unidentifiable_input(part, u_est[:, i], f" of input {f_basis.inputs[i]!r}")
+            if why:
+                reasons.append(why)
+    else:
+        why = unidentifiable_input(f_basis, u_est, "")
+        if why:
+            reasons.append(why)
     reasons.extend(f"near-duplicate columns: {note}" for note in cancelled_orders(res).values())
     return "; ".join(reasons)
+
+
+def unidentifiable_input(f_basis, u_est, which):
+    """Why ``f_basis`` is not identified on the levels of ``u_est`` ("" if it is)."""
+    m = len(f_basis.names)
+    levels = np.unique(u_est)
+    if m >= levels.size:
+        return (f"the input basis{which} {_describe(f_basis)} has {m} columns and the "
+                f"estimation input takes only {levels.size} distinct level(s) "
+                f"({', '.join(f'{v:.4g}' for v in levels[:5])}): with the constant, "
+                f"{m + 1} columns on {levels.size} levels are linearly dependent, so the "
+                "input map is not identified (use a basis of at most "
+                f"{max(levels.size - 1, 0)} column(s), or an input with more levels)")
+    return ""
 
 
 def free_run_check(res, u, reference, envelope, *, initial="fitted"):
@@ -464,7 +480,8 @@ def split_validation(u, y, validation):
     if isinstance(validation, Record):
         validation = (validation.u, validation.y)
     if isinstance(validation, tuple) and len(validation) == 2:
-        uv = check_array(validation[0], "validation input")
+        uv = check_inputs(validation[0], 1 if np.ndim(u) == 1 else np.shape(u)[1],
+                          "validation input")
         yv = check_array(validation[1], "validation output")
         check_same_length(uv, yv, "validation input", "validation output")
         if len(yv) < 2:
@@ -639,7 +656,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     if candidates is None:
         raise ParameterError("`candidates` is missing: a list of dicts of identify keywords "
                              "or a dict of lists (a grid).")
-    u = check_array(u, "u")
+    u, names = split_inputs(u)
+    if names is not None and "inputs" not in common:
+        common = dict(common, inputs=names)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if score not in SCORES:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .._types import ArrayLike
-from .._validation import check_array, check_int, check_same_length, check_scalar
+from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
@@ -340,7 +340,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
                                 for name in ("simulate", "predict")):
         raise ParameterError("`model` must be an identification result (fohw.identify) or a "
                              f"fohw.HammersteinWiener; got {type(model).__name__}.")
-    u = check_array(u, "u")
+    u = check_inputs(u, model.structure.n_inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if y.size < 2:
@@ -373,8 +373,13 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     if y.size - n_init > 3 * max_lag:
         white = _measure("whiteness test skipped", whiteness_test, notes, residual,
                          max_lag=max_lag, confidence=confidence, n_init=n_init)
-        xcorr = _measure("input cross-correlation test skipped", cross_correlation_test, notes,
-                         residual, u, max_lag=max_lag, confidence=confidence, n_init=n_init)
+        if u.ndim == 1:
+            xcorr = _measure("input cross-correlation test skipped", cross_correlation_test,
+                             notes, residual, u, max_lag=max_lag, confidence=confidence,
+                             n_init=n_init)
+        else:
+            notes.append("input cross-correlation test skipped: it is for a single input "
+                         f"(`u` has {u.shape[1]} columns)")
         white = None if isinstance(white, float) else white
         xcorr = None if isinstance(xcorr, float) else xcorr
     return Validation(y=y, simulated=ysim, predicted=yhat, fit_simulation=fit_s,

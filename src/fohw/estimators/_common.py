@@ -61,7 +61,8 @@ def natural_sizes(builder):
     n_g = len(s.g_basis)
     out = []
     for i, row in enumerate(builder.signals):
-        terms = s.orders.output if i < n_g else s.orders.input
+        terms = (s.orders.output if i < n_g else
+                 s.orders.input_terms(builder.signal_inputs[i - n_g]))
         out += [log_y - np.log2(rms_scale(row))] * len(terms)
     if s.offset:
         out.append(log_y)
@@ -327,6 +328,10 @@ def paper_model_only(structure):
     """``supports`` of the recursive methods: the paper's commensurate model (Eq. 16) only."""
     if structure.is_paper_model:
         return None
+    if structure.n_inputs > 1:
+        return (f"implements the paper's single-input model; `u` has {structure.n_inputs} "
+                f"columns (inputs {', '.join(structure.inputs)}). Use method='varpro', "
+                "'structured' or 'output_error' for several inputs.")
     return ("implements the paper's commensurate model (Eq. 16: one order for every term, no "
             f"offset, rest before k = 0, dt = 1); this structure is {structure.describe()}. Use "
             "method='varpro', 'structured' or 'output_error' for it.")

@@ -10,7 +10,7 @@ class are checked by :mod:`fohw.estimators.problem`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
 
@@ -42,17 +42,27 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
              alpha_bounds: PairLike | Mapping[str, PairLike] = (0.0, 1.0),
              output_map: OutputMapLike = None,
              options: Mapping[str, Any] | MethodOptions | None = None,
-             executor: Executor | None = None, **method_options: Any) -> IdentificationResult:
+             executor: Executor | None = None, nk: int | Sequence[int] = 1,
+             inputs: Sequence[str] | None = None,
+             **method_options: Any) -> IdentificationResult:
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Input and output records (zero before ``k = 0``).
+        Input and output records (zero before ``k = 0``). ``u`` of shape ``(N, m)``, or a
+        pandas DataFrame of ``m`` columns (whose names then name the inputs), is a model with
+        ``m`` inputs: ``y[k] = A-terms + sum_i B_i-terms of fbar_i(u_i) + …``, each input with
+        its own basis, lags, delay and orders (``nb``, ``nk`` and ``f_basis`` one per input as
+        lists, or one value for every input; a list or tuple ``f_basis`` is then always one
+        basis per input). Its coefficients are named ``<input>.b<lag>``, ``<input>.p2b<lag>``.
+        A 1-D ``u`` (or one column) is the single-input model, exactly as before.
     na, nb : int
-        Output and input lag orders.
+        Output and input lag orders: output terms at lags ``1 … na``, input terms at lags
+        ``nk … nk + nb - 1``. ``nb``: one per input (a list) with several inputs, or one for all.
     f_basis, g_basis : Basis, int or callables
-        Input and output basis functions (an int is a polynomial degree).
+        Input and output basis functions (an int is a polynomial degree); ``f_basis`` one per
+        input (a list) with several inputs, or one for all.
     method : str, optional
         One of :data:`METHODS`:
 
@@ -122,6 +132,16 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     options : mapping or MethodOptions, optional
         The method's options, as a mapping (``options={"innovation_length": 3}``) or an instance
         of its options class.
+    nk : int, optional
+        Input delay in samples, an integer ``>= 0`` (MATLAB's ``nk``). Default 1: the paper's
+        input lags ``1 … nb``. ``nk = 0`` is direct feedthrough (a term ``b0`` of the present
+        input, as a D term of a state-space model); ``nk = 3`` a dead time of 3 samples
+        (terms ``b3 … b{nb+2}``). The input coefficients are named by their lag. The paper's
+        methods (``"hybrid"``, the baselines, ``"rls"``) implement ``nk = 1`` only. Several
+        inputs: one per input (a list), or one for all.
+    inputs : sequence of str, optional
+        Names of the inputs of a 2-D ``u`` (default: a DataFrame's column names, else ``u1,
+        u2, …``). The paper's methods take one input only.
     executor : concurrent.futures.Executor, optional
         Where ``method="output_error"`` runs its local searches (its option ``n_starts``): a
         :class:`~concurrent.futures.ProcessPoolExecutor` or dask's ``Client.get_executor()``;
@@ -186,4 +206,4 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
                       orders=orders, offset=offset, operating_point=operating_point, past=past,
                       dt=dt, alpha_bounds=alpha_bounds, output_map=output_map,
-                      executor=executor)
+                      executor=executor, nk=nk, inputs=inputs)

@@ -17,8 +17,15 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .._validation import AlphaBounds, check_array, check_int, check_same_length, check_scalar
-from ..exceptions import DataWarning, ParameterError
+from .._validation import (
+    AlphaBounds,
+    check_array,
+    check_inputs,
+    check_int,
+    check_same_length,
+    check_scalar,
+)
+from ..exceptions import DataWarning, DimensionError, ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.structure import Structure
 from ._common import check_units, rms_scale
@@ -42,7 +49,8 @@ class Problem:
     operating_point : (float, float)
         ``(u0, y0)`` removed from the data.
     input_range : (float, float)
-        ``(min u, max u)`` of the record as given.
+        ``(min u, max u)`` of the record as given (several inputs: ``(mins, maxs)``, a tuple
+        per input each).
     """
 
     builder: RegressorBuilder
@@ -58,22 +66,34 @@ class Problem:
 
 def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=False,
             operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
-            output_map=None):
+            output_map=None, nk=1, inputs=None):
     """Check a record and a model class; warn about the data once; return the :class:`Problem`.
 
-    The keywords are those of :func:`fohw.identify`.
+    The keywords are those of :func:`fohw.identify`. ``u`` of shape ``(N, m)`` (or a pandas
+    DataFrame, whose column names name the inputs) has ``m`` inputs; ``nb``, ``nk`` and
+    ``f_basis`` are then one per input (a list) or one for all.
     """
-    u = check_array(u, "u")
+    u, inputs = split_inputs(u, names=inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
-    point = _operating_point(operating_point, u, y)
     if not isinstance(offset, (bool, np.bool_)):
         raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
-    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
-                               f_basis=f_basis, g_basis=g_basis, orders=orders,
-                               offset=bool(offset), past=past, dt=dt, output_map=output_map)
+    if inputs is None:
+        if not isinstance(nb, (list, tuple, np.ndarray)):
+            nb = check_int(nb, "nb", minimum=1)
+        _check_single_basis(f_basis)
+    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=nb, f_basis=f_basis,
+                               g_basis=g_basis, orders=orders, offset=bool(offset), past=past,
+                               dt=dt, nk=nk, inputs=inputs, output_map=output_map)
+    point = _operating_point(operating_point, u, y)
     bounds = _order_bounds(structure, alpha_bounds)
-    u_dev = u - point[0] if point[0] else u
+    if inputs is None:
+        u_dev = u - point[0] if point[0] else u
+        u_range = (float(u.min()), float(u.max()))
+    else:
+        u_dev = u - np.asarray(point[0]) if any(point[0]) else u
+        u_range = (tuple(float(x) for x in u.min(axis=0)),
+                   tuple(float(x) for x in u.max(axis=0)))
     y_dev = y - point[1] if point[1] else y
     _check_offset(structure, u_dev)
     if operating_point is None and not structure.offset:
@@ -81,7 +101,39 @@ def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=Fal
     _warn_tiny(y_dev)
     builder = RegressorBuilder(u_dev, y_dev, structure=structure)
     check_units(builder)
-    return Problem(builder, bounds, point, (float(u.min()), float(u.max())))
+    return Problem(builder, bounds, point, u_range)
+
+
+def _check_single_basis(f_basis):
+    """One input: a list of bases (ints, Basis objects) is one per input, so the wrong length."""
+    from ..model.basis import Basis
+
+    if isinstance(f_basis, (list, tuple)) and len(f_basis) > 1 and all(
+            isinstance(b, (int, np.integer, Basis)) and not isinstance(b, bool) for b in f_basis):
+        raise DimensionError(f"`f_basis` gives {len(f_basis)} bases (one per input), but `u` has "
+                             "1 column (a single input).")
+
+
+def split_inputs(u, name="u", names=None):
+    """``(u, input names)``: a 1-D input and ``None``, or ``(N, m)`` and ``m`` names.
+
+    ``names`` if given, else a pandas DataFrame's column names (``u1, u2, …`` otherwise); a
+    single column, ``(N, 1)``, is the single-input model of a 1-D ``u``.
+    """
+    columns = getattr(u, "columns", None) if type(u).__module__.startswith("pandas") else None
+    if np.ndim(u) == 2 and np.shape(u)[1] > 1:
+        arr = check_inputs(u, np.shape(u)[1], name)
+        if names is None:
+            names = (tuple(str(c) for c in columns) if columns is not None else
+                     tuple(f"u{i}" for i in range(1, arr.shape[1] + 1)))
+        elif isinstance(names, (str, bytes)) or len(names) != arr.shape[1]:
+            raise DimensionError(f"`inputs` must name the {arr.shape[1]} columns of `{name}`; "
+                                 f"got {names!r}.")
+        return arr, tuple(names)
+    if names is not None and (isinstance(names, (str, bytes)) or len(names) != 1):
+        raise DimensionError(f"`inputs` must name the 1 column of `{name}`; got {names!r}.")
+    u = np.asarray(u)[:, 0] if np.ndim(u) == 2 else u
+    return check_inputs(u, 1, name), None
 
 
 def fit_method(method, options, u, y, executor=None, **model):
@@ -137,6 +189,20 @@ def fit_method(method, options, u, y, executor=None, **model):
 
 
 def _operating_point(spec, u, y):
+    if u.ndim == 2:                  # several inputs: u0 one level per input
+        from ..model.simulation import check_input_point
+
+        m = u.shape[1]
+        if spec is None:
+            return (0.0,) * m, 0.0
+        if spec == "initial":
+            return tuple(float(x) for x in u[0]), float(y[0])
+        if spec == "mean":
+            return tuple(float(x) for x in np.mean(u, axis=0)), float(np.mean(y))
+        if isinstance(spec, str):
+            raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or "
+                                 f"a pair (u0, y0); got {spec!r}.")
+        return check_input_point(spec, m)
     if spec is None:
         return (0.0, 0.0)
     if isinstance(spec, str):
@@ -184,7 +250,8 @@ def _warn_tiny(y):
 
 def _warn_levels(u, y):
     """Warn when a signal sits far from 0 and the model has no way to represent the level."""
-    for name, x in (("u", u), ("y", y)):
+    signals = [("u", u)] if u.ndim == 1 else [(f"u[:, {i}]", u[:, i]) for i in range(u.shape[1])]
+    for name, x in signals + [("y", y)]:
         scale = float(np.max(np.abs(x)))
         if scale == 0.0:
             continue
@@ -206,7 +273,7 @@ def _check_offset(structure, u):
     """An offset beside order-0 input terms needs an input that is not constant."""
     if not structure.offset:
         return
-    if any(t.order == 0.0 for t in structure.orders.input) and np.ptp(u) == 0.0:
+    if any(t.order == 0.0 for t in structure.orders.input) and np.any(np.ptp(u, axis=0) == 0.0):
         raise ParameterError("`offset=True` cannot be estimated from this record: the input is "
                              "constant, so the offset cannot be told apart from the order-0 "
                              "input terms. Use a record where the input moves, or offset=False.")

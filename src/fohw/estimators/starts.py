@@ -78,12 +78,13 @@ def nested_structure(structure, value=0.0):
     def terms(branch):
         out = []
         for t in branch:
-            term = (t.lag, value if t.free else t.order)
+            term = (t.lag, value if t.free else t.order, t.input)
             if term not in out:
                 out.append(term)
         return out
 
-    return Structure(Orders(terms(orders.output), terms(orders.input)), structure.f_basis,
+    return Structure(Orders([t[:2] for t in terms(orders.output)], terms(orders.input),
+                            inputs=orders.inputs or None), structure.f_basis,
                      structure.g_basis, structure.offset, structure.past, structure.dt)
 
 
@@ -99,13 +100,14 @@ def tied_structure(structure):
     name = "alpha"
 
     def terms(branch):
-        return [(t.lag, name if t.free else t.order) for t in branch]
+        return [(t.lag, name if t.free else t.order, t.input) for t in branch]
 
     a, b = terms(orders.output), terms(orders.input)
     if len(set(a)) < len(a) or len(set(b)) < len(b):
         return None
-    return Structure(Orders(a, b), structure.f_basis, structure.g_basis, structure.offset,
-                     structure.past, structure.dt)
+    return Structure(Orders([t[:2] for t in a], b, inputs=orders.inputs or None),
+                     structure.f_basis, structure.g_basis, structure.offset, structure.past,
+                     structure.dt)
 
 
 def _term_values(structure, free_values):
@@ -160,12 +162,19 @@ def embed(nested, linear, params, structure, free_values):
     f_out, f_in = _term_values(structure, free_values)
     lay, nlay = structure.layout, nested.layout
     out = np.zeros(structure.n_linear)
-    branches = (
+    branches = [
         (structure.orders.output, f_out, [(t.lag, v) for t, v in zip(nested.orders.output, nl_out)],
-         len(structure.g_basis), lay.na, nlay.na, 0, 0),
-        (structure.orders.input, f_in, [(t.lag, v) for t, v in zip(nested.orders.input, nl_in)],
-         len(structure.f_basis), lay.nb, nlay.nb, lay.n_output_params, nlay.n_output_params),
-    )
+         len(structure.g_basis), lay.na, nlay.na, 0, 0)]
+    if structure.n_inputs == 1:
+        branches.append(
+            (structure.orders.input, f_in, [(t.lag, v) for t, v in zip(nested.orders.input, nl_in)],
+             len(structure.f_basis), lay.nb, nlay.nb, lay.n_output_params, nlay.n_output_params))
+    else:                                # each input's block in turn
+        for i, (group, ngroup) in enumerate(zip(lay.groups, nlay.groups)):
+            full = [(t, v) for t, v in zip(structure.orders.input, f_in) if t.input == i]
+            nest = [(t.lag, v) for t, v in zip(nested.orders.input, nl_in) if t.input == i]
+            branches.append(([t for t, _ in full], [v for _, v in full], nest, group[2],
+                             len(group[1]), len(ngroup[1]), group[3], ngroup[3]))
     for terms, values, nested_terms, n_basis, n_full, n_nest, at, n_at in branches:
         mapping = _term_map(terms, values, nested_terms)
         for j in range(n_basis):

@@ -88,6 +88,13 @@ def structured_scale(builder):
     n_out, n_in = len(s.orders.output), len(s.orders.input)
     n_g, n_f = len(s.g_basis), len(s.f_basis)
     wg = w[0:n_g * n_out:n_out]
+    if s.n_inputs > 1:                    # per input: b_i from its first signal, p_i ratios
+        groups = s.layout.groups
+        wb = [np.full(len(names), w[off]) for _, names, _, off in groups]
+        wp = [w[off + len(names):off + nf * len(names):len(names)] / w[off]
+              for _, names, nf, off in groups]
+        return np.concatenate([np.full(n_out, wg[0])] + wb + wp
+                              + [wg[1:] / wg[0], w[s.layout.n_params:]])
     wf = w[n_g * n_out:n_g * n_out + n_f * n_in:n_in]
     return np.r_[np.full(n_out, wg[0]), np.full(n_in, wf[0]), wf[1:] / wf[0], wg[1:] / wg[0],
                  w[s.layout.n_params:]]

@@ -104,6 +104,34 @@ def _finite_pair(d, key, path, optional=False):
                             + (" or null" if optional else "") + f"; got {value!r}.")
 
 
+def _inputs_pairs(d, path):
+    """Several inputs (``operating_point[0]`` a list): check the per-input fields, True.
+
+    ``operating_point`` is ``[[u0_1, …], y0]`` and ``input_range`` ``[[lo_1, …], [hi_1, …]]``
+    (or null); the structure says how many inputs (checked against it later).
+    """
+    point = d.get("operating_point")
+    if not (isinstance(point, list) and len(point) == 2 and isinstance(point[0], list)):
+        return False
+
+    def finite_list(value):
+        return isinstance(value, list) and len(value) >= 2 and all(
+            _is_number(v) and np.isfinite(v) for v in value)
+    if not finite_list(point[0]) or not (_is_number(point[1]) and np.isfinite(point[1])):
+        raise DataFileError(f"{path}: field 'operating_point' must be [[u0 per input], y0] of "
+                            f"finite numbers; got {point!r}.")
+    ranges = d.get("input_range")
+    if ranges is not None and not (isinstance(ranges, list) and len(ranges) == 2
+                                   and all(finite_list(r) for r in ranges)
+                                   and len(ranges[0]) == len(ranges[1]) == len(point[0])):
+        raise DataFileError(f"{path}: field 'input_range' must be [[smallest per input], "
+                            f"[largest per input]] or null; got {ranges!r}.")
+    if ranges is not None and any(lo > hi for lo, hi in zip(*ranges)):
+        raise DataFileError(f"{path}: field 'input_range' is reversed ({ranges!r}); it "
+                            "is the (smallest, largest) input of the estimation record.")
+    return True
+
+
 def _finite_list(d, key, path):
     value = d.get(key)
     if not isinstance(value, list) or not value or not all(
@@ -154,6 +182,18 @@ def _basis(d, given, name, path) -> Basis:
         raise DataFileError(f"{path}: field {name!r} must be an object such as "
                             f'{{"kind": "polynomial", "degree": 2}}; got {d!r}.')
     kind = d.get("kind")
+    if kind == "inputs" and name == "f_basis":       # several inputs: one basis per input
+        parts = d.get("parts")
+        if not isinstance(parts, list) or len(parts) < 2 or set(d) != {"kind", "parts"}:
+            raise DataFileError(f"{path}: field {name!r}: 'parts' must be a list of one basis "
+                                f"per input (at least 2); got {parts!r}.")
+        given_parts = getattr(given, "parts", given)
+        if given_parts is not None and (not isinstance(given_parts, (list, tuple))
+                                        or len(given_parts) != len(parts)):
+            raise ParameterError(f"{path}: `{name}` must give one basis per input "
+                                 f"({len(parts)}); got {given!r}.")
+        return [_basis(p, None if given_parts is None else given_parts[i], f"{name}[{i}]", path)
+                for i, p in enumerate(parts)]
     if kind == "polynomial":
         degree = d.get("degree")
         if isinstance(degree, bool) or not isinstance(degree, int) \
@@ -350,9 +390,11 @@ def _check_result_fields(d, version, path):
     _number(d, "offset", path)
     _orders_field(d, "orders", path)
     _finite_pair(d, "past", path)
-    _finite_pair(d, "operating_point", path)
-    _finite_pair(d, "input_range", path, optional=True)
-    if d["input_range"] is not None and d["input_range"][0] > d["input_range"][1]:
+    inputs = _inputs_pairs(d, path)
+    if not inputs:
+        _finite_pair(d, "operating_point", path)
+        _finite_pair(d, "input_range", path, optional=True)
+    if not inputs and d["input_range"] is not None and d["input_range"][0] > d["input_range"][1]:
         raise DataFileError(f"{path}: field 'input_range' is reversed ({d['input_range']!r}); it "
                             "is the (smallest, largest) input of the estimation record.")
     if _array_field(d, "theta", path) is None:
@@ -416,7 +458,7 @@ def _check_agreement(body, structure, path):
     if shape != [n_theta]:
         _contradiction(path, f"field 'theta' has shape {shape}, but field 'structure' has "
                        f"{n_theta} entries ({', '.join(structure.layout.names)})")
-    lags = max(structure.na, structure.nb)
+    lags = structure.max_lag
     if body["n_samples"] <= lags:
         _contradiction(path, f"field 'n_samples' is {body['n_samples']}, but field 'structure' "
                        f"has lags up to {lags}, which need a longer record")

@@ -18,7 +18,7 @@ import numpy as np
 from .._validation import check_array, check_int
 from ..exceptions import DimensionError, ParameterError
 
-__all__ = ["Basis", "polynomial_basis", "as_basis"]
+__all__ = ["Basis", "polynomial_basis", "as_basis", "InputBases", "as_input_bases"]
 
 
 
@@ -298,3 +298,107 @@ def _check_callables(funcs: Sequence[Callable], name: str) -> None:
     for i, f in enumerate(funcs):
         if not callable(f):
             raise ParameterError(f"`{name}` entry {i} must be callable; got {f!r}.")
+
+
+class InputBases:
+    """One :class:`Basis` per input of a model with several inputs (issue 24).
+
+    It acts as the input basis of the whole model: :meth:`evaluate` of a ``(N, m)`` input
+    stacks the basis signals of every input, ``f_{1,1}(u_1), …, f_{1,n_1}(u_1), f_{2,1}(u_2),
+    …``, so that ``fbar_i = sum_j p_ij f_ij`` of input ``i`` enters through its own block of
+    theta.
+
+    Parameters
+    ----------
+    parts : sequence of Basis, int or callables
+        The basis of each input.
+    inputs : sequence of str
+        The inputs' names (as in :attr:`fohw.Orders.inputs`).
+
+    Examples
+    --------
+    >>> import numpy as np, fohw
+    >>> b = fohw.InputBases([2, 1], ("u1", "u2"))
+    >>> len(b), b.names
+    (3, ('u1.x', 'u1.x^2', 'u2.x'))
+    >>> b.evaluate(np.array([[2.0, 3.0], [1.0, -1.0]]))
+    array([[ 2.,  1.],
+           [ 4.,  1.],
+           [ 3., -1.]])
+    """
+
+    is_polynomial = False
+
+    def __init__(self, parts, inputs):
+        inputs = tuple(inputs)
+        if isinstance(parts, (str, bytes)) or not isinstance(parts, Sequence):
+            raise ParameterError(f"`f_basis` must give one basis per input; got {parts!r}.")
+        if len(parts) != len(inputs):
+            raise DimensionError(f"`f_basis` gives {len(parts)} bases (one per input), but there "
+                                 f"are {len(inputs)} inputs (columns of `u`).")
+        self.parts = tuple(as_basis(p, f"f_basis[{i}]") for i, p in enumerate(parts))
+        self.inputs = inputs
+
+    def __len__(self):
+        return sum(len(p) for p in self.parts)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """``<input>.<function>`` for every stacked basis signal."""
+        return tuple(f"{i}.{n}" for i, p in zip(self.inputs, self.parts) for n in p.names)
+
+    def evaluate(self, x, name: str = "u") -> np.ndarray:
+        """The stacked basis signals of a ``(N, m)`` input (or of one sample, shape ``(m,)``)."""
+        x = np.asarray(x, dtype=np.float64)
+        if x.ndim == 0 or x.shape[-1] != len(self.parts):
+            raise DimensionError(f"`{name}` must have {len(self.parts)} columns (one per input); "
+                                 f"got shape {x.shape}.")
+        return np.concatenate([p.evaluate(x[..., i], f"{name}[:, {i}]")
+                               for i, p in enumerate(self.parts)])
+
+    def to_dict(self) -> dict:
+        """``{"kind": "inputs", "parts": [<each basis' dict>]}`` (names: :class:`fohw.Orders`)."""
+        return {"kind": "inputs", "parts": [p.to_dict() for p in self.parts]}
+
+    @classmethod
+    def from_dict(cls, d, inputs, bases=None, *, name="f_basis") -> InputBases:
+        """Inverse of :meth:`to_dict`; custom parts need ``bases`` (one per input) again."""
+        parts = d.get("parts") if isinstance(d, Mapping) else None
+        if parts is None or d.get("kind") != "inputs" or not isinstance(parts, list) \
+                or len(parts) != len(inputs):
+            raise ParameterError(f"`{name}` must be described as {{'kind': 'inputs', 'parts': "
+                                 f"[...]}} with one basis per input ({len(inputs)}); got {d!r}.")
+        given = bases.parts if isinstance(bases, InputBases) else bases
+        if given is not None and (not isinstance(given, Sequence) or len(given) != len(parts)):
+            raise ParameterError(f"`{name}` must give one basis per input ({len(parts)}); got "
+                                 f"{bases!r}.")
+        return cls([Basis.from_dict(p, None if given is None else given[i],
+                                    name=f"{name}[{i}]") for i, p in enumerate(parts)], inputs)
+
+    def __eq__(self, other):
+        return (isinstance(other, InputBases) and self.parts == other.parts
+                and self.inputs == other.inputs)
+
+    def __hash__(self):
+        return hash((self.parts, self.inputs))
+
+    def __repr__(self):
+        return "InputBases(" + ", ".join(f"{i}: {p!r}" for i, p in zip(self.inputs, self.parts)) \
+            + ")"
+
+
+def as_input_bases(spec, inputs, name="f_basis"):
+    """One basis per input: an :class:`InputBases`, a list (one per input), or one for all.
+
+    One basis (an int, a :class:`Basis`) applies to every input. With several inputs a list or
+    tuple is always one entry per input (a single basis of several callables is written
+    ``fohw.Basis(...)`` or as a dict).
+    """
+    if isinstance(spec, InputBases):
+        if spec.inputs != tuple(inputs):
+            return InputBases(spec.parts, inputs)
+        return spec
+    if isinstance(spec, (list, tuple)):
+        return InputBases(spec, inputs)
+    one = as_basis(spec, name)
+    return InputBases([one] * len(inputs), inputs)

@@ -1,7 +1,8 @@
 """The linear block of a lagged fractional HW model in the frequency domain: response, static gain, stability.
 
-The paper's model (Eq. 16) and fohw's general class (Eq. 14: a lag ``i_t >= 1`` and an order
-``nu_t`` per term) are polynomials in the lag operator ``q^{-1}`` and in ``(1 - q^{-1})/h``:
+The paper's model (Eq. 16) and fohw's general class (Eq. 14: a lag ``i_t >= 1``, ``>= 0`` for
+input terms, and an order ``nu_t`` per term) are polynomials in the lag operator ``q^{-1}`` and
+in ``(1 - q^{-1})/h``:
 
 .. math:: y = A(q)\\,\\bar g(y) + B(q)\\,\\bar f(u), \\quad
           A(z) = \\sum_t a_t z^{-i_t} \\Big(\\frac{1 - z^{-1}}{h}\\Big)^{\\nu_t}, \\quad
@@ -99,7 +100,8 @@ class LinearBlock:
     a, b : array_like
         Coefficients of the output and input terms.
     a_terms, b_terms : sequence of (int, float)
-        ``(lag, order)`` of each term, lags ``>= 1``, orders ``>= 0``.
+        ``(lag, order)`` of each term, lags ``>= 1`` (``>= 0`` for ``b``: feedthrough), orders
+        ``>= 0``.
     dt : float
         Sampling time ``h``.
     g_slope, f_slope : float, optional
@@ -124,10 +126,11 @@ class LinearBlock:
             raise ParameterError(f"one (lag, order) per coefficient: got {self.a.size} `a` for "
                                  f"{len(self.a_terms)} terms and {self.b.size} `b` for "
                                  f"{len(self.b_terms)} terms.")
-        for i, nu in self.a_terms + self.b_terms:
-            if i < 1 or not np.isfinite(nu) or nu < 0:
-                raise ParameterError(f"a term needs a lag >= 1 and a finite order >= 0; got "
-                                     f"(lag {i}, order {nu}).")
+        for least, terms, branch in ((1, self.a_terms, "output"), (0, self.b_terms, "input")):
+            for i, nu in terms:
+                if i < least or not np.isfinite(nu) or nu < 0:
+                    raise ParameterError(f"an {branch} term needs a lag >= {least} and a finite "
+                                         f"order >= 0; got (lag {i}, order {nu}).")
         self.dt = float(dt)
         self.g_slope = float(g_slope)
         self.f_slope = float(f_slope)
@@ -291,8 +294,9 @@ def linear_block(model):
     """
     inner = getattr(model, "model", model)
     if inner is None:
-        raise ParameterError("the result has no recovered model (an a_i or b_i is exactly zero; see "
-                             "result.message): its linear block is undefined.")
+        raise ParameterError("the result has no recovered model (an a_i or b_i is exactly zero, "
+                             "or several inputs; see result.message): its linear block is "
+                             "undefined.")
     if not hasattr(inner, "structure") or not hasattr(inner, "a"):
         raise ParameterError(f"`model` must be a HammersteinWiener or an identification result; got "
                              f"{type(model).__name__}.")

@@ -30,6 +30,11 @@ class ThetaLayout:
         Number of output (``g``) and input (``f``) basis functions (``>= 1``).
     a_names, b_names : tuple of str, optional
         Names of the terms (default ``a1 … a{na}``, ``b1 … b{nb}``).
+    b_groups : tuple of (str, tuple of str, int), optional
+        Several inputs: per input, its name, the names of its terms (without the input's
+        name) and its number of basis functions. Theta is then ``[q ⊗ a, p_1 ⊗ b_1, …,
+        p_m ⊗ b_m]``; ``nb`` and ``n_f`` are the totals, ``b_names`` the qualified names
+        (``u2.b1``), and entries are named ``u2.p2b1``, the structural ``p`` ``u2.p2``.
 
     Examples
     --------
@@ -51,6 +56,7 @@ class ThetaLayout:
     n_f: int
     a_names: tuple | None = None
     b_names: tuple | None = None
+    b_groups: tuple | None = None
 
     def __post_init__(self):
         for name in ("na", "nb", "n_g", "n_f"):
@@ -62,10 +68,32 @@ class ThetaLayout:
             if len(names) != size:
                 raise DimensionError(f"`{name}` must have {size} entries; got {len(names)}.")
             object.__setattr__(self, name, names)
+        if self.b_groups is not None:
+            groups = tuple((str(g[0]), tuple(str(n) for n in g[1]), check_int(g[2], "n_f",
+                                                                                minimum=1))
+                           for g in self.b_groups)
+            if sum(len(g[1]) for g in groups) != self.nb or \
+                    sum(g[2] for g in groups) != self.n_f:
+                raise DimensionError(f"`b_groups` must add up to nb = {self.nb} terms and n_f = "
+                                     f"{self.n_f} basis functions; got {groups}.")
+            object.__setattr__(self, "b_groups", groups)
+
+    @property
+    def groups(self):
+        """``[(name, term names, n_f, offset in theta), …]`` per input (one group: name "")."""
+        if self.b_groups is None:
+            return [("", self.b_names, self.n_f, self.n_output_params)]
+        out, offset = [], self.n_output_params
+        for name, names, nf in self.b_groups:
+            out.append((name, names, nf, offset))
+            offset += nf * len(names)
+        return out
 
     @property
     def n_params(self) -> int:
-        """Length of theta, ``n = n_g * na + n_f * nb`` (Eq. 20)."""
+        """Length of theta, ``n = n_g * na + n_f * nb`` (Eq. 20; summed over the inputs)."""
+        if self.b_groups is not None:
+            return self.n_g * self.na + sum(nf * len(n) for _, n, nf in self.b_groups)
         return self.n_g * self.na + self.n_f * self.nb
 
     @property
@@ -79,6 +107,11 @@ class ThetaLayout:
         out = []
         for j in range(1, self.n_g + 1):
             out += [(f"q{j}" if j > 1 else "") + a for a in self.a_names]
+        if self.b_groups is not None:
+            for prefix, names, nf, _ in self.groups:
+                for j in range(1, nf + 1):
+                    out += [f"{prefix}." + (f"p{j}" if j > 1 else "") + b for b in names]
+            return tuple(out)
         for j in range(1, self.n_f + 1):
             out += [(f"p{j}" if j > 1 else "") + b for b in self.b_names]
         return tuple(out)
@@ -86,6 +119,11 @@ class ThetaLayout:
     @property
     def model_parameter_names(self) -> tuple[str, ...]:
         """Names of the free structural parameters ``a_i, b_i, q_j (j>1), p_j (j>1)``."""
+        if self.b_groups is not None:
+            return (self.a_names + self.b_names
+                    + tuple(f"{prefix}.p{j}" for prefix, _, nf, _ in self.groups
+                            for j in range(2, nf + 1))
+                    + tuple(f"q{j}" for j in range(2, self.n_g + 1)))
         return (self.a_names + self.b_names
                 + tuple(f"p{j}" for j in range(2, self.n_f + 1))
                 + tuple(f"q{j}" for j in range(2, self.n_g + 1)))
@@ -100,7 +138,8 @@ class ThetaLayout:
         return theta
 
     def to_theta(self, a, b, p, q) -> np.ndarray:
-        """Assemble ``theta = [q ⊗ a, p ⊗ b]``."""
+        """Assemble ``theta = [q ⊗ a, p ⊗ b]`` (one input)."""
+        self._single("to_theta")
         a, b, p, q = self._check_blocks(a, b, p, q)
         return np.concatenate([np.kron(q, a), np.kron(p, b)])
 
@@ -108,8 +147,30 @@ class ThetaLayout:
         """Return theta reshaped as ``(n_g, na)`` and ``(n_f, nb)`` matrices (rows ``q_j a``, ``p_j b``)."""
         theta = self.check_theta(theta)
         k = self.n_output_params
+        if self.b_groups is not None:            # block diagonal over the inputs
+            pb = np.zeros((self.n_f, self.nb))
+            row = col = 0
+            for block in self.input_blocks(theta):
+                pb[row:row + block.shape[0], col:col + block.shape[1]] = block
+                row, col = row + block.shape[0], col + block.shape[1]
+            return theta[:k].reshape(self.n_g, self.na), pb
         return theta[:k].reshape(self.n_g, self.na), theta[k:].reshape(self.n_f, self.nb)
 
+    def input_blocks(self, theta):
+        """The ``(n_f_i, nb_i)`` blocks ``[p_ij b_it]`` of theta, one per input.
+
+        With several inputs :meth:`blocks` gives them as one block-diagonal matrix (the
+        stacked basis signals of every input against every input term).
+        """
+        theta = self.check_theta(theta)
+        return [theta[off:off + nf * len(names)].reshape(nf, len(names))
+                for _, names, nf, off in self.groups]
+
+    def _single(self, what):
+        if self.b_groups is not None:
+            raise ParameterError(f"{what} is for a single input; this layout has "
+                                 f"{len(self.b_groups)} inputs (a, b_i, p_i, q: "
+                                 "recover_vector, theta_of_model_vector).")
     def recover(self, theta):
         """Recover ``a, b, p, q`` from theta by Eqs. (39)–(40).
 
@@ -122,6 +183,7 @@ class ThetaLayout:
             An ``a_i`` (or ``b_i``) is exactly zero while ``q`` (``p``) has more than one entry,
             so Eq. (39) (Eq. (40)) is undefined.
         """
+        self._single("recover (Eqs. 39-40 into a, b, p, q)")
         qa, pb = self.blocks(theta)
         a, b = qa[0].copy(), pb[0].copy()
         if self.n_g > 1 and np.any(a == 0):
@@ -136,6 +198,11 @@ class ThetaLayout:
 
     def recover_vector(self, theta) -> np.ndarray:
         """``[a, b, p_2.., q_2..]`` from theta (Eqs. 39–40), in :attr:`model_parameter_names` order."""
+        if self.b_groups is not None:
+            qa, _ = self.blocks(theta)
+            a, q = _ratio_recovery(qa, "a", "q", "Eq. (39)")
+            bp = [_ratio_recovery(block, "b", "p", "Eq. (40)") for block in self.input_blocks(theta)]
+            return np.concatenate([a] + [b for b, _ in bp] + [p[1:] for _, p in bp] + [q[1:]])
         a, b, p, q = self.recover(theta)
         return np.concatenate([a, b, p[1:], q[1:]])
 
@@ -155,6 +222,8 @@ class ThetaLayout:
                [ 0.,  0.,  1.],
                [-1.,  2.,  0.]])
         """
+        if self.b_groups is not None:
+            return self._group_recover_jacobian(theta)
         qa, pb = self.blocks(theta)
         a, b, p, q = self.recover(theta)
         na, nb, k = self.na, self.nb, self.n_output_params
@@ -179,9 +248,40 @@ class ThetaLayout:
             rows.append(r)
         return np.array(rows)
 
+    def _group_recover_jacobian(self, theta):
+        qa, _ = self.blocks(theta)
+        a = qa[0]
+        na = self.na
+        rows = []
+
+        def unit(i):
+            r = np.zeros(self.n_params)
+            r[i] = 1.0
+            return r
+        rows += [unit(i) for i in range(na)]
+        groups, blocks = self.groups, self.input_blocks(theta)
+        for (_, names, _, off) in groups:
+            rows += [unit(off + i) for i in range(len(names))]
+        for (_, names, nf, off), pb in zip(groups, blocks):
+            nb, b = len(names), pb[0]
+            for j in range(1, nf):
+                r = np.zeros(self.n_params)
+                r[off + j * nb:off + (j + 1) * nb] = 1.0 / (nb * b)
+                r[off:off + nb] = -pb[j] / (nb * b**2)
+                rows.append(r)
+        for j in range(1, self.n_g):
+            r = np.zeros(self.n_params)
+            r[j * na:(j + 1) * na] = 1.0 / (na * a)
+            r[:na] = -qa[j] / (na * a**2)
+            rows.append(r)
+        return np.array(rows)
+
     @property
     def n_model_params(self) -> int:
         """Number of free structural parameters, ``na + nb + (n_f - 1) + (n_g - 1)``."""
+        if self.b_groups is not None:
+            return (self.na + self.nb + sum(nf - 1 for _, _, nf in self.b_groups)
+                    + self.n_g - 1)
         return self.na + self.nb + self.n_f - 1 + self.n_g - 1
 
     def split_model_vector(self, eta):
@@ -194,6 +294,14 @@ class ThetaLayout:
         if eta.shape[0] != self.n_model_params:
             raise DimensionError(f"`eta` must have {self.n_model_params} entries "
                                  f"{self.model_parameter_names}; got {eta.shape[0]}.")
+        if self.b_groups is not None:       # a, [b_i], [p_i], q
+            na, pos = self.na, self.na + self.nb
+            b, p, start = [], [], na
+            for _, names, nf in self.b_groups:
+                b.append(eta[start:start + len(names)])
+                p.append(np.r_[1.0, eta[pos:pos + nf - 1]])
+                start, pos = start + len(names), pos + nf - 1
+            return eta[:na], b, p, np.r_[1.0, eta[pos:]]
         na, nb, nf = self.na, self.nb, self.n_f
         a, b = eta[:na], eta[na:na + nb]
         p = np.r_[1.0, eta[na + nb:na + nb + nf - 1]]
@@ -202,6 +310,9 @@ class ThetaLayout:
 
     def theta_of_model_vector(self, eta) -> np.ndarray:
         """``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20) from ``eta = [a, b, p_2.., q_2..]``."""
+        if self.b_groups is not None:
+            a, b, p, q = self.split_model_vector(eta)
+            return np.concatenate([np.kron(q, a)] + [np.kron(pi, bi) for pi, bi in zip(p, b)])
         return self.to_theta(*self.split_model_vector(eta))
 
     def theta_jacobian(self, eta) -> np.ndarray:
@@ -226,6 +337,8 @@ class ThetaLayout:
                [0.5, 0. , 0.5],
                [0. , 1. , 0. ]])
         """
+        if self.b_groups is not None:
+            return self._group_theta_jacobian(eta)
         a, b, p, q = self.split_model_vector(eta)
         na, nb, nf, ng, k = self.na, self.nb, self.n_f, self.n_g, self.n_output_params
         jac = np.zeros((self.n_params, self.n_model_params))
@@ -235,6 +348,22 @@ class ThetaLayout:
             jac[k + j * nb:k + (j + 1) * nb, na + nb + j - 1] = b
         for j in range(1, ng):
             jac[j * na:(j + 1) * na, na + nb + nf - 1 + j - 1] = a
+        return jac
+
+    def _group_theta_jacobian(self, eta):
+        a, b, p, q = self.split_model_vector(eta)
+        na, ng, k = self.na, self.n_g, self.n_output_params
+        jac = np.zeros((self.n_params, self.n_model_params))
+        jac[:k, :na] = np.kron(q[:, None], np.eye(na))
+        col_b, col_p = na, na + self.nb
+        for (_, names, nf, off), bi, pi in zip(self.groups, b, p):
+            nb = len(names)
+            jac[off:off + nf * nb, col_b:col_b + nb] = np.kron(pi[:, None], np.eye(nb))
+            for j in range(1, nf):
+                jac[off + j * nb:off + (j + 1) * nb, col_p + j - 1] = bi
+            col_b, col_p = col_b + nb, col_p + nf - 1
+        for j in range(1, ng):
+            jac[j * na:(j + 1) * na, col_p + j - 1] = a
         return jac
 
     def rank_one_recovery(self, theta):
@@ -253,6 +382,14 @@ class ThetaLayout:
             The first row of a block's leading singular vector is zero (``q_1 = 1`` cannot be
             imposed: the first basis function does not enter that block).
         """
+        if self.b_groups is not None:
+            qa, _ = self.blocks(theta)
+            pairs = [_rank_one(block, name) for block, name in
+                     [(qa, "output (q ⊗ a)")] + [(blk, f"input {g[0]!r} (p ⊗ b)") for blk, g in
+                                                 zip(self.input_blocks(theta), self.b_groups)]]
+            (a, q), rest = pairs[0], pairs[1:]
+            return np.concatenate([a] + [b for b, _ in rest] + [p[1:] for _, p in rest]
+                                  + [q[1:]])
         out = []
         for block, name in zip(self.blocks(theta), ("output (q ⊗ a)", "input (p ⊗ b)")):
             u, s, vt = np.linalg.svd(block, full_matrices=False)
@@ -275,3 +412,25 @@ class ThetaLayout:
             if vec.shape[0] != size:
                 raise DimensionError(f"`{name}` must have {size} entries; got {vec.shape[0]}.")
         return a, b, p, q
+
+
+def _rank_one(block, name):
+    """``(coefficients, weights)`` of the best rank-one fit of a block, first weight 1."""
+    u, s, vt = np.linalg.svd(block, full_matrices=False)
+    lead = u[0, 0]
+    if lead == 0.0 or s[0] == 0.0:
+        raise ParameterError(f"cannot normalise the {name} block of theta to a first "
+                             f"coefficient of 1: its rank-one part has a zero first row "
+                             f"(block {block.tolist()}).")
+    return s[0] * lead * vt[0], u[:, 0] / lead
+
+
+def _ratio_recovery(block, coef, weight, eq):
+    """Eqs. (39)-(40) on one block: first row, and the mean ratios of the others to it."""
+    first = block[0].copy()
+    if block.shape[0] > 1 and np.any(first == 0):
+        raise ParameterError(f"cannot recover {weight} by {eq}: an entry of `{coef}` is zero "
+                             f"({first}).")
+    w = np.ones(block.shape[0])
+    w[1:] = (block[1:] / first).mean(axis=1)
+    return first, w

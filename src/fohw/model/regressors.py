@@ -19,7 +19,7 @@ import numpy as np
 import scipy.fft
 
 from .._types import ArrayLike, PairLike
-from .._validation import check_array, check_int, check_same_length, check_scalar
+from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
 from .basis import BasisLike
 from .gl import (
@@ -173,7 +173,8 @@ class RegressorBuilder:
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Input and output records, same length, finite (deviations from the operating point).
+        Input and output records, same length, finite (deviations from the operating point);
+        ``u`` of shape ``(N, m)`` for a structure with ``m`` inputs.
     na, nb : int
         Output and input lag orders (``>= 1``); ``N`` must exceed both.
     f_basis, g_basis : Basis, int or callables
@@ -182,6 +183,8 @@ class RegressorBuilder:
         The model class (:class:`fohw.Structure`); default the paper's commensurate model.
     structure : Structure, optional
         Instead of ``na … dt``.
+    nk : int, optional
+        Input delay (default 1; 0: direct feedthrough): input lags ``nk … nk + nb - 1``.
 
     Notes
     -----
@@ -205,29 +208,45 @@ class RegressorBuilder:
     """
 
     def __init__(self, u, y, *, na=None, nb=None, f_basis=None, g_basis=None, orders=None,
-                 offset=False, past="rest", dt=1.0, structure=None):
-        u = check_array(u, "u")
+                 offset=False, past="rest", dt=1.0, structure=None, nk=1):
         y = check_array(y, "y")
-        check_same_length(u, y, "u", "y")
         if structure is None:
             na = check_int(na, "na", minimum=1)
-            nb = check_int(nb, "nb", minimum=1)
+            m = np.shape(u)[1] if np.ndim(u) == 2 else 1
+            inputs = tuple(f"u{i}" for i in range(1, m + 1)) if m > 1 else None
+            if inputs is None:
+                nb = check_int(nb, "nb", minimum=1)
             structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
-                                       orders=orders, offset=offset, past=past, dt=dt)
+                                       orders=orders, offset=offset, past=past, dt=dt, nk=nk,
+                                       inputs=inputs)
+        u = check_inputs(u, structure.n_inputs)
+        check_same_length(u, y, "u", "y")
         self.structure = structure
         na, nb = structure.na, structure.nb
         n = y.shape[0]
-        if n <= max(na, nb):
+        if n <= structure.max_lag:
+            delay = f", nk={structure.nk}" if structure.nk != 1 else ""
             raise DimensionError(f"the record must be longer than the lags: got {n} samples for "
-                                 f"na={na}, nb={nb} (need at least {max(na, nb) + 1}).")
+                                 f"na={na}, nb={nb}{delay} (need at least "
+                                 f"{structure.max_lag + 1}).")
         self.f_basis, self.g_basis = structure.f_basis, structure.g_basis
         self.layout = structure.layout
         self.n_samples = n
         self.u, self.y = u, y
-        # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u).
-        self.signals = np.vstack([_evaluate(self.g_basis, y, "y"), _evaluate(self.f_basis, u, "u")])
+        # Stacked basis signals: g_1(y), …, g_nq(y), f_1(u), …, f_np(u) (each input's in turn).
+        if structure.n_inputs > 1:
+            f_signals = [_evaluate(part, u[:, i], f"u[:, {i}]")
+                         for i, part in enumerate(self.f_basis.parts)]
+            self.signal_inputs = [i for i, part in enumerate(self.f_basis.parts)
+                                  for _ in range(len(part))]
+            input_lags = [b for b, part in zip(nb, self.f_basis.parts) for _ in range(len(part))]
+        else:
+            f_signals = [_evaluate(self.f_basis, u, "u")]
+            self.signal_inputs = [0] * len(self.f_basis)
+            input_lags = [nb] * len(self.f_basis)
+        self.signals = np.vstack([_evaluate(self.g_basis, y, "y")] + f_signals)
         self._n_g = len(self.g_basis)
-        self.lags = [na] * len(self.g_basis) + [nb] * len(self.f_basis)
+        self.lags = [na] * len(self.g_basis) + input_lags
         self._convolution = CausalConvolution(self.signals)
         self._row_convolutions = None
         self._window_kernel = WindowKernel(self.lags)
@@ -381,7 +400,10 @@ class RegressorBuilder:
                     (range(self._n_g, self.signals.shape[0]), struct.orders.input, in_nu, 0))
         for signals, terms, nus, past_index in branches:
             for s in signals:
+                own = 0 if past_index else self.signal_inputs[s - self._n_g]
                 for term, nu in zip(terms, nus):
+                    if term.input != own:          # another input's term (several inputs)
+                        continue
                     i = term.lag
                     if which is None:
                         extra = (None if levels is None or levels[s] == 0.0 else
@@ -457,7 +479,7 @@ class RegressorBuilder:
 def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, na: int, nb: int,
                        f_basis: BasisLike, g_basis: BasisLike, orders: OrdersLike | None = None,
                        offset: bool = False, past: str | PairLike = "rest",
-                       dt: float = 1.0) -> np.ndarray:
+                       dt: float = 1.0, nk: int = 1) -> np.ndarray:
     """Information matrix of a fractional-order Hammerstein–Wiener record.
 
     Parameters
@@ -474,6 +496,9 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     orders, offset, past, dt : optional
         The model class (:class:`fohw.Orders`, :class:`fohw.Structure`); default the paper's
         commensurate model.
+    nk : int, optional
+        Input delay (default 1): the input columns are ``(Delta^nu f_j(u))[k - i]`` for
+        ``i = nk … nk + nb - 1``; ``nk = 0`` includes the present input (direct feedthrough).
 
     Returns
     -------
@@ -500,4 +525,4 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     True
     """
     return RegressorBuilder(u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis, orders=orders,
-                            offset=offset, past=past, dt=dt).matrix(alpha)
+                            offset=offset, past=past, dt=dt, nk=nk).matrix(alpha)

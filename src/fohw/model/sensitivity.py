@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_array
+from .._validation import check_array, check_inputs
 from ..exceptions import DimensionError
 from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
@@ -133,7 +133,7 @@ def _feedback_problem(structure, linear, params, u):
                              f"{type(structure).__name__}.")
     linear = check_array(linear, "linear")
     params = np.atleast_1d(np.asarray(params, dtype=np.float64))
-    u = check_array(u, "u")
+    u = check_inputs(u, structure.n_inputs)
     y = simulate_predictor(structure, linear, params, u)
     builder = RegressorBuilder(u, y, structure=structure)
     E = builder.jacobian(linear, params)

@@ -22,7 +22,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._types import ArrayLike, PairLike, RandomStateLike
-from .._validation import check_array, check_random_state, check_same_length, check_scalar
+from .._validation import (
+    check_array,
+    check_inputs,
+    check_random_state,
+    check_same_length,
+    check_scalar,
+)
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
@@ -32,7 +38,7 @@ from .system import HammersteinWiener, check_pair
 
 __all__ = ["simulate", "simulate_predictor", "equation_noise", "free_run", "forcing", "recursion",
            "accumulators", "output_terms", "Accumulators", "apply_output_map",
-           "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
+           "check_input_point", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
 
 #: Below this record length the simulator runs the recursion directly (one dot product per
 #: output signal and sample); above it, by divide and conquer (:func:`recursion`).
@@ -65,7 +71,8 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         then given by ``params``.
     u : array_like, shape (N,)
         Input signal, finite, in the model's units (its operating point is subtracted inside
-        and the output's added back).
+        and the output's added back). Shape ``(N, m)`` for a structure (or result) with ``m``
+        inputs (:attr:`Structure.n_inputs`; its ``operating_point`` then ``((u0_1, …), y0)``).
     params : array_like or dict, optional
         With a Structure only (and required): its linear parameters, then its nonlinear ones
         (:attr:`Structure.linear_names` then :attr:`Structure.nonlinear_names`: theta in the
@@ -241,7 +248,7 @@ def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0,
     qa, pb = layout.blocks(linear[:layout.n_params])
     offset = float(linear[layout.n_params]) if structure.offset else 0.0
     values, past = structure.split_nonlinear(nonlinear)
-    u = check_array(u, "u")
+    u = check_inputs(u, structure.n_inputs)
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
     Q, A = _output_representation(qa)
     hmap = structure.output_map
@@ -250,8 +257,10 @@ def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0,
         if history is not None:            # the recursion's memory holds z, not y = h(z)
             u_hist, y_hist = _check_history(history)
             history = (u_hist, hmap.inverse(y_hist, eta))
+    point = (check_pair(operating_point, "operating_point") if structure.n_inputs == 1 else
+             check_input_point(operating_point, structure.n_inputs))
     z = free_run(structure, Q, A, qa, pb, values, u, v, offset=offset, past=past,
-                 operating_point=check_pair(operating_point, "operating_point"),
+                 operating_point=point,
                  threshold=_check_threshold(divergence_threshold), history=history)
     return z if hmap is None else apply_output_map(hmap, eta, z)
 
@@ -519,13 +528,13 @@ def free_run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, opera
     in_terms = [(term.lag, nu) for term, nu in zip(structure.orders.input, in_nu)]
     n_hist, y_fixed = 0, None
     if history is not None:
-        u_hist, y_hist = _check_history(history)
+        u_hist, y_hist = _check_history(history, structure.n_inputs)
         n_hist = u_hist.shape[0]
         u = np.r_[u_hist, u]
         v = np.r_[np.zeros(n_hist), v]
         y_fixed = y_hist - y0 if y0 != 0.0 else y_hist
-    if u0 != 0.0:
-        u = u - u0
+    if np.any(np.asarray(u0) != 0.0):
+        u = u - np.asarray(u0)
     w = forcing(pb, in_terms, qa, out_terms, structure.f_basis, structure.g_basis, u, v,
                 structure.dt, offset, past)
     if threshold is None:
@@ -592,13 +601,29 @@ def equation_noise(n, noise=None, noise_std=0.0, random_state=None):
     return np.zeros(n)
 
 
-def _check_history(history):
+def check_input_point(operating_point, n_inputs):
+    """``(u0, y0)`` of a model with several inputs: ``u0`` one level per input (a tuple)."""
+    try:
+        u0, y0 = operating_point
+    except (TypeError, ValueError):
+        raise ParameterError(f"`operating_point` must be a pair (u0, y0); got "
+                             f"{operating_point!r}.") from None
+    if np.ndim(u0) == 0:
+        u0 = [check_scalar(u0, "operating_point[0]")] * n_inputs
+    u0 = check_array(u0, "operating_point[0]")
+    if u0.shape[0] != n_inputs:
+        raise DimensionError(f"`operating_point[0]` must give {n_inputs} input levels (one per "
+                             f"input); got {u0.shape[0]}.")
+    return tuple(float(x) for x in u0), check_scalar(y0, "operating_point[1]")
+
+
+def _check_history(history, n_inputs=1):
     try:
         u_hist, y_hist = history
     except (TypeError, ValueError):
         raise ParameterError("`history` must be a pair (u_past, y_past) of measured records; "
                              f"got {type(history).__name__}.") from None
-    u_hist = check_array(u_hist, "history u")
+    u_hist = check_inputs(u_hist, n_inputs, "history u")
     y_hist = check_array(y_hist, "history y")
     check_same_length(u_hist, y_hist, "history u", "history y")
     return u_hist, y_hist

@@ -36,7 +36,7 @@ import numpy as np
 
 from .._validation import check_scalar
 from ..exceptions import DimensionError, ParameterError
-from .basis import Basis, as_basis
+from .basis import Basis, InputBases, as_basis, as_input_bases
 from .orders import Orders
 from .output_map import SeriesMap, as_output_map, output_map_from_dict
 from .params import ThetaLayout
@@ -86,7 +86,14 @@ class Structure:
     def __post_init__(self):
         if not isinstance(self.orders, Orders):
             raise ParameterError(f"`orders` must be an Orders; got {type(self.orders).__name__}.")
-        object.__setattr__(self, "f_basis", as_basis(self.f_basis, "f_basis"))
+        if self.orders.n_inputs > 1:
+            object.__setattr__(self, "f_basis", as_input_bases(self.f_basis, self.orders.inputs))
+            if self.past != "rest":
+                raise ParameterError(f"`past` = {self.past!r} is for a single input; a model "
+                                     f"with several inputs ({list(self.orders.inputs)}) starts "
+                                     "from rest (past='rest').")
+        else:
+            object.__setattr__(self, "f_basis", as_basis(self.f_basis, "f_basis"))
         object.__setattr__(self, "g_basis", as_basis(self.g_basis, "g_basis"))
         if not isinstance(self.offset, bool):
             raise ParameterError(f"`offset` must be True or False; got {self.offset!r}.")
@@ -98,10 +105,15 @@ class Structure:
 
     @classmethod
     def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0,
-             output_map=None):
-        """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …)."""
-        return cls(Orders.resolve(orders, na=na, nb=nb), f_basis, g_basis, offset, past, dt,
-                   output_map)
+             nk=1, inputs=None, output_map=None):
+        """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …).
+
+        ``nk`` is the input delay: the input terms sit at lags ``nk … nk + nb - 1``. Several
+        inputs: ``inputs`` names them, and ``nb``, ``nk`` and ``f_basis`` are one per input
+        (a list) or one for all.
+        """
+        return cls(Orders.resolve(orders, na=na, nb=nb, nk=nk, inputs=inputs), f_basis, g_basis,
+                   offset, past, dt, output_map)
 
     @property
     def inner(self) -> Structure:
@@ -124,9 +136,24 @@ class Structure:
     @cached_property
     def layout(self) -> ThetaLayout:
         """The theta layout, with the term names of :attr:`orders`."""
+        groups = None
+        if self.orders.n_inputs > 1:
+            groups = tuple((name, names, len(part)) for (name, names), part
+                           in zip(self.orders.input_groups(), self.f_basis.parts))
         return ThetaLayout(na=len(self.orders.output), nb=len(self.orders.input),
                            n_g=len(self.g_basis), n_f=len(self.f_basis),
-                           a_names=self.orders.a_names, b_names=self.orders.b_names)
+                           a_names=self.orders.a_names, b_names=self.orders.b_names,
+                           b_groups=groups)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs (1: the paper's single-input model)."""
+        return self.orders.n_inputs
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Names of the inputs when there are several (``()`` for one)."""
+        return self.orders.inputs
 
     @property
     def na(self) -> int:
@@ -135,12 +162,22 @@ class Structure:
 
     @property
     def nb(self) -> int:
-        """Largest input lag."""
+        """Number of input lags (``nk … nk + nb - 1``)."""
         return self.orders.nb
 
     @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 in the paper; 0: direct feedthrough)."""
+        return self.orders.nk
+
+    @property
+    def max_lag(self) -> int:
+        """Largest lag of either branch: a record must be longer."""
+        return self.orders.max_lag
+
+    @property
     def is_paper_model(self) -> bool:
-        """The paper's Eq. (16): commensurate orders, no offset, rest before 0, ``dt = 1``."""
+        """The paper's Eq. (16): commensurate orders (input lags from 1), no offset, rest, ``dt = 1``."""
         return (self.orders.is_commensurate and not self.offset and self.past == "rest"
                 and self.dt == 1.0 and self.output_map is None)
 
@@ -267,8 +304,12 @@ class Structure:
             raise ParameterError(f"`structure` must have exactly the fields {sorted(keys)} (and "
                                  f"optionally 'output_map'); got "
                                  f"{sorted(d) if isinstance(d, dict) else d!r}.")
-        return cls(Orders.from_dict(d["orders"]),
-                   Basis.from_dict(d["f_basis"], f_basis, name="f_basis"),
+        orders = Orders.from_dict(d["orders"])
+        if orders.n_inputs > 1:
+            fb = InputBases.from_dict(d["f_basis"], orders.inputs, f_basis, name="f_basis")
+        else:
+            fb = Basis.from_dict(d["f_basis"], f_basis, name="f_basis")
+        return cls(orders, fb,
                    Basis.from_dict(d["g_basis"], g_basis, name="g_basis"),
                    offset=d["offset"], past=d["past"], dt=d["dt"],
                    output_map=None if "output_map" not in d else output_map_from_dict(
@@ -287,6 +328,8 @@ class Structure:
     def describe(self) -> str:
         """One line: the terms and their orders, offset, past and dt."""
         parts = [repr(self.orders)]
+        if self.nk != 1:
+            parts.append(f"nk={self.nk}")
         if self.offset:
             parts.append("offset")
         if self.past != "rest":

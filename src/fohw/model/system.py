@@ -65,6 +65,10 @@ class HammersteinWiener:
     operating_point : (float, float), optional
         ``(u0, y0)``: the model acts on ``u - u0`` and produces ``y - y0``; :func:`fohw.simulate`
         subtracts ``u0`` and adds ``y0``. Default ``(0, 0)``.
+    nk : int, optional
+        Input delay in samples, ``>= 0``: ``b`` acts at lags ``nk … nk + nb - 1`` (``nk = 0``:
+        direct feedthrough, ``b[0]`` multiplies ``fbar(u)(k)``). Default 1 (the paper's lags
+        ``1 … nb``), or the lags of an :class:`Orders` given as ``orders``.
 
     Attributes
     ----------
@@ -96,7 +100,7 @@ class HammersteinWiener:
                  alpha: float | ArrayLike | None = None, f_basis: BasisLike | None = None,
                  g_basis: BasisLike | None = None, *, orders: OrdersLike | None = None,
                  dt: float = 1.0, offset: float = 0.0, past: PairLike = (0.0, 0.0),
-                 operating_point: PairLike = (0.0, 0.0)):
+                 operating_point: PairLike = (0.0, 0.0), nk: int | None = None):
         a = check_array(a, "a")
         b = check_array(b, "b")
         p = check_array(p, "p")
@@ -113,7 +117,7 @@ class HammersteinWiener:
         if len(g_basis) != q.shape[0]:
             raise DimensionError(f"`q` must have one entry per g-basis function ({len(g_basis)});"
                                  f" got {q.shape[0]}.")
-        terms = Orders.infer(orders, a.shape[0], b.shape[0])
+        terms = Orders.infer(orders, a.shape[0], b.shape[0], nk)
         if len(terms.free) == 1 and np.ndim(alpha) == 0 and not isinstance(alpha, dict) \
                 and alpha is not None:
             alpha = {terms.free[0]: check_alpha(alpha, lower=ALPHA_BOUNDS[0],
@@ -149,6 +153,11 @@ class HammersteinWiener:
     def nb(self) -> int:
         """Number of input terms (lags, for the paper's model)."""
         return self.layout.nb
+
+    @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag (1 for the paper's model; 0: direct feedthrough)."""
+        return self.structure.nk
 
     @property
     def theta(self) -> np.ndarray:
@@ -199,7 +208,7 @@ class HammersteinWiener:
     def from_theta(cls, theta: ArrayLike, alpha: float | ArrayLike | None, *, na: int, nb: int,
                    f_basis: BasisLike, g_basis: BasisLike, orders: OrdersLike | None = None,
                    dt: float = 1.0, offset: float = 0.0, past: PairLike = (0.0, 0.0),
-                   operating_point: PairLike = (0.0, 0.0)) -> HammersteinWiener:
+                   operating_point: PairLike = (0.0, 0.0), nk: int = 1) -> HammersteinWiener:
         """Build a model from a parameter vector by Eqs. (39)–(40).
 
         Parameters
@@ -214,6 +223,8 @@ class HammersteinWiener:
             Input and output basis functions.
         orders, dt, offset, past, operating_point
             As for the constructor (``orders`` with the lags ``na``, ``nb``).
+        nk : int, optional
+            Input delay (default 1): input lags ``nk … nk + nb - 1``.
 
         Returns
         -------
@@ -234,7 +245,7 @@ class HammersteinWiener:
         array([1.  , 0.7 , 0.35])
         """
         structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
-                                   orders=orders, dt=dt)
+                                   orders=orders, dt=dt, nk=nk)
         a, b, p, q = structure.layout.recover(theta)
         return cls(a, b, p, q, alpha, f_basis=structure.f_basis, g_basis=structure.g_basis,
                    orders=structure.orders, dt=dt, offset=offset, past=past,
