@@ -239,10 +239,22 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     y_scale = rms_scale(y)
 
     residual, jacobian = crit.scaled(scale, y_scale)
+    keep = kept_above_zero(s, n_lin, lower)
     z, status, ls = bounded_least_squares(residual, x0 / scale, jac=jacobian,
                                           lower=bound_lo / scale, upper=bound_hi / scale,
-                                          keep=kept_above_zero(s, n_lin, lower),
-                                          max_nfev=max_nfev)
+                                          keep=keep, max_nfev=max_nfev)
+    pinned = keep & (x0 == bound_lo)
+    if np.any(pinned) and not float(ls.fun @ ls.fun) * y_scale ** 2 <= sse0:
+        # An order started exactly on a lower bound of 0 with estimated past levels: the model
+        # jumps at 0 (kept_above_zero) and the solver starts 1e-10 inside its bounds, so it
+        # searched from the nu -> 0+ model, not the one it was given, and ended above the
+        # start (cascaded tanks, per-lag from its orders-0 fit: 86.8 -> 4227). Search again
+        # with those orders held at 0 and keep the better of the two.
+        again = _least_squares_pinned(residual, jacobian, x0 / scale, pinned,
+                                      lower=bound_lo / scale, upper=bound_hi / scale,
+                                      keep=keep, max_nfev=max_nfev)
+        if float(again[2].fun @ again[2].fun) < float(ls.fun @ ls.fun):
+            z, status, ls = again
     x = z * scale
     fun = ls.fun * y_scale
     sse = float(fun @ fun)
@@ -282,6 +294,33 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
                   status=status, message=message, covariance=cov, noise_variance=s2,
                   nit=int(ls.njev), nfev=crit.n_simulations, at_lower=active < 0,
                   at_upper=active > 0, start_sse=sse0, stuck=stuck)
+
+
+def _least_squares_pinned(residual, jacobian, z0, pinned, *, lower, upper, keep, max_nfev):
+    """:func:`bounded_least_squares` over the entries not ``pinned`` (those stay at ``z0``).
+
+    The solver's result has ``x``, ``jac`` and ``active_mask`` over every entry again, the
+    pinned ones reported active on their lower bound.
+    """
+    if not np.any(pinned):
+        return bounded_least_squares(residual, z0, jac=jacobian, lower=lower, upper=upper,
+                                     keep=keep, max_nfev=max_nfev)
+    free = ~pinned
+
+    def full(zf):
+        z = z0.copy()
+        z[free] = zf
+        return z
+
+    zf, status, ls = bounded_least_squares(
+        lambda zf: residual(full(zf)), z0[free], jac=lambda zf: jacobian(full(zf))[:, free],
+        lower=lower[free], upper=upper[free], keep=keep[free], max_nfev=max_nfev)
+    jac = np.zeros((ls.fun.shape[0], z0.shape[0]))
+    jac[:, free] = ls.jac
+    active = np.full(z0.shape[0], -1, dtype=int)
+    active[free] = ls.active_mask
+    ls.x, ls.jac, ls.active_mask = full(ls.x), jac, active
+    return full(zf), status, ls
 
 
 def _parameter_scale(x0, structure, u, y):
