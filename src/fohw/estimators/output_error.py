@@ -76,7 +76,8 @@ class OutputErrorOptions(MethodOptions):
         Local searches of the default chain (:mod:`fohw.estimators.starts`, used when
         ``start`` is None and the class has free orders): the candidates (the nested integer
         models, the equation-error estimate, a scan of the orders) are ranked by their
-        free-run criterion and the best ``n_starts`` searched (on ``executor`` when
+        free-run criterion; the best is searched, then (``n_starts >= 2``) the
+        equation-error estimate whatever its rank, then the next best (on ``executor`` when
         :func:`fohw.identify` has one); the best result is kept. Default 2. The fit never
         ends above the nested integer model's criterion, whatever ``n_starts``.
     """

@@ -4,7 +4,8 @@ A free-run (simulation-error) criterion has local minima; which one a local sear
 depends on where it starts. The default chain of ``method="output_error"`` (the standard
 initialisation of block-oriented identification, as MATLAB's ``nlhw`` and PNLSS start from a
 linear approximation) gathers candidate starts, ranks them by their free-run criterion and runs
-the local search from the best ``n_starts`` of them:
+the local search from ``n_starts`` of them: the best, the equation-error estimate whatever its
+rank (a start's criterion does not tell its basin), then the next best:
 
 * **the nested integer model**: the same structure with every free order fixed at 0 (the class
   contains it: commensurate, mixed and per-lag orders at 0, the mixed class's fractional
