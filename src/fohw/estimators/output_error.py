@@ -46,7 +46,7 @@ from ._common import (
 )
 from .options import N_GRID, Anything, Integer, Method, MethodOptions
 from .profile import parameter_covariance
-from .starts import AGREEMENT_RTOL, Start, agreement, multi_start
+from .starts import AGREEMENT_RTOL, Start, agreement, multi_start, nested_structure
 from .varpro import VarproOptions
 from .varpro_search import separable_least_squares
 
@@ -505,6 +505,9 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
              "status": None if f is None else f.status.name,
              "nfev": None if f is None else f.nfev} for c, f in searches]
         details["n_starts_agreed"] = agreed
+        integer = chain.nested.get(nested_structure(s, 0.0))
+        if integer is not None:
+            details["integer_sse"] = float(integer[2])
         chain_note = (f" Default chain: {n_candidates} candidate starts (nested integer models, "
                       f"the equation-error estimate, a scan of the orders), the best "
                       f"{len(searches)} searched; {agreed} of {len(done)} ended within "
