@@ -191,3 +191,24 @@ def test_a_search_never_ends_above_its_start_at_order_0_with_estimated_past_leve
                            dict.fromkeys(full.orders.free, 0.0))
     res = _fit(e.u, e.y, orders="per_lag", start=(linear, params), **kw)
     assert _sse(res) <= _sse(zero) * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("method", ["varpro", "structured"])
+@pytest.mark.parametrize("record", ["tanks", "robot_arm"])
+def test_equation_error_classes_at_least_as_good_as_their_integer_model(method, record):
+    # Item 1 for the equation-error methods: their criterion J of every class <= the orders-0
+    # J of the same candidate (1e-6: the solvers' relative tolerances are 1e-8 and below).
+    if record == "tanks":
+        e = fohw.datasets.cascaded_tanks().estimation
+        u, y, kw = e.u[:768], e.y[:768], dict(offset=True, operating_point="mean", dt=4.0)
+    else:
+        r = fohw.datasets.robot_arm()
+        u, y, kw = r.u[:384], r.y[:384], {}
+    bad = []
+    for cand in GRID:
+        zero = _fit(u, y, orders=0, method=method, **cand, **kw).J
+        for orders in ("commensurate", "mixed", "per_lag"):
+            got = _fit(u, y, orders=orders, method=method, **cand, **kw).J
+            if got > zero * (1 + 1e-6):
+                bad.append((cand, orders, got, zero))
+    assert not bad
