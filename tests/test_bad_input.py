@@ -64,6 +64,11 @@ def _result_file(tmp, **change):
     return str(path)
 
 
+def _past_result():
+    """A fit with past='estimate' (its levels belong to its estimation record)."""
+    return fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1, past="estimate")
+
+
 def _nan_result():
     import dataclasses
 
@@ -518,6 +523,84 @@ API = [
      lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0]}], dt=0.1,
                                          num_orders=[0.0], validation=1),
      fohw.ParameterError, "`validation` = 1 (an int: a number of samples)"),
+    # issue 24 (initial)
+    ("IdentificationResult.simulate", "a past='estimate' fit without `initial`",
+     lambda t: _past_result().simulate(U), fohw.ParameterError,
+     "its levels (u_past, y_past) = (0.508501, 0.737396) are those before the *estimation* "
+     "record"),
+    ("compare", "a past='estimate' fit without `initial`",
+     lambda t: fohw.compare(_past_result(), U, U**3), fohw.ParameterError,
+     "Say which initial state to start from: initial='fitted'"),
+    ("IdentificationResult.simulate", "initial='estimate' without `y`",
+     lambda t: _result().simulate(U, initial="estimate"), fohw.ParameterError,
+     "initial='estimate' fits the record's initial state to its output: pass the measured "
+     "output as `y`"),
+    ("IdentificationResult.simulate", "`y` with initial='rest' (it would be ignored)",
+     lambda t: _result().simulate(U, initial="rest", y=U**3), fohw.ParameterError,
+     "`y` is used only by initial='estimate'"),
+    ("initial_state", "initial=('estimate', 2) on a record of 4 samples (4 unknowns)",
+     lambda t: fohw.initial_state(_result(), U[:4], Y[:4], ("estimate", 2)),
+     fohw.DimensionError, "fits 4 unknowns (u_past, y_past and 2 past outputs) to the record's "
+     "output, which has 4 sample(s): it needs more samples than unknowns"),
+    ("compare", "initial='estimate' on a record of 2 samples",
+     lambda t: fohw.compare(_result(), U[:2], Y[:2], initial="estimate"),
+     fohw.DimensionError, "fits 2 unknowns (u_past, y_past) to the record's output, which has "
+     "2 sample(s)"),
+    ("compare", "an unknown initial state 'zero'",
+     lambda t: fohw.compare(_result(), U, Y, initial="zero"), fohw.ParameterError,
+     "`initial` must be one of ('rest', 'fitted', 'estimate'), ('estimate', n), (u_hist, "
+     "y_hist) or an InitialState; got 'zero'"),
+    ("IdentificationResult.simulate", "initial=('estimate', -1)",
+     lambda t: _result().simulate(U, initial=("estimate", -1), y=Y), fohw.ParameterError,
+     "must be ('estimate', n), n >= 0 free past output samples; got ('estimate', -1)"),
+    ("IdentificationResult.simulate", "a history whose u and y differ in length",
+     lambda t: _result().simulate(U, initial=(U[:5], U[:4])), fohw.DimensionError,
+     "`initial history u` and `initial history y` must have the same length; got 5 and 4"),
+    ("IdentificationResult.simulate", "a history of shape (5, 2)",
+     lambda t: _result().simulate(U, initial=(np.ones((5, 2)), np.ones(5))),
+     fohw.DimensionError, "`initial history u` must be 1-D; got an array of shape (5x2)"),
+    ("IdentificationResult.simulate", "initial=3 (neither a choice nor a history)",
+     lambda t: _result().simulate(U, initial=3), fohw.ParameterError,
+     "`initial` must be one of ('rest', 'fitted', 'estimate'), ('estimate', n), a measured "
+     "history (u_hist, y_hist) or an InitialState; got 3"),
+    ("compare", "both `initial` and `history`",
+     lambda t: fohw.compare(_result(), U, Y, initial="rest", history=(U, Y)),
+     fohw.ParameterError, "not both; got both `initial` ('rest') and `history`"),
+    ("simulate", "`initial` with a HammersteinWiener (it carries its own levels)",
+     lambda t: fohw.simulate(M(), U, initial="rest"), fohw.ParameterError,
+     "`initial` is for an identification result; got it with a HammersteinWiener"),
+    # issue 24 (outmap)
+    ("identify", "output_map: saturation limits out of order",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.Saturation(lower=2.0, upper=1.0)),
+     fohw.ParameterError, "the saturation limits must satisfy lower < upper; got lower = 2.0"),
+    ("identify", "output_map: a dead zone wider than the data",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.DeadZone(lower=-5.0, upper=5.0)),
+     fohw.ParameterError, "is wider than the data"),
+    ("identify", "output_map: an unknown name",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map="saturate"),
+     fohw.ParameterError, "`output_map` must be None, one of ('saturation', 'deadzone', "
+     "'piecewise_linear'), an int (a polynomial degree) or a SeriesMap; got 'saturate'"),
+    ("identify", "output_map: polynomial degree 0",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=0),
+     fohw.ParameterError, "`output_map` as a polynomial degree must be at least 1; got 0"),
+    ("identify", "output_map with an equation-error method",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, output_map="saturation"),
+     fohw.ParameterError, "method 'varpro' cannot fit a series `output_map`"),
+    ("identify", "output_map: fixed saturation limits that leave the data at one limit",
+     lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                             output_map=fohw.Saturation(lower=3.0)),
+     fohw.ParameterError, "entirely at one limit"),
+    ("simulate", "output_map without an inverse and a measured history",
+     lambda t: fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, output_map=3),
+                             U, params=[0.5, 1.0, 0.4, 0.0, 0.0], history=(U, U)),
+     fohw.ParameterError, "has no inverse"),
+    ("PolynomialMap", "monotone with an even degree",
+     lambda t: fohw.PolynomialMap(4, monotone=True), fohw.ParameterError,
+     "a monotone polynomial output map has an odd degree"),
 ]
 
 CLI = [
@@ -619,6 +702,27 @@ CLI = [
     ("fohw identify", "@NAME that does not ship with fohw",
      lambda t: ["identify", "@tanks", "--na", "1", "--nb", "1"],
      "no record of that name ships with fohw; use one of @cascaded_tanks, @robot_arm"),
+    # issue 24 (initial)
+    ("fohw simulate", "a result fitted with past='estimate', without --initial",
+     lambda t: ["simulate", "--model", fohw.save_result(_past_result(), t / "p.json") or
+                str(t / "p.json"), "--input", _bad_file(t, "1\n2\n")],
+     "Say which initial state to start from: --initial fitted (those levels: for the "
+     "estimation record itself) or --initial rest"),
+    ("fohw simulate", "--initial estimate (needs the output: fohw.compare)",
+     lambda t: ["simulate", "--model", "m.json", "--input", "x.dat", "--initial", "estimate"],
+     "argument --initial: invalid choice: 'estimate'"),
+    # issue 24 (outmap)
+    ("fohw identify", "--output-map with an unknown name",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "saturate"],
+     "an output map is one of saturation, deadzone, piecewise_linear, none or a polynomial "
+     "degree from 1 to 100; got 'saturate'"),
+    ("fohw identify", "--output-map 0",
+     lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--output-map", "0"],
+     "a polynomial degree from 1 to 100; got '0'"),
+    ("fohw identify", "--output-map with the default method varpro",
+     lambda t: ["identify", "@cascaded_tanks", "--columns", "uEst,yEst", "--na", "1", "--nb",
+                "1", "--output-map", "saturation", "-q"],
+     "method 'varpro' cannot fit a series `output_map`"),
 ]
 
 

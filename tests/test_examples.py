@@ -24,6 +24,8 @@ EXAMPLES = {
                                "table_2_monte_carlo.png"],
     "cascaded_tanks.py": ["cascaded_tanks.md", "cascaded_tanks_selection.csv",
                           "cascaded_tanks_selection.png", "cascaded_tanks.png"],
+    "cascaded_tanks_series.py": ["cascaded_tanks_series.md", "cascaded_tanks_series.csv",
+                                 "cascaded_tanks_series.png"],
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
 }

@@ -323,7 +323,8 @@ def test_an_order_ending_at_0_with_past_levels_simulates_as_fitted():
     """Issue 24's bug (issue 28): CONVERGED at alpha_b1 = 0 with a criterion RMSE of 0.238 V,
     while result.simulate gave 0.919 V. The solver stopped just above 0 (the limit nu -> 0+,
     where a term forgets the past level) and the estimate was put on 0 (a term of order 0
-    keeps it: another model). The order now stays where the fit was evaluated."""
+    keeps it: another model). The order now stays where the fit was evaluated. The levels
+    are those of the estimation record, so the free run on it says initial="fitted"."""
     e = fohw.datasets.cascaded_tanks().estimation
     kw = dict(na=2, nb=2, f_basis=2, g_basis=3, orders="per_lag", offset=True,
               operating_point="mean", dt=4, past="estimate")
@@ -336,9 +337,13 @@ def test_an_order_ending_at_0_with_past_levels_simulates_as_fitted():
     assert res.status == fohw.Status.CONVERGED
     assert 0.0 <= res.orders["alpha_b1"] < 1e-8 and res.alpha_at_bound
     assert "alpha_b1 ended at" in res.message and "order 0 is another model" in res.message
-    sse = float(np.sum((e.y - res.simulate(e.u)) ** 2))
+    sse = float(np.sum((e.y - res.simulate(e.u, initial="fitted")) ** 2))
     assert sse == pytest.approx(res.details["simulation_sse"], rel=1e-12)
     assert np.sqrt(sse / e.y.size) < 0.24                    # 0.919 V before
+    check = fohw.compare(res, e.u, e.y, initial="fitted")
+    assert check.rmse == pytest.approx(np.sqrt(sse / e.y.size), rel=1e-12)
+    with pytest.raises(fohw.ParameterError, match="initial='fitted'"):
+        res.simulate(e.u)                   # its levels are not applied to a record unasked
 
 
 def test_the_default_chain_does_at_least_as_well_as_the_varpro_start():

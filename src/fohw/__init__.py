@@ -51,7 +51,9 @@ from .model.basis import Basis, as_basis, polynomial_basis
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
+from .model.initial import InitialState, initial_state
 from .model.orders import Orders
+from .model.output_map import CustomMap, DeadZone, PiecewiseLinear, PolynomialMap, Saturation
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
@@ -134,6 +136,8 @@ __all__ = [
     "save_result",
     "polynomial_basis",
     "simulate",
+    "InitialState",
+    "initial_state",
     "FractionalTF",
     "FractionalTFFit",
     "fit_fractional_tf",
@@ -147,4 +151,9 @@ __all__ = [
     "OutputMap",
     "fit_fractional_hw",
     "fractional_hw_crb",
+    "Saturation",
+    "DeadZone",
+    "PiecewiseLinear",
+    "PolynomialMap",
+    "CustomMap",
 ]

@@ -1,17 +1,20 @@
 """Command-line interface ``fohw`` (also ``python -m fohw``).
 
 * ``fohw identify DATA [--columns U,Y] --na 2 --nb 2 --f-basis 2 --g-basis 3 [--method varpro]
-  [--offset] [--operating-point mean] [--dt 4] [--decimal-comma] [--option NAME=VALUE]
-  [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
+  [--offset] [--operating-point mean] [--dt 4] [--output-map saturation] [--decimal-comma]
+  [--option NAME=VALUE] [--json] [--plot FILE] [--save FILE]`` — identify from a comma-, semicolon- or
   whitespace-separated file (the sampling time a ``Ts`` column gives is the default ``--dt``);
   prints a summary and the free-run fit on the record (or, with ``--json``, both as JSON).
 * ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
-  [--operating-point mean] [--dt 4] [--jobs 2] [--csv F] [--plot F] [--save F]`` — choose a
-  structure by free-run simulation on a held-back part (:func:`fohw.select_structure`).
+  [--output-map none,saturation] [--operating-point mean] [--dt 4] [--jobs 2] [--csv F]
+  [--plot F] [--save F]`` — choose a structure by free-run simulation on a held-back part
+  (:func:`fohw.select_structure`).
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
-  [--output FILE]`` — simulate a saved model (``fohw.save_model``), or the result of
-  ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an input.
+  [--initial rest|fitted] [--output FILE]`` — simulate a saved model (``fohw.save_model``), or
+  the result of ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an
+  input, from the initial state ``--initial`` (needed for a result fitted with
+  ``past="estimate"``).
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``) or a simulated one (``paper_example [--samples N] [--seed S]``) as a file to try
   the commands on; without NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
@@ -177,6 +180,30 @@ def _basis_arg(text):
         raise argparse.ArgumentTypeError(f"a basis is a polynomial degree from 1 to "
                                          f"{MAX_POLYNOMIAL_DEGREE}; got {degree}")
     return degree
+
+
+def _output_map_arg(text):
+    """``--output-map``: a series output map by name, or a polynomial degree."""
+    from .model.output_map import MAX_MAP_DEGREE, OUTPUT_MAP_NAMES
+
+    if text == "none":
+        return None
+    if text in OUTPUT_MAP_NAMES:
+        return text
+    try:
+        degree = int(text)
+    except ValueError:
+        degree = None
+    if degree is None or not 1 <= degree <= MAX_MAP_DEGREE:
+        raise argparse.ArgumentTypeError(f"an output map is one of {', '.join(OUTPUT_MAP_NAMES)}, "
+                                         f"none or a polynomial degree from 1 to "
+                                         f"{MAX_MAP_DEGREE}; got {text!r}")
+    return degree
+
+
+def _output_map_list(text):
+    """``fohw select --output-map none,saturation``: output maps to try."""
+    return [_output_map_arg(t.strip()) for t in text.split(",")]
 
 
 def _check_file_out(path, flag, inputs=()):
@@ -350,6 +377,9 @@ def _add_identify_parser(sub):
     _add_dt(ide)
     ide.add_argument("--alpha-bounds", type=_pair_arg, default=(0.0, 1.0),
                      help="interval for alpha, 'low,high' within [0, 2] (default 0,1)")
+    ide.add_argument("--output-map", type=_output_map_arg, default=None,
+                     help="a series output block y = h(z) in the data's units: saturation, "
+                     "deadzone, piecewise_linear or a polynomial degree (method output_error)")
     ide.add_argument("--schedule", choices=SCHEDULES, default=None,
                      help="hybrid and single-innovation methods: Table 1 or Steps 1-9")
     ide.add_argument("--innovation-length", type=int, default=None, help="hybrid, rls: P")
@@ -385,6 +415,9 @@ def _add_select_parser(sub):
     sel.add_argument("--validation", type=_validation_arg, default=0.25,
                      help="held-back part: a fraction (default 0.25) or a number of samples")
     sel.add_argument("--offset", action="store_true", help="a constant term in every model")
+    sel.add_argument("--output-map", type=_output_map_list, default=None,
+                     help="series output maps to try, e.g. 'none,saturation' (method "
+                     "output_error; default: none)")
     sel.add_argument("--operating-point", choices=("initial", "mean"), default=None,
                      help="remove the first samples or the means before fitting")
     _add_dt(sel)
@@ -406,6 +439,11 @@ def _add_simulate_parser(sub):
     sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
     sim.add_argument("--noise-std", type=float, default=0.0)
     sim.add_argument("--seed", type=int, default=None)
+    sim.add_argument("--initial", choices=("rest", "fitted"), default=None,
+                     help="the state before the input: rest (the operating point) or fitted "
+                     "(the levels a past='estimate' fit estimated before its estimation record, "
+                     "right for that record). Default: rest, and a saved model's own levels; "
+                     "a result fitted with past='estimate' needs it")
     sim.add_argument("--output", help="write y here (one value per line); default stdout")
     _add_quiet(sim)
 
@@ -495,13 +533,14 @@ def _fit_and_check(args, u, y, options, dt):
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
         res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=dt)
+                       offset=args.offset, operating_point=args.operating_point, dt=dt,
+                       output_map=args.output_map)
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
         if res.model is not None:
             try:
-                check = compare(res, u, y)
+                check = compare(res, u, y, initial="fitted")      # its own estimation record
             except FohwError as exc:        # e.g. a constant output: no fit index
                 warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
@@ -630,6 +669,8 @@ def _candidates(args):
 
     grid = {"na": args.na, "f_basis": args.f_basis, "g_basis": args.g_basis,
             "orders": args.orders}
+    if args.output_map is not None:
+        grid["output_map"] = args.output_map
     if args.nb is not None:
         grid["nb"] = args.nb
     candidates = expand_candidates(grid)
@@ -700,12 +741,19 @@ def _simulate(args):
 
     import numpy as np
 
+    from .model.initial import initial_state, simulate_from
     from .model.simulation import equation_noise, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.input, _decimal(args))
     (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    if kind == "result" and args.initial is None and loaded.structure.past == "estimate":
+        raise UsageError(f"{args.model} was fitted with past='estimate': its levels (u_past, "
+                         f"y_past) = ({loaded.past[0]:.6g}, {loaded.past[1]:.6g}) are those "
+                         "before its estimation record. Say which initial state to start "
+                         "from: --initial fitted (those levels: for the estimation record "
+                         "itself) or --initial rest (the operating point).")
     start = time.perf_counter()
     _stage(args, f"simulating {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
@@ -713,9 +761,12 @@ def _simulate(args):
             warnings.simplefilter("always", category)
         if kind == "result":        # the predictor that was fitted: theta itself, as identify's
             noise = equation_noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
-            y = loaded.simulate(u, noise=noise)
-        else:
+            y = loaded.simulate(u, initial=args.initial, noise=noise)
+        elif args.initial is None:
             y = simulate(loaded, u, noise_std=args.noise_std, random_state=args.seed)
+        else:
+            y = simulate_from(loaded, u, initial_state(loaded, u, None, args.initial),
+                              noise_std=args.noise_std, random_state=args.seed)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)

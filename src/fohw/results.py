@@ -22,9 +22,9 @@ from ._validation import RANGE_TOLERANCE, check_array, check_scalar, input_in_ra
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
+from .model.initial import initial_state, simulate_from
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
-from .model.simulation import simulate
 from .model.structure import Structure
 from .model.system import HammersteinWiener
 from .presentation import ResultPresentation
@@ -57,7 +57,7 @@ class Status(enum.IntEnum):
 #: the five histories and profiles are also read as attributes of the result.
 DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
                "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed",
-               "integer_sse")
+               "integer_sse", "identity_sse")
 
 
 def _readonly(a):
@@ -205,21 +205,27 @@ class IdentificationResult(ResultPresentation):
         input that goes beyond it by more than 5 % of its span.
     options : mapping
         The settings of the run (innovation length, bounds, …), nothing it computed.
+    output_map_params : mapping
+        The estimated parameters of the structure's series output map ``y = h(z)``,
+        ``{name: value}`` in :attr:`~fohw.model.output_map.SeriesMap.names` order (``h_lower``,
+        …; data units);
+        empty without an output map.
     details : mapping
         Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
         ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
         ``alpha_profile`` (see the properties of those names), ``simulation_sse`` (the
         simulation-error sum of squares of ``"output_error"``), ``start`` (which start an
         ``"output_error"`` or ``"structured"`` fit began from), ``starts`` and
-        ``n_starts_agreed`` (its default chain's local searches) and ``integer_sse`` (the
+        ``n_starts_agreed`` (its default chain's local searches), ``integer_sse`` (the
         simulation-error sum of squares of the integer class it contains, every order 0,
-        fitted by that chain: :meth:`order_test`).
+        fitted by that chain: :meth:`order_test`) and ``identity_sse`` (that of the fit
+        without the series output map, which the fit with it starts from).
 
     Notes
     -----
     ``covariance`` and :meth:`standard_errors` are ordered as :attr:`estimate_names`: the
     linear parameters (theta's, then ``offset``) and the nonlinear ones (the free orders, then
-    ``u_past``, ``y_past``).
+    ``u_past``, ``y_past``, then the output map's ``h_*``).
     """
 
     method: str
@@ -242,6 +248,7 @@ class IdentificationResult(ResultPresentation):
     input_range: tuple | None = None
     options: Mapping = field(default_factory=dict)
     details: Mapping = field(default_factory=dict)
+    output_map_params: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         def put(name, value):
@@ -279,6 +286,13 @@ class IdentificationResult(ResultPresentation):
             raise DimensionError(f"`covariance` must have shape ({d}, {d}) (the estimates "
                                  f"{', '.join(self.estimate_names)}); got {self.covariance.shape}.")
         put("options", types.MappingProxyType(dict(self.options)))
+        names = () if s.output_map is None else s.output_map.names
+        given = dict(self.output_map_params)
+        if list(given) != list(names):
+            raise ParameterError(f"`output_map_params` must give the output map's parameters "
+                                 f"{list(names)} in that order; got {list(given)}.")
+        put("output_map_params", types.MappingProxyType(
+            {n: check_scalar(v, f"output_map_params[{n!r}]") for n, v in given.items()}))
         put("details", types.MappingProxyType(
             {k: _readonly(v) if isinstance(v, np.ndarray) else v
              for k, v in self.details.items()}))
@@ -287,7 +301,7 @@ class IdentificationResult(ResultPresentation):
         # the mappings are read-only views, which pickle cannot store: rebuild from plain dicts
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         values.update(orders=dict(self.orders), options=dict(self.options),
-                      details=dict(self.details))
+                      details=dict(self.details), output_map_params=dict(self.output_map_params))
         return (_rebuild, (type(self), values))
 
     # ---- derived facts ------------------------------------------------------------------------
@@ -314,6 +328,10 @@ class IdentificationResult(ResultPresentation):
     @cached_property
     def model(self) -> HammersteinWiener | None:
         """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40).
+
+        With a series output map it is the model of ``z``, before ``h`` (a
+        :class:`fohw.HammersteinWiener` has no output map): ``result.simulate`` applies ``h``,
+        ``fohw.simulate(result.model, u)`` does not.
 
         ``None`` if that is undefined (an ``a_i`` or ``b_i`` exactly zero; ``message`` says so).
         """
@@ -373,10 +391,11 @@ class IdentificationResult(ResultPresentation):
 
     @property
     def nonlinear(self) -> np.ndarray:
-        """The nonlinear parameters: the free orders, then ``u_past``, ``y_past`` if estimated."""
+        """The nonlinear parameters: the free orders, ``u_past``, ``y_past`` if estimated, ``h_*``."""
         values = list(self.orders.values())
         if self.structure.past == "estimate":
             values += list(self.past)
+        values += list(self.output_map_params.values())
         return np.array(values, dtype=np.float64)
 
     @property
@@ -421,6 +440,9 @@ class IdentificationResult(ResultPresentation):
             return None if x is None else float(x)
 
         settings = {str(k): _setting_to_json(v) for k, v in self.options.items()}
+        extra = ({} if self.structure.output_map is None
+                 else {"output_map_params": {k: float(v) for k, v in
+                                             self.output_map_params.items()}})
         return {
             "method": self.method, "structure": self.structure.to_dict(),
             "theta": _array_to_dict(self.theta), "orders": dict(self.orders),
@@ -434,11 +456,12 @@ class IdentificationResult(ResultPresentation):
             "input_range": None if self.input_range is None else list(self.input_range),
             "options": {k: v for k, v in settings.items() if v is not ...},
             "details": {str(k): _detail_to_json(v) for k, v in self.details.items()},
-        }
+        } | extra
 
     @classmethod
-    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> IdentificationResult:
-        """Inverse of :meth:`to_dict` (custom bases passed again, checked by their names).
+    def from_dict(cls, d, *, f_basis=None, g_basis=None,
+                  output_map=None) -> IdentificationResult:
+        """Inverse of :meth:`to_dict` (custom bases and maps passed again, checked by their names).
 
         Raises
         ------
@@ -446,6 +469,8 @@ class IdentificationResult(ResultPresentation):
             A field is missing, unknown or inconsistent with another (the message names it).
         """
         names = {f.name for f in dataclasses.fields(cls)}
+        if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
+            names.discard("output_map_params")
         if not isinstance(d, Mapping) or set(d) != names:
             missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)
             unknown = sorted(set(d) - names) if isinstance(d, Mapping) else []
@@ -453,7 +478,10 @@ class IdentificationResult(ResultPresentation):
                                  f"missing {missing}, unknown {unknown}.")
         values = dict(d)
         values["structure"] = Structure.from_dict(d["structure"], f_basis=f_basis,
-                                                  g_basis=g_basis)
+                                                  g_basis=g_basis, output_map=output_map)
+        if "output_map_params" in d and not isinstance(d["output_map_params"], Mapping):
+            raise ParameterError(f"`output_map_params` must be a mapping of names to values; got "
+                                 f"{d['output_map_params']!r}.")
         values["theta"] = _array_from_dict(d["theta"], "theta")
         if d["covariance"] is not None:
             values["covariance"] = _array_from_dict(d["covariance"], "covariance")
@@ -553,6 +581,9 @@ class IdentificationResult(ResultPresentation):
         """One-step-ahead prediction ``yhat[k] = phi[k] @ [theta, c] + y0`` (Eq. 19).
 
         ``u`` and ``y`` in the data's units; the operating point is removed and added back.
+        With a series output map ``h`` the prediction is ``h(phi[k] @ [theta, c] + y0)``, the
+        regressors built from the measured ``y`` in place of the unmeasured ``z`` (exact only
+        where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
         u = check_array(u, "u")
@@ -560,22 +591,41 @@ class IdentificationResult(ResultPresentation):
         builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
                                    structure=self.structure)
         yhat = builder.matrix(self.nonlinear) @ self.linear
-        return yhat + y0 if y0 else yhat
+        yhat = yhat + y0 if y0 else yhat
+        hmap = self.structure.output_map
+        if hmap is not None:
+            yhat = hmap.evaluate(yhat, list(self.output_map_params.values()))
+        return yhat
 
-    def simulate(self, u, *, history=None, **kwargs):
+    def simulate(self, u, *, initial=None, y=None, history=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.
 
-        Uses ``theta`` itself (and the offset, orders and past levels), i.e. exactly the model
-        that was fitted; for the rank-one ``a, b, p, q`` of Eqs. (39)–(40) use
-        ``fohw.simulate(result.model, u)``.
+        Uses ``theta`` itself (and the offset and orders), i.e. exactly the model that was
+        fitted, from the initial state ``initial``; for the rank-one ``a, b, p, q`` of
+        Eqs. (39)–(40) use ``fohw.simulate(result.model, u)``.
 
         Parameters
         ----------
         u : array_like
             Input.
+        initial : str, tuple or InitialState, optional
+            What the signals did before ``u`` began (:mod:`fohw.model.initial` says what each
+            choice assumes and costs): ``"rest"`` (the operating point; the default of a fit
+            with ``past="rest"``); ``"fitted"`` (the levels estimated with a
+            ``past="estimate"`` fit, which belong to the estimation record: right for that
+            record, where it reproduces the fit); ``"estimate"`` or ``("estimate", n)`` (the
+            levels, and ``n`` free past outputs, of *this* record fitted to its output ``y``);
+            a measured history ``(u_hist, y_hist)`` just before ``u``; or an
+            :class:`fohw.InitialState` (e.g. ``fohw.compare(...).initial``). A fit with
+            ``past="estimate"`` has no default: without ``initial`` (or ``history``) it raises
+            a ParameterError that lists the choices.
+        y : array_like, optional
+            The measured output of the record, for ``initial="estimate"`` only.
         history : (u_past, y_past), optional
-            Measured data just before ``u`` (e.g. the estimation record, to simulate the
-            validation record that follows it): the GL memory starts from them.
+            The older spelling of ``initial=(u_past, y_past)``: measured data just before
+            ``u`` (e.g. the estimation record, to simulate the validation record that follows
+            it); the GL memory starts from them, after the fit's own levels if it has any.
+            Not together with ``initial``.
         **kwargs
             ``noise``, ``noise_std``, ``random_state``, ``divergence_threshold``
             (:func:`fohw.simulate`).
@@ -584,6 +634,9 @@ class IdentificationResult(ResultPresentation):
         ------
         SimulationDivergedError
             The identified model is unstable on this input.
+        ParameterError
+            No ``initial`` for a ``past="estimate"`` fit; a bad ``initial``; ``y`` without
+            ``initial="estimate"`` or the reverse; both ``initial`` and ``history``.
 
         Warns
         -----
@@ -592,6 +645,7 @@ class IdentificationResult(ResultPresentation):
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
         u = check_array(u, "u")
+        state = self.initial_state(u, y, initial, history=history)
         if self.input_range is not None:
             u_arr = u
             if not input_in_range(u_arr, self.input_range):
@@ -601,8 +655,15 @@ class IdentificationResult(ResultPresentation):
                     f"[{lo:.4g}, {hi:.4g}] the model was estimated on (by more than "
                     f"{RANGE_TOLERANCE:.0%} of its span); the basis functions extrapolate "
                     "there, so check the simulation before trusting it."), stacklevel=2)
-        return simulate(self.structure, u, params=np.r_[self.linear, self.nonlinear],
-                        operating_point=self.operating_point, history=history, **kwargs)
+        return simulate_from(self, u, state, **kwargs)
+
+    def initial_state(self, u, y=None, initial=None, *, history=None):
+        """The state a free run on the record ``(u, y)`` starts from: :func:`fohw.initial_state`.
+
+        ``initial`` as for :meth:`simulate`; ``y`` only for ``"estimate"``, whose fitted levels
+        (and window) the returned :class:`fohw.InitialState` holds.
+        """
+        return initial_state(self, u, y, initial, history=history)
 
     def validate(self, u, y, **kwargs):
         """Free-run simulation and one-step prediction on a record: :func:`fohw.compare`."""

@@ -280,10 +280,10 @@ def _davies_profile(full, rss_r, n, u, y, n_grid):
 def _bootstrap_one(restricted, full, u, seed, noise_std):
     """Both classes refitted on a record simulated from ``restricted`` (one bootstrap draw)."""
     rng = np.random.default_rng(seed)
-    if restricted.method == "output_error":
-        y = restricted.simulate(u) + noise_std * rng.standard_normal(u.shape[0])
+    if restricted.method == "output_error":           # on the estimation record: its own past
+        y = restricted.simulate(u, initial="fitted") + noise_std * rng.standard_normal(u.shape[0])
     else:
-        y = restricted.simulate(u, noise_std=noise_std, random_state=rng)
+        y = restricted.simulate(u, initial="fitted", noise_std=noise_std, random_state=rng)
     r = refit(restricted, u, y)
     f = refit(full, u, y)
     rss_r, n = criterion(r)

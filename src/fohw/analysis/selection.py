@@ -123,6 +123,9 @@ def _describe(value):
         return f"{value:g}"
     if isinstance(value, (str, numbers.Number, type(None))):
         return str(value)
+    describe = getattr(value, "describe", None)    # a series output map
+    if callable(describe):
+        return describe()
     names = getattr(value, "names", None)          # a Basis
     if names is not None:
         return "(" + ", ".join(names) + ")"
@@ -170,15 +173,17 @@ def unidentifiable(res, u_est):
     return "; ".join(reasons)
 
 
-def free_run_check(res, u, reference, envelope, *, history=None):
+def free_run_check(res, u, reference, envelope, *, initial="fitted"):
     """``(ysim, status, reason)`` of a result's free run on ``u``; ``ysim`` None unless ok.
 
     ``status`` is ``"ok"``, ``"diverged"``, ``"nan"`` (the output basis) or ``"implausible"``
     (outside the envelope of ``reference``, :func:`fohw.analysis.validation.implausible_sample`).
+    ``initial``: the free run's initial state (``result.simulate``); the default
+    ``"fitted"`` is right for a record that begins where the estimation record began.
     ExtrapolationWarnings are the caller's to catch.
     """
     try:
-        ysim = res.simulate(u, history=history)
+        ysim = res.simulate(u, initial=initial)
     except SimulationDivergedError as exc:
         return None, "diverged" if exc.cause == "growth" else "nan", str(exc)
     found = implausible_sample(ysim, reference, envelope)
@@ -239,7 +244,10 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
             row["aic"] = aic(criterion, n, d)
             row["bic"] = bic(criterion, n, d)
         try:       # the simulator raises on any non-finite output, so ysim is finite
-            ysim, status, reason = free_run_check(res, u_sim, reference, envelope)
+            # the held-back part continues the estimation part's free run from its fitted
+            # past; a separate record starts at rest (the estimation levels are not its own)
+            ysim, status, reason = free_run_check(res, u_sim, reference, envelope,
+                                                  initial="fitted" if score_from else "rest")
             row.update(status=status, reason=_where(status, reason, score_from))
             if status == "ok" and not score_from:     # a separate validation record: and the
                 yest, status, reason = free_run_check(res, u_est, reference, envelope)
@@ -558,8 +566,12 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         The held-back part: a fraction (default 0.25, a float in (0, 1)) or a number of
         samples (an int, at least 2) at the end of the record. Each candidate is fitted on the
         samples before it and simulated in free run from sample 0 through both parts (the
-        held-back part continues the simulation, with its GL memory). Or a separate record,
-        simulated from the model's operating point.
+        held-back part continues the simulation, with its GL memory, from the initial state
+        of the fit: ``initial="fitted"``, the estimated levels of a ``past="estimate"``
+        candidate, which belong to sample 0). Or a separate record, simulated from the model's
+        operating point (``initial="rest"``, for every candidate: the levels a
+        ``past="estimate"`` candidate estimated are those before the estimation record, not
+        before this one).
     method : str, optional
         The ``identify`` method of every candidate that does not name its own (default: that of
         :func:`fohw.identify`, ``"varpro"``).

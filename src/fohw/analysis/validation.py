@@ -24,8 +24,8 @@ import numpy as np
 from .._types import ArrayLike
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
+from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
-from ..model.simulation import simulate
 from ..model.system import HammersteinWiener
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
@@ -139,6 +139,10 @@ class Validation:
     notes : tuple of str
         What was skipped and why (a residual test, a fit % of a constant output, a one-step
         prediction a model cannot give).
+    initial : InitialState or None
+        The state the free run started from (:func:`fohw.initial_state`): for
+        ``initial="estimate"`` the levels (and window) fitted to this record's output, and
+        ``initial.n_estimated`` values so fitted.
     """
 
     y: np.ndarray
@@ -155,6 +159,17 @@ class Validation:
     n_init: int
     status: str = "ok"
     notes: tuple = ()
+    initial: InitialState | None = None
+
+    @property
+    def fit(self) -> float:
+        """The free run's fit % (:attr:`fit_simulation`)."""
+        return self.fit_simulation
+
+    @property
+    def rmse(self) -> float:
+        """The free run's RMSE in the data's units (:attr:`rmse_simulation`)."""
+        return self.rmse_simulation
 
     def to_markdown(self, unit=""):
         """A two-row table (free run, one step) and the residual tests."""
@@ -168,6 +183,9 @@ class Validation:
                f"{self.rmse_prediction:.4g} |", ""]
         if self.diverged:
             out.append(f"Free run: {self.diverged}")
+        if self.initial is not None and self.initial.n_estimated:
+            out.append(f"Free run from an initial state fitted to this record's output "
+                       f"({self.initial.n_estimated} values): {self.initial!r}.")
         if not self.in_range:
             out.append("The input leaves the range the model was estimated on.")
         for name, t in (("whiteness", self.whiteness), ("input cross-correlation",
@@ -222,18 +240,23 @@ def _one_step(model, u, y):
     return yhat + y0 if y0 else yhat
 
 
-def _free_run(model, u, history):
-    """``(ysim or None, status, reason, caught warnings)`` of a result or a model."""
+def _free_run(model, u, state):
+    """``(ysim or None, status, reason, caught warnings)`` of a result or a model from ``state``."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ExtrapolationWarning)
         try:
             if isinstance(model, HammersteinWiener):
-                ysim = simulate(model, u, history=history)
+                ysim = simulate_from(model, u, state)
             else:
-                ysim = model.simulate(u, history=history)
+                ysim = model.simulate(u, initial=state)
         except SimulationDivergedError as exc:
             return None, "nan" if exc.cause == "output_basis" else "diverged", str(exc), caught
     return ysim, "ok", "", caught
+
+
+def _is_estimate(initial):
+    return (isinstance(initial, str) and initial == "estimate") or (
+        isinstance(initial, tuple) and len(initial) == 2 and isinstance(initial[0], str))
 
 
 def _measure(what, fn, notes, *args, **kwargs):
@@ -246,7 +269,8 @@ def _measure(what, fn, notes, *args, **kwargs):
 
 
 def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
-            history: tuple[ArrayLike, ArrayLike] | None = None, n_init: int = 0,
+            initial: Any = None, history: tuple[ArrayLike, ArrayLike] | None = None,
+            n_init: int = 0,
             max_lag: int = 25, confidence: float = 0.99,
             envelope: float = ENVELOPE) -> Validation:
     """Validate an identified model on a record: free run and one-step prediction.
@@ -259,8 +283,20 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         step ahead through its theta ``[q (x) a, p (x) b]``, Eq. 19).
     u, y : array_like
         The validation record, in the data's units (at least 2 samples).
+    initial : str, tuple or InitialState, optional
+        The state the free run starts from (:mod:`fohw.model.initial`): ``"rest"`` (the
+        default of a ``past="rest"`` fit); ``"fitted"`` (the levels a ``past="estimate"`` fit
+        estimated before its *estimation* record; a HammersteinWiener's own levels, its
+        default); ``"estimate"`` or ``("estimate", n)`` (this record's levels, and ``n`` free
+        past outputs, fitted by least squares on ``y`` with the model fixed, as MATLAB's
+        ``compare(..., InitialCondition='estimate')``; ``initial.n_estimated`` values are then
+        fitted on the output that is scored, so the free-run fit is optimistic by that many
+        parameters: compare models with the same choice); a measured history
+        ``(u_past, y_past)``; or an :class:`fohw.InitialState`. A ``past="estimate"`` result
+        has no default: a ParameterError lists the choices.
     history : (u_past, y_past), optional
-        Measured data just before the record (the free run continues from them).
+        The older spelling of ``initial=(u_past, y_past)``: measured data just before the
+        record (the free run continues from them). Not with ``initial``.
     n_init : int
         Leading samples left out of every measure (a start-up transient).
     max_lag, confidence :
@@ -284,9 +320,11 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     ------
     ParameterError
         ``model`` is neither a result nor a HammersteinWiener, or a bad ``n_init`` or
-        ``envelope``.
+        ``envelope``; no ``initial`` for a ``past="estimate"`` result, a bad ``initial``, or
+        both ``initial`` and ``history``.
     DimensionError
-        ``u`` and ``y`` differ in length, or the record has fewer than 2 samples.
+        ``u`` and ``y`` differ in length, or the record has fewer than 2 samples (or no more
+        than the ``2 + n`` unknowns of ``initial="estimate"``).
 
     Examples
     --------
@@ -310,13 +348,15 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
                              "least 2 (a fit % compares the output with its mean).")
     n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
     factor = check_envelope(envelope)
-    ysim, status, diverged, caught = _free_run(model, u, history)
+    state = initial_state(model, u, y if _is_estimate(initial) else None, initial,
+                          history=history)
+    ysim, status, diverged, caught = _free_run(model, u, state)
     in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
     for w in caught:
         if not issubclass(w.category, ExtrapolationWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if ysim is not None:
-        reference = y if history is None else np.r_[check_array(history[1], "history output"), y]
+        reference = y if state.history is None else np.r_[state.history[1], y]
         found = implausible_sample(ysim, reference, factor)
         if found is not None:
             ysim, status = None, "implausible"
@@ -341,4 +381,4 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
                       rmse_simulation=rmse_s, fit_prediction=fit_p,
                       rmse_prediction=rmse(y, yhat, n_init=n_init), whiteness=white,
                       cross_correlation=xcorr, diverged=diverged, in_range=in_range,
-                      n_init=n_init, status=status, notes=tuple(notes))
+                      n_init=n_init, status=status, notes=tuple(notes), initial=state)

@@ -294,7 +294,8 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         nit=int(nit), nfev=int(nfev), message=message + note,
         alpha_at_bound=bool(alpha_at_bound), n_samples=builder.n_samples,
         options=dict(options or {}), covariance=covariance, noise_variance=noise_variance,
-        details=out)
+        details=out, output_map_params=({} if structure.output_map is None else dict(zip(
+            structure.output_map.names, structure.output_map_params(params).tolist()))))
 
 
 def bound_note(name, lo, hi, at_lower, at_upper, value=None):

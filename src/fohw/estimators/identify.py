@@ -18,6 +18,7 @@ from .._types import ArrayLike, PairLike
 from ..exceptions import ParameterError
 from ..model.basis import BasisLike
 from ..model.orders import OrdersLike
+from ..model.output_map import OutputMapLike
 from ..results import IdentificationResult
 from . import hybrid, output_error, rls, structured, varpro
 from .options import MethodOptions
@@ -39,6 +40,7 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
              offset: bool = False, operating_point: str | PairLike | None = None,
              past: str = "rest", dt: float = 1.0,
              alpha_bounds: PairLike | Mapping[str, PairLike] = (0.0, 1.0),
+             output_map: OutputMapLike = None,
              options: Mapping[str, Any] | MethodOptions | None = None,
              executor: Executor | None = None, **method_options: Any) -> IdentificationResult:
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
@@ -108,6 +110,15 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
         Interval for every free order, ``0 <= low < high <= 2`` (default ``(0, 1)``, as in the
         paper), or ``{name: (low, high)}`` per free order. The batch methods may end on a bound
         (the result says so); the recursive ones hold alpha ``1e-3 * (high - low)`` inside it.
+    output_map : None, "saturation", "deadzone", "piecewise_linear", int or SeriesMap, optional
+        A series output block ``y = h(z)`` after the model (``z`` its output, in the data's
+        units: a saturation's limits are in the units of ``y``; :mod:`fohw.model.output_map`):
+        a saturation or a dead zone with both limits free, a piecewise-linear map (5
+        breakpoints over the output's range), a polynomial of that degree, or a map object
+        (fixed limits, a monotone polynomial, a user's function). None (default): today's
+        model. Fitted by ``method="output_error"`` only (the fit without ``h`` first, then
+        ``h`` from the data, then all together with exact Jacobians through ``h``); the
+        equation-error methods refuse it.
     options : mapping or MethodOptions, optional
         The method's options, as a mapping (``options={"innovation_length": 3}``) or an instance
         of its options class.
@@ -174,4 +185,5 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     opts = declared.options.build(method, options, others=OPTIONS)
     return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
                       orders=orders, offset=offset, operating_point=operating_point, past=past,
-                      dt=dt, alpha_bounds=alpha_bounds, executor=executor)
+                      dt=dt, alpha_bounds=alpha_bounds, output_map=output_map,
+                      executor=executor)

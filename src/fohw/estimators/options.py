@@ -285,6 +285,9 @@ class Method:
         :class:`fohw.Structure`, else why not (a sentence completing "method 'name' …").
     parallel : bool
         ``run`` takes ``executor=`` (independent starts it can run in parallel).
+    output_map : bool
+        ``run`` fits a series output map ``y = h(z)`` (a simulation-error method); the others
+        are refused one by :func:`~fohw.estimators.problem.fit_method`.
     """
 
     name: str
@@ -292,3 +295,4 @@ class Method:
     run: Callable
     supports: Callable = every_structure
     parallel: bool = False
+    output_map: bool = False

@@ -23,6 +23,7 @@ output-feedback block.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -480,6 +481,9 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     ``executor`` runs its local searches.
     """
     s = builder.structure
+    if s.output_map is not None:
+        return series_result(builder, options, bounds, operating_point=operating_point,
+                             executor=executor)
     check_enough_samples(builder.n_samples - options.n_init, s,
                          after=f" after n_init = {options.n_init}" if options.n_init else "")
     lower, upper = bounds
@@ -553,5 +557,211 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
                   operating_point=operating_point)
 
 
+class SeriesResidual:
+    """The simulation-error residual of a structure with a series output map, exact Jacobian.
+
+    ``x = (linear, inner nonlinear, h_*)``: the residual is ``(y - (h(z(x) + y0) - y0))`` on
+    the criterion's samples, ``z`` the free run of :attr:`Structure.inner` (deviations) and
+    ``y0`` the output's operating point (``h`` acts in the data's units). Its Jacobian is
+    ``-[h'(z + y0) S_z, dh/dh_*]`` (:func:`~fohw.model.sensitivity.simulation_jacobian`). A run
+    that escapes (``|z|`` beyond ``guard``, ten times the largest measured ``|y - y0|``) gets the
+    constant residual ``2 guard`` and a zero Jacobian, as in :class:`SimulationResidual`.
+    """
+
+    def __init__(self, structure, u, y, n_init, y0):
+        self.structure, self.u, self.y, self.y0 = structure, u, y, y0
+        self.guard = 10.0 * float(np.max(np.abs(y)))
+        self.window = slice(n_init, None)
+        self.penalty = np.full(y.shape[0] - n_init, 2.0 * self.guard)
+        self.n_simulations = 0
+        self.n_jacobians = 0
+
+    def model_output(self, x):
+        """``h(z(x) + y0) - y0``; :class:`SimulationDivergedError` when ``z`` escapes."""
+        self.n_simulations += 1
+        n = self.structure.n_linear
+        return simulate_predictor(self.structure, x[:n], x[n:], self.u,
+                                  operating_point=(0.0, self.y0),
+                                  divergence_threshold=self.guard) - self.y0
+
+    def residual(self, x):
+        """The residual on the criterion's samples, or the penalty."""
+        try:
+            r = (self.y - self.model_output(x))[self.window]
+        except SimulationDivergedError:
+            return self.penalty
+        return r if np.all(np.isfinite(r)) else self.penalty
+
+    def jacobian(self, x):
+        """``d residual / dx``, exact (zeros where the residual is the penalty)."""
+        self.n_jacobians += 1
+        self.n_simulations += 1
+        n = self.structure.n_linear
+        try:
+            ysim, G = simulation_jacobian(self.structure, x[:n], x[n:], self.u, y0=self.y0)
+        except SimulationDivergedError:
+            return np.zeros((self.penalty.shape[0], x.shape[0]))
+        if not np.all(np.isfinite(G)) or np.max(np.abs(ysim)) > 10 * self.guard:
+            return np.zeros((self.penalty.shape[0], x.shape[0]))
+        return -G[self.window]
+
+
+def fit_series(builder, linear0, params0, *, lower, upper, y0, n_init=0, max_nfev=None):
+    """Fit a structure with a series output map by simulation error, from a start.
+
+    ``builder``: the record (deviations) and the structure (with its map, resolved);
+    ``linear0, params0``: the start (inner nonlinear parameters, then the map's); ``lower``,
+    ``upper``: bounds of the free orders; ``y0``: the output's operating point. The map's
+    ordered parameters are searched through
+    :meth:`~fohw.model.output_map.SeriesMap.transform` (they never cross). The result never
+    has a larger criterion than its start (else the start is returned).
+
+    Returns
+    -------
+    _OEFit
+    """
+    s = builder.structure
+    hmap, inner = s.output_map, s.inner
+    u, y = builder.u, builder.y
+    n_lin, n_free, n_eta = s.n_linear, len(s.orders.free), hmap.n_params
+    n_in = n_lin + inner.n_nonlinear
+    window = slice(n_init, None)
+    m = y.shape[0] - n_init
+    crit = SeriesResidual(s, u, y, n_init, y0)
+    x0 = np.r_[np.asarray(linear0, dtype=np.float64), np.asarray(params0, dtype=np.float64)]
+    y_data = y + y0
+    T, w_lo, w_hi = hmap.transform(x0[n_in:], y_data)
+    w0 = np.linalg.solve(T, x0[n_in:]) if n_eta else np.zeros(0)
+    n_past = inner.n_nonlinear - n_free
+    lo = np.r_[np.full(n_lin, -np.inf), lower, np.full(n_past, -np.inf), w_lo]
+    hi = np.r_[np.full(n_lin, np.inf), upper, np.full(n_past, np.inf), w_hi]
+    v0 = np.clip(np.r_[x0[:n_in], w0], lo, hi)
+
+    def to_x(v):
+        return np.r_[v[:n_in], T @ v[n_in:]]
+
+    r0 = crit.residual(to_x(v0))
+    sse0 = np.inf if r0 is crit.penalty else float(r0 @ r0)
+    scale = np.r_[_parameter_scale(x0[:n_in], inner, u, y),
+                  np.maximum(np.abs(w0), hmap.scale(y_data)) if n_eta else np.zeros(0)]
+    y_scale = rms_scale(y)
+
+    def residual(z):
+        return crit.residual(to_x(z * scale)) / y_scale
+
+    def jacobian(z):
+        G = crit.jacobian(to_x(z * scale))
+        return np.hstack([G[:, :n_in], G[:, n_in:] @ T]) * (scale / y_scale)
+
+    keep = np.r_[kept_above_zero(inner, n_lin, lower), np.zeros(n_eta, dtype=bool)]
+    zs, status, ls = bounded_least_squares(residual, v0 / scale, jac=jacobian, lower=lo / scale,
+                                           upper=hi / scale, keep=keep, max_nfev=max_nfev)
+    v = zs * scale
+    x = to_x(v)
+    r = crit.residual(x)
+    sse = np.inf if r is crit.penalty else float(r @ r)
+    fell_back = not sse <= sse0
+    if fell_back and np.isfinite(sse0):       # never above the start (nested models: docs)
+        v, x, sse = v0, to_x(v0), sse0
+    escaped = not np.isfinite(sse)
+    if escaped:
+        status = Status.FAILED
+    try:
+        _, G = simulation_jacobian(s, x[:n_lin], x[n_lin:], u, y0=y0)
+        cov, s2 = parameter_covariance(G[window], sse, m)
+    except SimulationDivergedError:
+        cov, s2 = None, sse / max(m - x.shape[0], 1)
+    active = ls.active_mask[n_lin:n_lin + n_free]
+    message = (f"output-error fit with the series output map {hmap.describe()} "
+               f"(scipy.optimize.least_squares): {ls.message} ({crit.n_simulations} "
+               f"simulations, {crit.n_jacobians} of them with the exact sensitivity through h)")
+    if escaped:
+        message = ("output-error fit failed: the free run of the estimate and of its start "
+                   f"escape (beyond ten times the largest measured |y|); {message}.")
+    elif fell_back:
+        message += ("; the search ended above its start's criterion, so the start is kept "
+                    "(the fit never ends above the model it nests)")
+    return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=1.0,
+                  status=status, message=message, covariance=cov, noise_variance=s2,
+                  nit=int(ls.njev), nfev=crit.n_simulations,
+                  at_lower=(active < 0) if not fell_back else np.zeros(n_free, dtype=bool),
+                  at_upper=(active > 0) if not fell_back else np.zeros(n_free, dtype=bool),
+                  start_sse=sse0)
+
+
+def _series_start(builder, s, options, bounds, operating_point, executor):
+    """``(linear0, params0, origin, identity)``: the fit without h, then h's start from the data.
+
+    ``identity``: ``(sse, status name)`` of the fit without ``h`` (None for a given start).
+    """
+    start = options.start
+    u, y0 = builder.u, operating_point[1]
+    if isinstance(start, IdentificationResult) and start.structure == s:
+        return start.linear, start.nonlinear, "the given start", None
+    inner = s.inner
+    inner_builder = RegressorBuilder(u, builder.y, structure=inner)
+    with warnings.catch_warnings(record=True) as caught:    # said once, by the final fit
+        warnings.simplefilter("always")
+        got = output_error_result(inner_builder, options, bounds,
+                                  operating_point=operating_point, executor=executor)
+    del caught
+    z = simulate_predictor(inner, got.linear, got.nonlinear, u) + y0
+    eta0 = s.output_map.start(z, builder.y + y0)
+    origin = ("the fit without the output map (h the identity"
+              + (", limits at the measured output's range)" if s.output_map.kind == "saturation"
+                 else ")"))
+    identity = (float(got.details.get("simulation_sse", np.nan)), got.status.name)
+    return got.linear, np.r_[got.nonlinear, eta0], origin, identity
+
+
+def series_result(builder, options, bounds, *, operating_point=(0.0, 0.0), executor=None):
+    """``method="output_error"`` for a structure with a series output map ``y = h(z)``.
+
+    First the same structure without ``h`` (today's model, its default chain of starts), then
+    ``h``'s parameters from the data (:meth:`~fohw.model.output_map.SeriesMap.start`: the
+    identity, a saturation's limits at the measured output's range), then every parameter
+    together by simulation error with the exact Jacobian through ``h`` (:func:`fit_series`).
+    The series model therefore never ends with a larger criterion than the model without ``h``
+    it contains (exactly for a saturation, whose start clip only moves ``z`` toward ``y``; to
+    rounding for the other maps, whose start is the identity).
+    """
+    s = builder.structure
+    y0 = operating_point[1]
+    y_data = builder.y + y0
+    hmap = s.output_map.resolve(y_data)
+    hmap.check_data(y_data)
+    if hmap is not s.output_map:
+        s = s.with_output_map(hmap)
+        builder = RegressorBuilder(builder.u, builder.y, structure=s)
+    check_enough_samples(builder.n_samples - options.n_init, s,
+                         after=f" after n_init = {options.n_init}" if options.n_init else "")
+    lower, upper = bounds
+    record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
+    linear0, params0, origin, identity = _series_start(builder, s, options, bounds,
+                                                       operating_point, executor)
+    fit = fit_series(builder, linear0, params0, lower=lower, upper=upper, y0=y0,
+                     n_init=options.n_init, max_nfev=options.max_nfev)
+    details = {"start": origin, "simulation_sse": fit.sse}
+    message = fit.message + f". Started from {origin}"
+    if identity is not None:
+        details["identity_sse"] = identity[0]
+        message += (f", whose simulation error sum of squares was {identity[0]:.6g} "
+                    f"({identity[1]}); now {fit.sse:.6g}")
+    message += f". Simulation error criterion from sample {options.n_init} on."
+    n_free = len(s.orders.free)
+    for j, name in enumerate(s.orders.free):
+        if fit.at_lower[j] or fit.at_upper[j]:
+            message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j],
+                                  value=fit.params[j])
+    inner_params = fit.params[:fit.params.shape[0] - hmap.n_params]
+    Phi = RegressorBuilder(builder.u, builder.y, structure=s.inner).matrix(inner_params)
+    return finish(builder, method="output_error", linear=fit.linear, params=fit.params,
+                  status=fit.status, nit=fit.nit, nfev=fit.nfev, message=message,
+                  alpha_at_bound=bool(np.any(fit.at_lower[:n_free]) or np.any(fit.at_upper)),
+                  options=record, details=details, Phi=Phi, covariance=fit.covariance,
+                  noise_variance=fit.noise_variance, operating_point=operating_point)
+
+
 #: ``method="output_error"`` as :func:`fohw.identify` dispatches it (every structure).
-METHOD = Method("output_error", OutputErrorOptions, output_error_result, parallel=True)
+METHOD = Method("output_error", OutputErrorOptions, output_error_result, parallel=True,
+                output_map=True)

@@ -57,7 +57,8 @@ class Problem:
 
 
 def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=False,
-            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0)):
+            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
+            output_map=None):
     """Check a record and a model class; warn about the data once; return the :class:`Problem`.
 
     The keywords are those of :func:`fohw.identify`.
@@ -70,7 +71,7 @@ def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=Fal
         raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
     structure = Structure.make(na=check_int(na, "na", minimum=1), nb=check_int(nb, "nb", minimum=1),
                                f_basis=f_basis, g_basis=g_basis, orders=orders,
-                               offset=bool(offset), past=past, dt=dt)
+                               offset=bool(offset), past=past, dt=dt, output_map=output_map)
     bounds = _order_bounds(structure, alpha_bounds)
     u_dev = u - point[0] if point[0] else u
     y_dev = y - point[1] if point[1] else y
@@ -117,6 +118,12 @@ def fit_method(method, options, u, y, executor=None, **model):
                                  f"None; got {type(executor).__name__}.")
         extra["executor"] = executor
     problem = prepare(u, y, **model)
+    if problem.structure.output_map is not None and not method.output_map:
+        raise ParameterError(
+            f"method {method.name!r} cannot fit a series `output_map` "
+            f"({problem.structure.output_map.describe()}): it minimises the one-step "
+            "(equation) error, and y = h(z) puts the unmeasured z inside the equation. Use "
+            "method='output_error' (simulation error), or fit without output_map first.")
     reason = method.supports(problem.structure)
     if reason:
         raise ParameterError(f"method {method.name!r} {reason}")

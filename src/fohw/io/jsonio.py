@@ -258,7 +258,10 @@ def load_model(path: str | os.PathLike, *, f_basis: Basis | None = None,
 
 
 # ---- results ----------------------------------------------------------------------------------
-_RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(IdentificationResult))
+#: ``output_map_params`` is written only for a structure with a series output map.
+_OPTIONAL_RESULT_FIELDS = ("output_map_params",)
+_RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(IdentificationResult)
+                       if f.name not in _OPTIONAL_RESULT_FIELDS)
 _V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
                  "alpha_profile")
 
@@ -320,7 +323,16 @@ def _result_from_v2(d, path):
 
 def _check_result_fields(d, version, path):
     """Every field of a result's content has its type and a finite value, before use."""
-    _require_fields(d, _RESULT_FIELDS, "fohw-result", version, path)
+    _require_fields(d, _RESULT_FIELDS + tuple(k for k in _OPTIONAL_RESULT_FIELDS if k in d),
+                    "fohw-result", version, path)
+    if "output_map_params" in d:
+        params = d["output_map_params"]
+        if not isinstance(params, dict) or not all(_is_number(v) and np.isfinite(v)
+                                                   for v in params.values()):
+            _bad(d, "output_map_params", "an object of finite numbers", path)
+        if "output_map" not in d["structure"]:
+            raise DataFileError(f"{path}: field 'output_map_params' is given, but field "
+                                "'structure' has no output map: the file contradicts itself.")
     for key in ("method", "message", "schedule"):
         if not isinstance(d[key], str):
             _bad(d, key, "a string", path)
@@ -368,7 +380,7 @@ _DETAILS = {"alpha_history": (1, ORDER_RANGE), "alpha_sample_history": (1, ORDER
             "J_history": (1, (0.0, np.inf)), "theta_history": (2, None),
             "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None),
             "starts": ("starts", None), "n_starts_agreed": ("count", None),
-            "integer_sse": (0, (0.0, np.inf))}
+            "integer_sse": (0, (0.0, np.inf)), "identity_sse": (0, (0.0, np.inf))}
 #: The fields of each entry of ``details["starts"]`` (output_error's chain of starts).
 _START_FIELDS = {"start", "orders", "start_sse", "sse", "status", "nfev"}
 
@@ -377,10 +389,11 @@ def _contradiction(path, text):
     raise DataFileError(f"{path}: {text}: the file contradicts itself.")
 
 
-def _structure_field(body, f, g, path):
+def _structure_field(body, f, g, path, output_map=None):
     """The stored model class, or a DataFileError naming ``structure``."""
     try:
-        return Structure.from_dict(body["structure"], f_basis=f, g_basis=g)
+        return Structure.from_dict(body["structure"], f_basis=f, g_basis=g,
+                                   output_map=output_map)
     except ParameterError as exc:
         raise DataFileError(f"{path}: field 'structure' is not a model class fohw can read: "
                             f"{exc}") from None
@@ -532,7 +545,7 @@ def _check_v2_copies(result, copies, path):
                             "file contradicts itself.")
 
 
-def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
+def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, path="<dict>"):
     """The result of a result file's content (:func:`result_to_dict`; version 2 files too).
 
     Every field is checked for its type and, for numbers, finiteness before use (the estimates,
@@ -554,9 +567,10 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>"):
     _check_result_fields(body, version, path)
     f = _basis(body["structure"]["f_basis"], f_basis, "f_basis", path)
     g = _basis(body["structure"]["g_basis"], g_basis, "g_basis", path)
-    _check_agreement(body, _structure_field(body, f, g, path), path)
+    _check_agreement(body, _structure_field(body, f, g, path, output_map), path)
     try:
-        result = IdentificationResult.from_dict(body, f_basis=f, g_basis=g)
+        result = IdentificationResult.from_dict(body, f_basis=f, g_basis=g,
+                                                output_map=output_map)
     except (ParameterError, DimensionError) as exc:      # one fact against another
         raise DataFileError(f"{path}: inconsistent fohw-result file: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -600,7 +614,7 @@ def save_result(result: IdentificationResult, path: str | os.PathLike) -> None:
 
 
 def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
-                g_basis: Basis | None = None) -> IdentificationResult:
+                g_basis: Basis | None = None, output_map=None) -> IdentificationResult:
     """Read an identification result written by :func:`save_result`.
 
     Parameters
@@ -608,6 +622,9 @@ def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
     path : str or os.PathLike
     f_basis, g_basis : Basis, optional
         Needed (and checked by name) when the result used custom basis functions.
+    output_map : SeriesMap, optional
+        Needed (and checked by name) when the result has a custom series output map
+        (:class:`fohw.model.output_map.CustomMap`: code is never stored).
 
     Returns
     -------
@@ -620,4 +637,4 @@ def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
         disagree (:func:`result_from_dict` lists the checks); the message names the field.
     """
     return result_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
-                            path=os.fspath(path))
+                            output_map=output_map, path=os.fspath(path))

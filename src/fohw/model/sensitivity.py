@@ -62,7 +62,7 @@ def basis_derivative(basis, x):
     return (basis.evaluate(x + step) - basis.evaluate(x - step)) / (2.0 * step)
 
 
-def simulation_jacobian(structure, linear, params, u):
+def simulation_jacobian(structure, linear, params, u, *, y0=0.0):
     """Free-run output of a structure and its exact derivative with respect to the parameters.
 
     Parameters
@@ -76,6 +76,11 @@ def simulation_jacobian(structure, linear, params, u):
         The nonlinear parameters (:attr:`Structure.nonlinear_names`).
     u : array_like, shape (N,)
         The input, as a deviation from the operating point.
+    y0 : float, optional
+        The output's operating point, for a structure with a series output map ``h`` (which
+        acts in the data's units): the output is then ``h(z + y0) - y0`` with ``z`` the free
+        run of :attr:`Structure.inner`, and the Jacobian ``[h'(z + y0) S_z, dh/d(h_*)]`` (the
+        chain rule through ``h``, exact). Default 0.
 
     Returns
     -------
@@ -106,6 +111,17 @@ def simulation_jacobian(structure, linear, params, u):
     >>> S.shape, bool(np.allclose(y, fohw.simulate(m, u)))
     ((300, 11), True)
     """
+    hmap = getattr(structure, "output_map", None)
+    if hmap is not None:
+        params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+        eta = structure.output_map_params(params)
+        z, S = simulation_jacobian(structure.inner, linear, params[:params.shape[0] - eta.shape[0]],
+                                   u)
+        zd = z + y0
+        y = hmap.evaluate(zd, eta)
+        G = np.hstack([hmap.derivative(zd, eta)[:, None] * S,
+                       hmap.param_jacobian(zd, eta).reshape(z.shape[0], eta.shape[0])])
+        return (y - y0 if y0 != 0.0 else y), G
     y, E, lags, betas, coefs = _feedback_problem(structure, linear, params, u)
     return y, _solve_feedback(E, lags, betas, coefs)
 

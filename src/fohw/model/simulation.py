@@ -31,8 +31,8 @@ from .structure import Structure
 from .system import HammersteinWiener, check_pair
 
 __all__ = ["simulate", "simulate_predictor", "equation_noise", "free_run", "forcing", "recursion",
-           "accumulators", "output_terms", "Accumulators", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE",
-           "LEAF_SIZE_COMPILED"]
+           "accumulators", "output_terms", "Accumulators", "apply_output_map",
+           "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
 
 #: Below this record length the simulator runs the recursion directly (one dot product per
 #: output signal and sample); above it, by divide and conquer (:func:`recursion`).
@@ -51,7 +51,8 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
              divergence_threshold: float | None = None,
-             history: tuple[ArrayLike, ArrayLike] | None = None) -> np.ndarray:
+             history: tuple[ArrayLike, ArrayLike] | None = None,
+             initial: Any = None) -> np.ndarray:
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
     Parameters
@@ -90,6 +91,9 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         Measured input and output just before ``u`` (same units): the simulation continues
         from them, its GL memory holding that history, in free run from the first sample of
         ``u``. The model's past levels (if any) apply before the history.
+    initial : str, tuple or InitialState, optional
+        With an identification result only: its initial state, as ``result.simulate(u,
+        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit).
 
     Returns
     -------
@@ -119,6 +123,11 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     once per process, for simulations of at least ``2**18`` samples or once that many have
     run; docs/performance.md, measured on an idle 2-core machine).
 
+    A structure with a series output map (:attr:`Structure.output_map`) gives
+    ``h(z; h_*)``, ``z`` the recursion's output in the data's units (the operating point added
+    back), with the map's parameters last in ``params``; a measured ``history`` enters the
+    recursion through the map's inverse.
+
     A model is simulated through its rank-one blocks (``gbar`` fed back once); a result or a
     structure through theta's blocks, one signal per basis function or per output term,
     whichever is fewer. The two agree to rounding for a theta of the form ``[q ⊗ a, p ⊗ b]``.
@@ -141,6 +150,10 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     True
     """
     kinds = "a HammersteinWiener, an identification result or a Structure with `params`"
+    if initial is not None and not callable(getattr(model, "initial_state", None)):
+        raise ParameterError(f"`initial` is for an identification result; got it with a "
+                             f"{type(model).__name__} (fohw.compare takes `initial` for a "
+                             "HammersteinWiener too).")
     if isinstance(model, HammersteinWiener):
         _only_for_structure(params, operating_point, "a HammersteinWiener")
         return _simulate_model(model, u, noise=noise, noise_std=noise_std,
@@ -163,7 +176,7 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
                       divergence_threshold=divergence_threshold, history=history)
         own = getattr(model, "simulate", None)
         if callable(own):          # a result: its own checks (input range), then this engine
-            return own(u, **kwargs)
+            return own(u, **kwargs) if initial is None else own(u, initial=initial, **kwargs)
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
@@ -231,9 +244,28 @@ def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0,
     u = check_array(u, "u")
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
     Q, A = _output_representation(qa)
-    return free_run(structure, Q, A, qa, pb, values, u, v, offset=offset, past=past,
-                    operating_point=check_pair(operating_point, "operating_point"),
-                    threshold=_check_threshold(divergence_threshold), history=history)
+    hmap = structure.output_map
+    if hmap is not None:
+        eta = hmap.check_params(structure.output_map_params(nonlinear))
+        if history is not None:            # the recursion's memory holds z, not y = h(z)
+            u_hist, y_hist = _check_history(history)
+            history = (u_hist, hmap.inverse(y_hist, eta))
+    z = free_run(structure, Q, A, qa, pb, values, u, v, offset=offset, past=past,
+                 operating_point=check_pair(operating_point, "operating_point"),
+                 threshold=_check_threshold(divergence_threshold), history=history)
+    return z if hmap is None else apply_output_map(hmap, eta, z)
+
+
+def apply_output_map(output_map, params, z):
+    """``y = h(z; params)`` of a series output map (data units), checked to be finite."""
+    y = output_map.evaluate(z, params)
+    if y.shape != z.shape or not np.all(np.isfinite(y)):
+        k = int(np.flatnonzero(~np.isfinite(y))[0]) if y.shape == z.shape else 0
+        raise ParameterError(f"the output map {output_map.describe()} returned "
+                             f"{'shape ' + str(y.shape) if y.shape != z.shape else y[k]!r} for the "
+                             f"model output z{'' if y.shape != z.shape else f'[{k}] = {z[k]!r}'}: "
+                             "it must return a finite value per sample.")
+    return y
 
 
 def forcing(pb, in_terms, qa, out_terms, f_basis, g_basis, u, v, h, offset, past):

@@ -8,7 +8,8 @@ the split that separable least squares exploits:
 * **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by :class:`fohw.ThetaLayout`), then the
   offset ``c`` if there is one;
 * **nonlinear**: the free orders (in :attr:`Orders.free` order), then the levels ``u_past`` and
-  ``y_past`` of the unseen past if ``past="estimate"``.
+  ``y_past`` of the unseen past if ``past="estimate"``, then the parameters of a series output
+  map ``h`` (``h_*``, :mod:`fohw.model.output_map`) if there is one.
 
 The equation (Eq. 16 generalised; deviations from the operating point, see
 :class:`fohw.HammersteinWiener`) is
@@ -37,6 +38,7 @@ from .._validation import check_scalar
 from ..exceptions import DimensionError, ParameterError
 from .basis import Basis, as_basis
 from .orders import Orders
+from .output_map import SeriesMap, as_output_map, output_map_from_dict
 from .params import ThetaLayout
 
 __all__ = ["Structure", "PAST_MODES"]
@@ -61,6 +63,9 @@ class Structure:
         What the signals did before ``k = 0`` (see the module notes).
     dt : float
         Sampling time ``h > 0``; every term is divided by ``h**nu`` (Eq. 4).
+    output_map : SeriesMap, str, int or None
+        A series output block ``y = h(z)`` after the recursion (data units,
+        :mod:`fohw.model.output_map`); None (default): the measured output is ``z`` itself.
 
     Examples
     --------
@@ -76,6 +81,7 @@ class Structure:
     offset: bool = False
     past: str = "rest"
     dt: float = 1.0
+    output_map: SeriesMap | None = None
 
     def __post_init__(self):
         if not isinstance(self.orders, Orders):
@@ -88,11 +94,32 @@ class Structure:
             raise ParameterError(f"`past` must be one of {PAST_MODES}; got {self.past!r}.")
         object.__setattr__(self, "dt", check_scalar(self.dt, "dt", lower=0.0,
                                                     lower_inclusive=False))
+        object.__setattr__(self, "output_map", as_output_map(self.output_map))
 
     @classmethod
-    def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0):
+    def make(cls, *, na, nb, f_basis, g_basis, orders=None, offset=False, past="rest", dt=1.0,
+             output_map=None):
         """A structure from the spellings :func:`fohw.identify` accepts (``orders`` preset, …)."""
-        return cls(Orders.resolve(orders, na=na, nb=nb), f_basis, g_basis, offset, past, dt)
+        return cls(Orders.resolve(orders, na=na, nb=nb), f_basis, g_basis, offset, past, dt,
+                   output_map)
+
+    @property
+    def inner(self) -> Structure:
+        """The structure without its series output map (itself when it has none): ``z``'s model."""
+        if self.output_map is None:
+            return self
+        return Structure(self.orders, self.f_basis, self.g_basis, self.offset, self.past, self.dt)
+
+    def with_output_map(self, output_map) -> Structure:
+        """The same structure with another series output map (None: without one)."""
+        return Structure(self.orders, self.f_basis, self.g_basis, self.offset, self.past, self.dt,
+                         output_map)
+
+    def output_map_params(self, params) -> np.ndarray:
+        """The output map's parameters: the last entries of a nonlinear vector (empty if none)."""
+        n = 0 if self.output_map is None else self.output_map.n_params
+        params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+        return params[params.shape[0] - n:].copy()
 
     @cached_property
     def layout(self) -> ThetaLayout:
@@ -115,7 +142,7 @@ class Structure:
     def is_paper_model(self) -> bool:
         """The paper's Eq. (16): commensurate orders, no offset, rest before 0, ``dt = 1``."""
         return (self.orders.is_commensurate and not self.offset and self.past == "rest"
-                and self.dt == 1.0)
+                and self.dt == 1.0 and self.output_map is None)
 
     @property
     def linear_names(self) -> tuple[str, ...]:
@@ -124,8 +151,9 @@ class Structure:
 
     @property
     def nonlinear_names(self) -> tuple[str, ...]:
-        """Names of the nonlinear parameters: the free orders, then ``u_past``, ``y_past``."""
-        return self.orders.free + (PAST_NAMES if self.past == "estimate" else ())
+        """Names of the nonlinear parameters: the free orders, ``u_past``, ``y_past``, ``h_*``."""
+        return (self.orders.free + (PAST_NAMES if self.past == "estimate" else ())
+                + (() if self.output_map is None else self.output_map.names))
 
     @property
     def n_linear(self) -> int:
@@ -209,12 +237,15 @@ class Structure:
         >>> fohw.Structure.from_dict(s.to_dict()) == s
         True
         """
-        return {"orders": self.orders.to_dict(), "f_basis": self.f_basis.to_dict(),
-                "g_basis": self.g_basis.to_dict(), "offset": self.offset, "past": self.past,
-                "dt": self.dt}
+        d = {"orders": self.orders.to_dict(), "f_basis": self.f_basis.to_dict(),
+             "g_basis": self.g_basis.to_dict(), "offset": self.offset, "past": self.past,
+             "dt": self.dt}
+        if self.output_map is not None:          # written only when there is one
+            d["output_map"] = self.output_map.to_dict()
+        return d
 
     @classmethod
-    def from_dict(cls, d, *, f_basis=None, g_basis=None) -> Structure:
+    def from_dict(cls, d, *, f_basis=None, g_basis=None, output_map=None) -> Structure:
         """Inverse of :meth:`to_dict`.
 
         Parameters
@@ -223,6 +254,8 @@ class Structure:
             As written by :meth:`to_dict`.
         f_basis, g_basis : Basis, optional
             Needed for a custom basis, and checked against ``d`` (:meth:`Basis.from_dict`).
+        output_map : SeriesMap, optional
+            Needed for a custom output map, and checked against ``d``.
 
         Raises
         ------
@@ -230,21 +263,26 @@ class Structure:
             A field is missing or invalid (the message names it).
         """
         keys = {"orders", "f_basis", "g_basis", "offset", "past", "dt"}
-        if not isinstance(d, dict) or set(d) != keys:
-            raise ParameterError(f"`structure` must have exactly the fields {sorted(keys)}; got "
+        if not isinstance(d, dict) or set(d) - {"output_map"} != keys:
+            raise ParameterError(f"`structure` must have exactly the fields {sorted(keys)} (and "
+                                 f"optionally 'output_map'); got "
                                  f"{sorted(d) if isinstance(d, dict) else d!r}.")
         return cls(Orders.from_dict(d["orders"]),
                    Basis.from_dict(d["f_basis"], f_basis, name="f_basis"),
                    Basis.from_dict(d["g_basis"], g_basis, name="g_basis"),
-                   offset=d["offset"], past=d["past"], dt=d["dt"])
+                   offset=d["offset"], past=d["past"], dt=d["dt"],
+                   output_map=None if "output_map" not in d else output_map_from_dict(
+                       d["output_map"], output_map))
 
     def __eq__(self, other):
         return (isinstance(other, Structure) and self.orders == other.orders
                 and self.f_basis == other.f_basis and self.g_basis == other.g_basis
-                and (self.offset, self.past, self.dt) == (other.offset, other.past, other.dt))
+                and (self.offset, self.past, self.dt) == (other.offset, other.past, other.dt)
+                and self.output_map == other.output_map)
 
     def __hash__(self):
-        return hash((self.orders, self.f_basis, self.g_basis, self.offset, self.past, self.dt))
+        return hash((self.orders, self.f_basis, self.g_basis, self.offset, self.past, self.dt,
+                     self.output_map))
 
     def describe(self) -> str:
         """One line: the terms and their orders, offset, past and dt."""
@@ -255,4 +293,6 @@ class Structure:
             parts.append(f"past={self.past!r}")
         if self.dt != 1.0:
             parts.append(f"dt={self.dt:g}")
+        if self.output_map is not None:
+            parts.append(f"output_map={self.output_map.describe()}")
         return ", ".join(parts)
