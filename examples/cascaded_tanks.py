@@ -126,6 +126,16 @@ def orders_text(res):
     return text + (" (at a bound)" if res.alpha_at_bound else "")
 
 
+def order_test_text(res):
+    """``result.order_test()`` (the LR test against the chain's orders-0 fit) in a cell."""
+    t = res.order_test()
+    if t is None:
+        return "-"
+    if not np.isfinite(t.pvalue):
+        return f"LR = {t.statistic:.3g}, df {t.df}, no p-value (order unidentified under the null)"
+    return f"LR = {t.statistic:.3g}, df {t.df}, p = {t.pvalue:.2g}"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--outdir", type=Path, default=Path("results"))
@@ -187,21 +197,22 @@ def main(argv=None):
            + (", ".join(f"{r['candidate']} ({r['status']})" for r in sel.rows
                         if r["status"] != "ok") or "none") + ".", "",
            "## 2. Validation record (free run), best of each class", "",
-           "| model | structure | orders | estimation RMSE (V) | validation RMSE (V) | "
-           "validation fit % |", "|---|---|---|---:|---:|---:|"]
+           "| model | structure | orders | LR test vs orders 0 | estimation RMSE (V) | "
+           "validation RMSE (V) | validation fit % |", "|---|---|---|---|---:|---:|---:|"]
     for cls, v in validated.items():
         res = v["result"]
         est_rmse = v.get("rmse_est", np.nan)
         out.append(f"| fohw, {CLASSES[cls]} | {describe(v['row'])} | {orders_text(res)} | "
-                   f"{est_rmse:.3f} | {v['rmse']:.3f} | {v['fit']:.1f} |"
+                   f"{order_test_text(res)} | {est_rmse:.3f} | {v['rmse']:.3f} | "
+                   f"{v['fit']:.1f} |"
                    if v["status"] == "ok" else
                    f"| fohw, {CLASSES[cls]} | {describe(v['row'])} | {orders_text(res)} | "
-                   f"- | {v['status']} | - |")
+                   f"{order_test_text(res)} | - | {v['status']} | - |")
     if same0 is not None:
         out.append(f"| fohw, the selected structure with every order 0 | {describe(same0['candidate'])} "
-                   f"| - | {same0.get('rmse_est', np.nan):.3f} | {same0['rmse']:.3f} | "
+                   f"| - | - | {same0.get('rmse_est', np.nan):.3f} | {same0['rmse']:.3f} | "
                    f"{same0['fit']:.1f} |")
-    out.append(f"| linear output error B/F (means removed) | nb = nf = {lin['n']} | - | "
+    out.append(f"| linear output error B/F (means removed) | nb = nf = {lin['n']} | - | - | "
                f"{lin['rmse_est']:.3f} | {lin['rmse']:.3f} | {lin['fit']:.1f} |")
     out += ["", f"The selected class (best held-back fit): **{CLASSES[win_cls]}**, "
             f"{describe(winner)}.", "",

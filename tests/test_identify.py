@@ -346,10 +346,6 @@ def test_an_order_ending_at_0_with_past_levels_simulates_as_fitted():
         res.simulate(e.u)                   # its levels are not applied to a record unasked
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 26, open: on this record output_error's default chain of starts ends at MAX_ITER "
-    "with simulation SSE 63.23, above the 57.83 that the varpro start alone reaches "
-    "(CONVERGED); the chain does not always search the start that would win"))
 def test_the_default_chain_does_at_least_as_well_as_the_varpro_start():
     e = fohw.datasets.cascaded_tanks().estimation
     kw = dict(na=2, nb=2, f_basis=2, g_basis=3, orders="per_lag", offset=True,

@@ -240,3 +240,36 @@ def test_profile_interval_covers_the_true_order_at_its_level():
         covered += low <= 0.5 <= high
     rate = covered / n_seeds
     assert abs(rate - 0.95) <= binomial_tolerance(0.95, n_seeds), rate
+
+
+@pytest.mark.parametrize("orders", ["commensurate", "per_lag"])
+def test_order_test_is_lr_test_against_an_independent_integer_fit(orders):
+    # result.order_test() reads the integer fit the default chain made (details["integer_sse"]);
+    # fohw.lr_test compares with a separately fitted orders-0 result: the same statistic, df
+    # and p-value (same record, same method, same criterion).
+    data = fohw.datasets.paper_example(400, random_state=2)
+    kw = dict(na=2, nb=2, f_basis=2, g_basis=3, method="output_error")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        full = fohw.identify(data.u, data.y, orders=orders, **kw)
+        integer = fohw.identify(data.u, data.y, orders=0, **kw)
+    quick, ref = full.order_test(), fohw.lr_test(integer, full)
+    assert quick.df == ref.df and quick.distribution == ref.distribution
+    np.testing.assert_allclose([quick.statistic, quick.pvalue], [ref.statistic, ref.pvalue],
+                               rtol=1e-6)
+    assert str(quick) in full.summary()
+    again = fohw.IdentificationResult.from_dict(full.to_dict())
+    assert again.order_test() == quick
+
+
+def test_order_test_of_the_mixed_class_needs_the_record():
+    data = fohw.datasets.paper_example(300, random_state=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        full = fohw.identify(data.u, data.y, na=1, nb=1, f_basis=1, g_basis=1,
+                             orders="mixed", method="output_error")
+        varpro = fohw.identify(data.u, data.y, na=1, nb=1, f_basis=1, g_basis=1,
+                               orders="mixed")
+    t = full.order_test()
+    assert np.isnan(t.pvalue) and "lr_test" in t.note and t.unidentified == ("alpha",)
+    assert varpro.order_test() is None                 # no integer fit kept: lr_test it

@@ -169,7 +169,7 @@ def test_the_mappings_and_arrays_are_read_only():
 def test_outputs_live_in_details_and_settings_in_options():
     r = FITS["output_error_mixed"]()
     assert set(r.details) == {"simulation_sse", "alpha_history", "J_history", "starts",
-                              "n_starts_agreed"}           # the default chain (issue 26)
+                              "n_starts_agreed", "integer_sse"}   # the default chain (issue 26)
     assert "simulation_sse" not in r.options and r.options["start"] is None
     started = FITS["output_error_from_a_result"]()
     assert started.details["start"] == "the given start"

@@ -173,3 +173,42 @@ def test_default_chain_finds_the_true_basin(orders):
         res = _fit(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders=orders, method="output_error")
         found += _sse(res) <= float(np.sum((y - y0) ** 2)) * (1 + 1e-3)
     assert found >= 38
+
+
+
+def test_a_search_never_ends_above_its_start_at_order_0_with_estimated_past_levels(tanks):
+    # With past="estimate" the model jumps at an order of exactly 0 (the level is kept at 0,
+    # forgotten above it), and the solver starts 1e-10 inside its bounds: a start at order 0
+    # was searched from the nu -> 0+ model instead and could end far above the start it was
+    # given (this per-lag fit from its orders-0 fit: start SSE 86.8, end 4227, MAX_ITER).
+    e = tanks
+    kw = dict(na=2, nb=2, f_basis=2, g_basis=3, offset=True, operating_point="mean", dt=4,
+              past="estimate", method="output_error")
+    zero = _fit(e.u, e.y, orders=0, **kw)
+    full = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=3, orders="per_lag",
+                               offset=True, past="estimate", dt=4)
+    linear, params = embed(zero.structure, zero.linear, zero.nonlinear, full,
+                           dict.fromkeys(full.orders.free, 0.0))
+    res = _fit(e.u, e.y, orders="per_lag", start=(linear, params), **kw)
+    assert _sse(res) <= _sse(zero) * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("method", ["varpro", "structured"])
+@pytest.mark.parametrize("record", ["tanks", "robot_arm"])
+def test_equation_error_classes_at_least_as_good_as_their_integer_model(method, record):
+    # Item 1 for the equation-error methods: their criterion J of every class <= the orders-0
+    # J of the same candidate (1e-6: the solvers' relative tolerances are 1e-8 and below).
+    if record == "tanks":
+        e = fohw.datasets.cascaded_tanks().estimation
+        u, y, kw = e.u[:768], e.y[:768], dict(offset=True, operating_point="mean", dt=4.0)
+    else:
+        r = fohw.datasets.robot_arm()
+        u, y, kw = r.u[:384], r.y[:384], {}
+    bad = []
+    for cand in GRID:
+        zero = _fit(u, y, orders=0, method=method, **cand, **kw).J
+        for orders in ("commensurate", "mixed", "per_lag"):
+            got = _fit(u, y, orders=orders, method=method, **cand, **kw).J
+            if got > zero * (1 + 1e-6):
+                bad.append((cand, orders, got, zero))
+    assert not bad

@@ -79,6 +79,9 @@ class ResultPresentation:
                     lines.append(f"  {name} = [{vals}]")
         if self.alpha_at_bound:
             lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
+        test = self.order_test() if "integer_sse" in self.details else None
+        if test is not None:
+            lines += ["", f"  {test}"]
         if linear_block:
             lines += ["", *self._linear_block_lines()]
         return "\n".join(lines)

@@ -58,7 +58,7 @@ class Status(enum.IntEnum):
 #: the five histories and profiles are also read as attributes of the result.
 DETAIL_KEYS = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
                "alpha_profile", "simulation_sse", "start", "starts", "n_starts_agreed",
-               "identity_sse")
+               "integer_sse", "identity_sse")
 
 
 def _readonly(a):
@@ -215,9 +215,12 @@ class IdentificationResult(ResultPresentation):
         Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
         ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
         ``alpha_profile`` (see the properties of those names), ``simulation_sse`` (the
-        simulation-error sum of squares of ``"output_error"``), ``identity_sse`` (that of the
-        fit without the series output map, which the fit with it starts from) and ``start`` (which start an
-        ``"output_error"`` or ``"structured"`` fit began from).
+        simulation-error sum of squares of ``"output_error"``), ``start`` (which start an
+        ``"output_error"`` or ``"structured"`` fit began from), ``starts`` and
+        ``n_starts_agreed`` (its default chain's local searches), ``integer_sse`` (the
+        simulation-error sum of squares of the integer class it contains, every order 0,
+        fitted by that chain: :meth:`order_test`) and ``identity_sse`` (that of the fit
+        without the series output map, which the fit with it starts from).
 
     Notes
     -----
@@ -689,6 +692,17 @@ class IdentificationResult(ResultPresentation):
         from .analysis.validation import compare
 
         return compare(self, u, y, **kwargs)
+
+    def order_test(self):
+        """The likelihood-ratio test of the free orders against orders 0, without refitting.
+
+        For an ``"output_error"`` fit by the default chain of starts, which fits the integer
+        class it contains (``details["integer_sse"]``); None otherwise (use
+        :func:`fohw.lr_test` with both fits). An order not identified under the null (the
+        mixed class) has no p-value here (NaN): :func:`fohw.lr_test` with the record gives
+        Davies' bound or a bootstrap. See :func:`fohw.analysis.lrtest.order_test`.
+        """
+        return REFITS["order_test"](self)
 
     def order_interval(self, name, level=0.95, *, u=None, y=None):
         """Profile-likelihood interval ``(low, high)`` of free order ``name``.

@@ -50,6 +50,8 @@ from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
 from ..exceptions import ParameterError
 from ..model.orders import Orders
+from ..model.structure import Structure
+from ..results import REFITS
 from .profile_interval import (
     check_data,
     check_result,
@@ -59,8 +61,8 @@ from .profile_interval import (
     refit,
 )
 
-__all__ = ["LRTest", "lr_test", "davies_bound", "chi_bar_squared_sf", "cancelled_orders",
-           "REFERENCES"]
+__all__ = ["LRTest", "lr_test", "order_test", "davies_bound", "chi_bar_squared_sf",
+           "cancelled_orders", "REFERENCES"]
 
 #: ``reference=`` spellings.
 REFERENCES = ("auto", "mixture", "davies", "bootstrap")
@@ -249,6 +251,14 @@ def _check_nested(restricted, full):
     return boundary, unidentified
 
 
+def _mixture(stat, k):
+    """``(pvalue, distribution)`` of the chi-bar-squared reference of ``k`` boundary orders."""
+    distribution = ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1" if k == 1 else
+                    f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_j (orders assumed "
+                    "uncorrelated)")
+    return chi_bar_squared_sf(stat, k), distribution
+
+
 def _statistic(rss_r, rss_f, n):
     return max(n * math.log(rss_r / rss_f), 0.0)
 
@@ -287,6 +297,56 @@ def _bootstrap_one(restricted, full, u, seed, noise_std):
     f = refit(full, u, y)
     rss_r, n = criterion(r)
     return _statistic(rss_r, criterion(f)[0], n)
+
+
+def _notes(full, rss_r, rss_f):
+    notes = list(cancelled_orders(full).values())
+    if rss_f > rss_r * (1 + 1e-9):
+        notes.append(f"The full fit's RSS ({rss_f:.6g}) is above the restricted one's "
+                     f"({rss_r:.6g}), though its class contains it: the full fit missed its "
+                     "optimum; the statistic is set to 0.")
+    return notes
+
+
+def order_test(full):
+    """:func:`lr_test` of an ``"output_error"`` fit against the integer fit its chain made.
+
+    The default chain of starts of ``method="output_error"`` fits the integer class the fit's
+    class contains (every order 0, as :func:`null_orders` builds it) and keeps its free-run RSS
+    in ``details["integer_sse"]``; this is the test :func:`lr_test` computes from that fit and
+    ``full``, without refitting (the same statistic, df and mixture). An order not identified
+    under the null (the mixed class) gets no p-value here (NaN): Davies' bound and the
+    bootstrap need the record (:func:`lr_test` with ``u``, ``y``).
+
+    Returns
+    -------
+    LRTest or None
+        None when ``full`` has no ``details["integer_sse"]`` (another method, a given start,
+        no free order, or a bound of an order above 0).
+    """
+    full = check_result(full, "full")
+    if "integer_sse" not in full.details or not full.orders:
+        return None
+    if any(order_bounds(full, name)[0] != 0.0 for name in full.orders):
+        return None
+    fs = full.structure
+    null, boundary, unidentified = null_orders(fs.orders)
+    rs = Structure(null, fs.f_basis, fs.g_basis, fs.offset, fs.past, fs.dt)
+    rss_r = float(full.details["integer_sse"])
+    rss_f, n = criterion(full)
+    stat = _statistic(rss_r, rss_f, n)
+    df = fs.n_linear - rs.n_linear + fs.n_nonlinear - rs.n_nonlinear
+    notes = _notes(full, rss_r, rss_f)
+    if unidentified:
+        pvalue, distribution = math.nan, "none without the record"
+        notes.append(f"The order(s) {list(unidentified)} are not identified under the null "
+                     "(Davies 1977): fohw.lr_test(restricted, full, u=u, y=y) gives Davies' "
+                     "bound or a bootstrap p-value.")
+    else:
+        pvalue, distribution = _mixture(stat, len(boundary))
+    return LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
+                  criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
+                  boundary=boundary, unidentified=unidentified, note=" ".join(notes))
 
 
 def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=199,
@@ -353,11 +413,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     stat = _statistic(rss_r, rss_f, n)
     df = (full.structure.n_linear - restricted.structure.n_linear
           + full.structure.n_nonlinear - restricted.structure.n_nonlinear)
-    notes = list(cancelled_orders(full).values())
-    if rss_f > rss_r * (1 + 1e-9):
-        notes.append(f"The full fit's RSS ({rss_f:.6g}) is above the restricted one's "
-                     f"({rss_r:.6g}), though its class contains it: the full fit missed its "
-                     "optimum; the statistic is set to 0.")
+    notes = _notes(full, rss_r, rss_f)
     if reference == "auto":
         reference = "davies" if unidentified else "mixture"
     boot = None
@@ -367,11 +423,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                                  f"{list(unidentified)} are not identified under the null (their "
                                  "coefficients are 0 there; Davies 1977); use 'davies' or "
                                  "'bootstrap'.")
-        k = len(boundary)
-        pvalue = chi_bar_squared_sf(stat, k)
-        distribution = ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1" if k == 1 else
-                        f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_j (orders assumed "
-                        "uncorrelated)")
+        pvalue, distribution = _mixture(stat, len(boundary))
     elif reference == "davies":
         if len(unidentified) != 1 or len(full.orders) != 1:
             raise ParameterError("`reference='davies'` is implemented for one free order that is "
@@ -405,3 +457,6 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                   criterion=crit_name, n=n, rss_restricted=rss_r, rss_full=rss_f,
                   boundary=boundary, unidentified=unidentified, note=" ".join(notes),
                   bootstrap=boot)
+
+
+REFITS["order_test"] = order_test            # IdentificationResult.order_test calls it

@@ -422,7 +422,7 @@ _DETAILS = {"alpha_history": (1, ORDER_RANGE), "alpha_sample_history": (1, ORDER
             "J_history": (1, (0.0, np.inf)), "theta_history": (2, None),
             "alpha_profile": (2, None), "simulation_sse": (0, (0.0, np.inf)), "start": ("text", None),
             "starts": ("starts", None), "n_starts_agreed": ("count", None),
-            "identity_sse": (0, (0.0, np.inf))}
+            "integer_sse": (0, (0.0, np.inf)), "identity_sse": (0, (0.0, np.inf))}
 #: The fields of each entry of ``details["starts"]`` (output_error's chain of starts).
 _START_FIELDS = {"start", "orders", "start_sse", "sse", "status", "nfev"}
 
