@@ -159,3 +159,15 @@ def test_discrete_impedance_is_the_impulse_responses_transform(element):
 def test_bad_parameters_are_named(make, match):
     with pytest.raises(fohw.FohwError, match=match):
         make()
+
+
+def test_impedance_with_the_ocv_capacitor():
+    f = np.array([1e-3, 1e-2])
+    circuit = EquivalentCircuit([ZARC(0.01, 100.0, 0.5)], r0=0.015, b=0.05)
+    extra = circuit.impedance(f, capacity=5.0, ocv_slope=0.55) - circuit.impedance(f)
+    # (dOCV/dsoc + b) / (3600 Q j omega): a capacitor of 3600 Q / 0.6 farad.
+    np.testing.assert_allclose(extra, 0.6 / (3600 * 5.0 * 2j * np.pi * f), rtol=1e-14)
+    # Discrete: the left sum of the coulomb count, h z^-1 / (1 - z^-1) = 1/(j omega) - h/2 + O(h^2).
+    h = 1e-3
+    d = circuit.impedance(f, h=h, capacity=5.0, ocv_slope=0.55) - circuit.impedance(f, h=h)
+    np.testing.assert_allclose(d, extra - 0.6 / (3600 * 5.0) * h / 2, rtol=1e-9)
