@@ -26,6 +26,8 @@ EXAMPLES = {
                           "cascaded_tanks_selection.png", "cascaded_tanks.png"],
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
+    "battery.py": ["battery.md", "battery_structures.csv", "battery_impedance.csv",
+                   "battery_fit.png", "battery_nyquist.png", "battery_profile.png"],
 }
 
 

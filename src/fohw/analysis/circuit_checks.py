@@ -213,7 +213,7 @@ def circuit_order_interval(fit, i, v, soc, name="alpha1", level=0.95, *, n=None,
                            one_sided=one_sided)
 
 
-def impedance_error(circuit, f, z, band=None, *, h=None):
+def impedance_error(circuit, f, z, band=None, *, h=None, capacity=None, ocv_slope=0.0):
     """Relative error ``|Z_model - Z| / |Z|`` of a circuit's impedance against a measured spectrum.
 
     Parameters
@@ -227,6 +227,8 @@ def impedance_error(circuit, f, z, band=None, *, h=None):
         Keep the frequencies in ``[low, high]`` [Hz]; default all.
     h : float, optional
         Use the GL-discretised model's response (see ``EquivalentCircuit.impedance``).
+    capacity, ocv_slope : float, optional
+        Add the OCV's capacitor (see ``EquivalentCircuit.impedance``).
 
     Returns
     -------
@@ -244,5 +246,5 @@ def impedance_error(circuit, f, z, band=None, *, h=None):
         keep = (f >= band[0]) & (f <= band[1])
         if not keep.any():
             raise ParameterError(f"`band` {band!r} holds none of the frequencies.")
-    model = circuit.impedance(f[keep], h=h)
+    model = circuit.impedance(f[keep], h=h, capacity=capacity, ocv_slope=ocv_slope)
     return f[keep], model, np.abs(model - z[keep]) / np.abs(z[keep])
