@@ -128,3 +128,21 @@ def test_fit_bad_settings_are_named(kwargs, match):
     kwargs = {"elements": ("zarc",), **kwargs}
     with pytest.raises(fohw.ParameterError, match=match):
         fit_circuit(i, 3.7 + 0.01 * i, soc, 1.0, **kwargs)
+
+
+def test_zero_weights_hold_a_block_back():
+    i, soc = record(3000, seed=7)
+    true = EquivalentCircuit([ZARC(0.012, 60.0, 0.5)], r0=0.015, a=0.01, b=-0.02, ocv=ocv)
+    v = true.simulate(i, soc, 1.0)
+    held = slice(1200, 1800)
+    spoiled = v.copy()
+    spoiled[held] += 0.05                       # a block the criterion must not see
+    w = np.ones(i.size)
+    w[held] = 0.0
+    fit = fit_circuit(i, spoiled, soc, 1.0, ("zarc",), ocv=ocv, tau_bounds=(1.0, 1000.0),
+                      sample_weight=w)
+    np.testing.assert_allclose(fit.circuit.values, true.values, rtol=1e-6, atol=1e-9)
+    assert fit.n == 2400 and fit.rss < 1e-18
+    np.testing.assert_allclose(fit.residuals[held], -0.05, atol=1e-9)
+    with pytest.raises(fohw.ParameterError, match="`sample_weight` must be non-negative"):
+        fit_circuit(i, v, soc, 1.0, ("zarc",), sample_weight=-w)

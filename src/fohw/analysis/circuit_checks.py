@@ -185,7 +185,8 @@ def circuit_order_interval(fit, i, v, soc, name="alpha1", level=0.95, *, n=None,
                                              for nm, x in zip(fit.circuit.names, fit.circuit.values)])
             r = fit_circuit(i, v, soc, fit.h, elements, current_map=fit.circuit.c3 is not None,
                             ocv=fit.circuit.ocv, fixed={**fit.fixed, name: value},
-                            tau_bounds=fit.tau_bounds, alpha_bounds=fit.alpha_bounds, start=start)
+                            tau_bounds=fit.tau_bounds, alpha_bounds=fit.alpha_bounds, start=start,
+                            sample_weight=fit.sample_weight)
             cache[value] = max(n * math.log(r.rss / fit.rss), 0.0)
         return cache[value]
 

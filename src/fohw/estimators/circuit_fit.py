@@ -54,9 +54,10 @@ class CircuitFit:
     fixed : dict
         Parameters held at given values.
     rss : float
-        Residual sum of squares ``sum (v_model - v)^2`` [V^2].
+        Residual sum of squares ``sum w (v_model - v)^2`` [V^2] (``w`` the sample weights, 1 by
+        default).
     n : int
-        Samples.
+        Samples in the criterion (with a positive weight).
     h : float
         Sampling time [s].
     tau_bounds, alpha_bounds : tuple of float
@@ -70,7 +71,9 @@ class CircuitFit:
     scan : list of (float, tuple)
         The best grid points: ``(rss, ((tau, alpha), ...))`` per element.
     residuals : ndarray
-        ``v_model - v``.
+        ``v_model - v`` at every sample (unweighted).
+    sample_weight : ndarray or None
+        The weights the fit was given.
     """
 
     circuit: EquivalentCircuit
@@ -89,6 +92,7 @@ class CircuitFit:
     message: str
     scan: list = field(default_factory=list)
     residuals: np.ndarray = field(default=None)
+    sample_weight: np.ndarray | None = field(default=None)
 
     @property
     def n_params(self) -> int:
@@ -178,7 +182,7 @@ def _element(kind, R, tau, alpha):
     return Warburg(R, alpha)
 
 
-def _scan(template, i, soc, y, h, fixed, tau_grid, alpha_grid, warburg_grid, keep):
+def _scan(template, i, soc, y, h, fixed, tau_grid, alpha_grid, warburg_grid, keep, sw):
     """Best grid points by linear least squares of the linear parameters."""
     kinds = template.kinds
     base = [np.ones_like(i), soc, i] + ([i ** 3] if template.c3 is not None else [])
@@ -198,7 +202,8 @@ def _scan(template, i, soc, y, h, fixed, tau_grid, alpha_grid, warburg_grid, kee
                 e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
                 responses[(kind, tau, alpha)] = e.unit_response(i, h)
     keys = list(responses)
-    cols = np.column_stack(base + [responses[k] for k in keys])
+    cols = np.column_stack(base + [responses[k] for k in keys]) * sw[:, None]
+    y = y * sw
     scale = np.sqrt(np.sum(cols ** 2, axis=0))
     scale[scale == 0] = 1.0
     cols = cols / scale
@@ -276,7 +281,7 @@ def _bounds(template, tau_bounds, alpha_bounds, warburg_alpha_bounds):
 
 def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None, fixed=None,
                 tau_bounds=None, alpha_bounds=(0.05, 1.0), warburg_alpha_bounds=(0.05, 0.95),
-                n_tau=8, n_alpha=5, n_starts=3, max_nfev=200, start=None):
+                n_tau=8, n_alpha=5, n_starts=3, max_nfev=200, start=None, sample_weight=None):
     """Fit an equivalent circuit to a record by free-run simulation error.
 
     Parameters
@@ -309,6 +314,10 @@ def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None
         Evaluations per local search (default 200).
     start : EquivalentCircuit, optional
         Start the local search here instead of scanning (warm starts, profiles).
+    sample_weight : array_like, shape (N,), optional
+        Non-negative weights of the squared errors (default 1). Zeros hold samples back from
+        the criterion while the simulation still runs through them (the circuit's state needs
+        the whole current history): a held-back block inside the record.
 
     Returns
     -------
@@ -373,6 +382,15 @@ def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None
         if not lo[j] <= value <= hi[j]:
             raise ParameterError(f"`fixed[{name!r}]` = {value!r} is outside its bounds "
                                  f"[{lo[j]:g}, {hi[j]:g}].")
+    if sample_weight is None:
+        sw = np.ones(n)
+    else:
+        weight = check_array(sample_weight, "sample_weight")
+        check_same_length(i, weight, "i", "sample_weight")
+        if np.any(weight < 0) or not np.any(weight > 0):
+            raise ParameterError("`sample_weight` must be non-negative with at least one positive "
+                                 f"entry; got values from {weight.min()!r} to {weight.max()!r}.")
+        sw = np.sqrt(weight)
     ocv_v = np.zeros(n) if ocv is None else np.asarray(ocv(soc), dtype=np.float64)
     y = v - ocv_v
 
@@ -386,7 +404,7 @@ def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None
         warburg_grid = np.linspace(max(wb[0], 0.2), wb[1], n_alpha) if n_alpha > 1 else \
             np.array([0.5 * (wb[0] + wb[1])])
         found = _scan(template, i, soc, y, h, fixed, tau_grid, alpha_grid, warburg_grid,
-                      keep=n_starts)
+                      keep=n_starts, sw=sw)
         if not found:
             raise ParameterError("no grid point gave non-negative resistances; widen `tau_bounds`.")
         scan = [(rss, combo) for rss, combo, _ in found]
@@ -415,9 +433,9 @@ def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None
     def fun_and_jac(p):
         circuit = template.with_values(to_natural(p))
         vm, jac = circuit.jacobian(i, soc, h)
-        jac = jac[:, free]
+        jac = jac[:, free] * sw[:, None]
         jac[:, logs] *= np.exp(p[logs])
-        return vm - v, jac
+        return (vm - v) * sw, jac
 
     cache = {}
 
@@ -451,17 +469,18 @@ def fit_circuit(i, v, soc, h, elements=("zarc",), *, current_map=False, ocv=None
     circuit = template.with_values(values)
     vm, full_jac = circuit.jacobian(i, soc, h)
     resid = vm - v
-    rss = float(resid @ resid)
+    rss = float(np.sum((resid * sw) ** 2))
+    n_used = int(np.count_nonzero(sw))
     fnames = tuple(names[j] for j in free)
     at_bound = tuple(nm for nm, x, a, b in zip(fnames, values[free], lo[free], hi[free])
                      if (np.isfinite(a) and x <= a * (1 + 1e-6) + 1e-12) or
                      (np.isfinite(b) and x >= b * (1 - 1e-6)))
-    stderr = _stderr(full_jac[:, free], rss, n, fnames, at_bound)
+    stderr = _stderr(full_jac[:, free] * sw[:, None], rss, n_used, fnames, at_bound)
     return CircuitFit(circuit=circuit, names=fnames, stderr=stderr, at_bound=at_bound,
-                      fixed=fixed, rss=rss, n=n, h=h, tau_bounds=tau_bounds,
+                      fixed=fixed, rss=rss, n=n_used, h=h, tau_bounds=tau_bounds,
                       alpha_bounds=alpha_bounds, fit_time=time.perf_counter() - t0, nfev=nfev,
                       converged=bool(best.status > 0), message=str(best.message), scan=scan,
-                      residuals=resid)
+                      residuals=resid, sample_weight=None if sample_weight is None else weight)
 
 
 def _pair(value, name, *, lower=None, upper=None):
