@@ -24,7 +24,7 @@ potentials, and impedance spectra measured separately on the same cell.
 5. Impedance: the identified circuits' Z(j omega) (with the OCV's capacitor) beside the measured
    spectra at SOC 0.4, 0.5 and 0.6, in the band 1e-3 to 0.33 Hz.
 
-Writes battery.md, battery_structures.csv, battery_impedance.csv, battery_fit.png,
+Writes battery.md, battery_structures.csv, battery_bounds.csv, battery_impedance.csv, battery_fit.png,
 battery_nyquist.png and battery_profile.png to --outdir.
 """
 
@@ -154,6 +154,24 @@ def main(argv=None):
         print(f"{rows[-1]['structure']:>24}: d = {fit.n_params}, tau_max = {bound:g}, est "
               f"{rows[-1]['est_mV']:.2f} val {rows[-1]['val_mV']:.2f} mV, alpha {alpha}", flush=True)
 
+    # Every circuit at the same bound (no selection): which circuit is better at a given bound?
+    same = [k for k in structures if not k[1] and "warburg" not in k[0] and len(k[0]) <= 3
+            and k[0] != () and k[0] not in (("rc", "zarc"), ("zarc", "zarc"))]
+    bound_rows = []
+    for elements, cubic in same:
+        for t in tau_max:
+            fit = fit_circuit(cell.i[est], cell.v[est], cell.soc[est], cell.dt, elements,
+                              current_map=cubic, ocv=cell.ocv, tau_bounds=(cell.dt, t), **fit_kw)
+            alpha = fit.params.get("alpha1", float("nan"))
+            bound_rows.append(dict(structure=label(elements, cubic), tau_max=t,
+                                   est_mV=1e3 * fit.rmse,
+                                   val_mV=1e3 * rms(free_run_error(fit, cell, val)), alpha=alpha))
+    with open(args.outdir / "battery_bounds.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(bound_rows[0]))
+        w.writeheader()
+        for r in bound_rows:
+            w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
+
     with open(args.outdir / "battery_structures.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
@@ -281,6 +299,16 @@ def main(argv=None):
         md.append(f"| {r['structure']} | " + " | ".join(
             (f"**{c:.2f}**" if t == r["tau_max"] else f"{c:.2f}") if c != "" else ""
             for c, t in zip(cells, tau_max)) + " |")
+    md += ["", "Every circuit at the same upper bound of its time constants (no selection), estimation / "
+           "validation RMSE (mV), and the ZARC's alpha:", "",
+           "| circuit | " + " | ".join(f"{t:g} s" for t in tau_max) + " |",
+           "|---|" + "---:|" * len(tau_max)]
+    for name in dict.fromkeys(r["structure"] for r in bound_rows):
+        cells = []
+        for r in (r for r in bound_rows if r["structure"] == name):
+            text = f"{r['est_mV']:.2f} / {r['val_mV']:.2f}"
+            cells.append(text + (f" (α {r['alpha']:.2f})" if np.isfinite(r["alpha"]) else ""))
+        md.append(f"| {name} | " + " | ".join(cells) + " |")
     verdict_rmse = "met" if gain >= 0.05 else "not met"
     a1 = frac.params["alpha1"]
     md += ["", "## The goal", "",
