@@ -103,3 +103,58 @@ def test_record_split_keeps_meaning_and_refuses_bad_points():
     with pytest.raises(fohw.ParameterError, match="`dt`"):
         fohw.Record(u=np.ones(3), y=np.ones(3), dt=0.0)
     assert not est.u.flags.writeable
+
+
+def test_battery_cell_is_the_shipped_file_decoded_losslessly():
+    cell = fohw.datasets.battery_cell()
+    with open(cell.path, "rb") as fh:
+        assert hashlib.sha256(fh.read()).hexdigest() == (
+            "4517f5f43194878fcbc04487efdb59761f46bc728aff1d091ab00352a770ac62")
+    assert (cell.n_samples, cell.dt) == (164953, 0.15)
+    # First samples, ranges and Z[0, 0] as printed in the source (data README).
+    assert list(cell.i[:3]) == [-0.151435, -0.119143, -0.0998028]
+    assert list(cell.v[:3]) == [4.03556, 4.03901, 4.03934]
+    assert (cell.i.min(), cell.i.max(), cell.v.min(), cell.v.max()) == (-3.9999, 1.31733, 3.42158, 4.0458)
+    assert cell.impedance[0, 0] == 0.0140485 - 4.770621e-05j
+    assert cell.impedance.shape == cell.impedance_fit.shape == (65, 7)
+    np.testing.assert_array_equal(cell.impedance_soc, [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8])
+    assert cell.impedance_f[0] == 1000.702 and cell.impedance_f[-1] == 3.974e-4
+    assert cell.t[-1] == pytest.approx(24742.8, abs=1e-9)
+    assert "arXiv:2412.10896" in cell.source and "BSD-3-Clause" in cell.source
+    assert "arXiv:2412.10896" in fohw.datasets.battery_cell.__doc__
+
+
+def test_battery_cell_state_of_charge_and_ocv():
+    cell = fohw.datasets.battery_cell()
+    # Coulomb counting: the charge passed, in Ah, over the nominal capacity (a left Riemann sum).
+    assert cell.soc[0] == 0.8
+    charge = np.sum(cell.i[:-1]) * 0.15 / 3600
+    assert cell.soc[-1] == pytest.approx(0.8 + charge / 4.885, rel=1e-12)
+    assert 0.20 < cell.soc[-1] < 0.205                 # "80 % -> 20 %" (source README)
+    assert np.all(np.diff(cell.soc) * 4.885 * 3600 / 0.15 == pytest.approx(cell.i[:-1], abs=1e-9))
+    # OCV from the electrodes at the SOC 0 and 1 stoichiometries, by hand.
+    st = cell.stoichiometry
+    assert (st["y1"], st["y0"], st["x0"], st["x1"]) == pytest.approx(  # printed to 4 decimals
+        (0.1897, 0.9829, 0.0015, 0.8864), abs=5e-5)
+    manual = np.interp(st["y0"], cell.x_pos, cell.U_pos) - np.interp(st["x0"], cell.x_neg, cell.U_neg)
+    assert cell.ocv(0.0) == manual
+    ocv = cell.ocv(np.linspace(0.2, 0.8, 61))
+    assert np.all(np.diff(ocv) > 0)                   # the OCV rises with the state of charge
+    # The voltage after a 60 s rest (|i| < 0.02 A) is within 13 mV below-or-near the OCV.
+    rests = {4561: 4.01823, 32747: 3.91007, 88724 + 397: 3.69909, 140241: 3.57188}
+    for k, v_rest in rests.items():
+        assert cell.v[k] == v_rest and abs(cell.i[k]) < 0.02
+        assert -0.002 < cell.ocv(cell.soc[k]) - v_rest < 0.013
+    with pytest.raises(fohw.ParameterError, match="`soc` must be in"):
+        cell.ocv(1.2)
+
+
+def test_battery_cell_decimate_keeps_the_charge():
+    cell = fohw.datasets.battery_cell()
+    dec = cell.decimate(10)
+    assert (dec.n_samples, dec.dt) == (16495, 1.5)
+    np.testing.assert_allclose(dec.i.sum() * 1.5, cell.i[:164950].sum() * 0.15, rtol=1e-12)
+    assert dec.v[0] == pytest.approx(cell.v[:10].mean(), rel=1e-15)
+    assert "dt=1.5 s" in repr(dec)
+    with pytest.raises(fohw.ParameterError, match="`factor`"):
+        cell.decimate(0)

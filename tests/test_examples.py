@@ -29,6 +29,8 @@ EXAMPLES = {
     "forgetting_map.py": ["forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",
                           "forgetting_best.png"],
     "input_lessons.py": ["input_lessons.md"],
+    "battery.py": ["battery.md", "battery_structures.csv", "battery_impedance.csv",
+                   "battery_fit.png", "battery_nyquist.png", "battery_profile.png"],
 }
 
 

@@ -10,6 +10,7 @@ matrix, and the paper's estimators.
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
 from .analysis.batch import identify_many
+from .analysis.circuit_checks import circuit_lr_test, circuit_order_interval
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
@@ -17,6 +18,7 @@ from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
+from .estimators.circuit_fit import CircuitFit, fit_circuit
 from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
@@ -48,6 +50,7 @@ from .exceptions import (
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
+from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
@@ -157,4 +160,13 @@ __all__ = [
     "PiecewiseLinear",
     "PolynomialMap",
     "CustomMap",
+    # issue 27
+    "EquivalentCircuit",
+    "RC",
+    "ZARC",
+    "Warburg",
+    "CircuitFit",
+    "fit_circuit",
+    "circuit_lr_test",
+    "circuit_order_interval",
 ]
