@@ -198,6 +198,19 @@ def test_result_json_round_trip(tmp_path):
     assert text["structure"]["f_basis"]["kind"] == "inputs"
 
 
+def test_the_initial_state_of_a_two_input_fit():
+    # "rest" and "fitted" work on (N, 2) inputs; an estimated or measured initial state would
+    # need one past level per input, which fohw does not model yet: a clear error, not a crash.
+    s, u, y = record(600, noise_std=0.01)
+    r = fohw.identify(u, y, **SPEC, orders=ORDERS, method="varpro")
+    np.testing.assert_array_equal(r.simulate(u, initial="rest"), r.simulate(u))
+    assert fohw.compare(r, u, y, initial="rest").fit > 90
+    with pytest.raises(fohw.ParameterError, match="single-input"):
+        fohw.compare(r, u, y, initial="estimate")
+    with pytest.raises(fohw.DimensionError, match="initial history u"):
+        r.simulate(u[100:], initial=(u[:100], y[:100]))
+
+
 def test_names_from_inputs_and_from_a_dataframe_give_the_same_numbers():
     s, u, y = record(500, noise_std=0.01)
     plain = fohw.identify(u, y, na=2, nb=[2, 3], nk=[0, 1], f_basis=[2, 1], g_basis=1)

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import check_array, check_same_length
+from .._validation import check_array, check_inputs, check_same_length
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .simulation import simulate
 from .structure import Structure
@@ -270,8 +270,15 @@ def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialSta
     choice, value = check_initial(initial, history)
     if choice is None:
         choice = default_initial(model)
-    u = check_array(u, "u")
-    op = tuple(float(v) for v in model.operating_point)
+    n_inputs = model.structure.n_inputs
+    u = check_inputs(u, n_inputs)
+    u0, y0 = model.operating_point
+    op = (float(u0) if n_inputs == 1 else tuple(float(v) for v in u0), float(y0))
+    if n_inputs > 1 and choice in ("estimate", "history"):
+        raise ParameterError(f"initial={_describe(initial)} is implemented for single-input "
+                             f"models; this one has {n_inputs} inputs (its past levels would be "
+                             "one per input). Use initial='rest', or simulate a longer record "
+                             "that contains the history.")
     if y is not None and choice != "estimate":
         raise ParameterError(f"`y` is used only by initial='estimate' (to fit the record's "
                              f"initial state); got `y` with initial={_describe(initial)}.")
