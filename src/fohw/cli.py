@@ -293,26 +293,21 @@ def _option_arg(text):
     return name.strip(), value
 
 
-def _int_list(text):
+def _int_list(text, minimum=1):
     try:
         values = [int(v) for v in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
             from None
-    if any(v < 1 for v in values):
-        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 1; got {text!r}")
+    if any(v < minimum for v in values):
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= {minimum}; got "
+                                         f"{text!r}")
     return values
 
 
 def _delay_list(text):
-    try:
-        values = [int(v) for v in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated integers; got {text!r}") \
-            from None
-    if any(v < 0 for v in values):
-        raise argparse.ArgumentTypeError(f"expected comma-separated integers >= 0; got {text!r}")
-    return values
+    """``--nk 0,1``: input delays, integers >= 0."""
+    return _int_list(text, minimum=0)
 
 
 def _positive_int(text):
