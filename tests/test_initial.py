@@ -210,3 +210,29 @@ def test_cli_simulate_takes_the_initial_state(tmp_path, capsys):
     y = np.array(capsys.readouterr().out.split(), dtype=float)
     np.testing.assert_allclose(y, fohw.simulate(est.model, d.u) if est.model.past == (0, 0)
                                else fohw.compare(est.model, d.u, d.y, initial="rest").simulated)
+
+
+def test_initial_states_of_a_fit_with_a_series_output_map():
+    # The levels and the map's parameters both sit in `nonlinear` (levels, then h_*): the
+    # initial-state code once dropped h's and every simulate of a past="estimate" fit with a
+    # map, and every initial="estimate" of a fit with a map, raised a DimensionError.
+    rng = np.random.default_rng(4)
+    u = rng.uniform(-1, 1, 400)
+    s = fohw.Structure.make(na=1, nb=2, f_basis=1, g_basis=1, orders="commensurate",
+                            past="estimate", nk=0, output_map="saturation")
+    params = [0.4, 1.0, 0.5, 0.5, 0.2, -0.3, -0.6, 0.8]     # a, b0, b1, alpha, levels, h
+    y = fohw.simulate(s, u, params=params)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = fohw.identify(u, y, na=1, nb=2, nk=0, f_basis=1, g_basis=1, past="estimate",
+                          method="output_error", output_map="saturation")
+    fitted = r.simulate(u, initial="fitted")
+    np.testing.assert_allclose(fitted, fohw.simulate(r.structure, u,
+                                                     params=np.r_[r.linear, r.nonlinear]),
+                               atol=1e-12)
+    assert np.sqrt(np.mean((fitted - y) ** 2)) < 1e-3 * np.std(y)
+    st = r.initial_state(u, fitted, "estimate")              # noise-free: its own levels back
+    np.testing.assert_allclose(st.past, r.nonlinear[1:3], atol=1e-5)
+    assert fohw.compare(r, u, y, initial="estimate").rmse < 1e-3 * np.std(y)
+    with pytest.raises(fohw.ParameterError, match="result.simulate"):
+        fohw.simulate(r, u, initial="estimate")

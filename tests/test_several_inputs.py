@@ -207,7 +207,7 @@ def test_the_initial_state_of_a_two_input_fit():
     assert fohw.compare(r, u, y, initial="rest").fit > 90
     with pytest.raises(fohw.ParameterError, match="single-input"):
         fohw.compare(r, u, y, initial="estimate")
-    with pytest.raises(fohw.DimensionError, match="initial history u"):
+    with pytest.raises(fohw.ParameterError, match="single-input"):
         r.simulate(u[100:], initial=(u[:100], y[:100]))
 
 

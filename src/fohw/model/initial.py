@@ -267,18 +267,20 @@ def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialSta
     >>> bool(np.max(np.abs(res.simulate(u, initial=st) - y)) < 1e-9)
     True
     """
+    n_inputs = model.structure.n_inputs
+    if n_inputs > 1 and (history is not None or initial == "estimate" or (
+            initial is not None and not isinstance(initial, (str, InitialState)))):
+        what = "a measured history" if history is not None else f"initial={_describe(initial)}"
+        raise ParameterError(f"{what} is implemented for single-input models; this one has "
+                             f"{n_inputs} inputs (its past levels would be one per input). Use "
+                             "initial='rest', or simulate a longer record that contains the "
+                             "history.")
     choice, value = check_initial(initial, history)
     if choice is None:
         choice = default_initial(model)
-    n_inputs = model.structure.n_inputs
     u = check_inputs(u, n_inputs)
     u0, y0 = model.operating_point
     op = (float(u0) if n_inputs == 1 else tuple(float(v) for v in u0), float(y0))
-    if n_inputs > 1 and choice in ("estimate", "history"):
-        raise ParameterError(f"initial={_describe(initial)} is implemented for single-input "
-                             f"models; this one has {n_inputs} inputs (its past levels would be "
-                             "one per input). Use initial='rest', or simulate a longer record "
-                             "that contains the history.")
     if y is not None and choice != "estimate":
         raise ParameterError(f"`y` is used only by initial='estimate' (to fit the record's "
                              f"initial state); got `y` with initial={_describe(initial)}.")
@@ -337,8 +339,8 @@ def simulate_from(model, u, state, **kwargs):
     if s.past == "rest" and past == (0.0, 0.0):
         params = np.r_[linear, nonlinear]
     else:
+        params = np.r_[linear, nonlinear[:n_free], past, s.output_map_params(nonlinear)]
         s = _level_structure(s)
-        params = np.r_[linear, nonlinear[:n_free], past]
     return simulate(s, u, params=params, operating_point=model.operating_point,
                     history=history, **kwargs)
 

@@ -157,6 +157,11 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     True
     """
     kinds = "a HammersteinWiener, an identification result or a Structure with `params`"
+    if initial == "estimate" or (isinstance(initial, tuple) and initial[:1] == ("estimate",)):
+        raise ParameterError("initial='estimate' fits the record's initial state to its "
+                             "measured output, which fohw.simulate does not take: use "
+                             "result.simulate(u, initial='estimate', y=y) or "
+                             "fohw.compare(result, u, y, initial='estimate').")
     if initial is not None and not callable(getattr(model, "initial_state", None)):
         raise ParameterError(f"`initial` is for an identification result; got it with a "
                              f"{type(model).__name__} (fohw.compare takes `initial` for a "
