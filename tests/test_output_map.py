@@ -356,3 +356,22 @@ def test_a_file_with_map_parameters_but_no_map_is_refused(tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps(d))
     with pytest.raises(fohw.DataFileError, match="output_map_params"):
         fohw.load_result(tmp_path / "bad.json")
+
+
+def test_a_dead_zone_outside_the_data_is_reported_not_identified():
+    # A review's reproducer: the dead zone starts at width 0 at 0 in data units, far below an
+    # output near 5, and stays outside the data: h_lower has no effect on the output. The fit
+    # said CONVERGED with no covariance and no reason; now RANK_DEFICIENT, naming it.
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    y = fohw.simulate(fohw.Structure.make(na=1, nb=2, nk=0, f_basis=1, g_basis=1, orders=0),
+                      u, params=[0.5, 1.0, 0.4])
+    y = y + 0.01 * rng.standard_normal(300)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = fohw.identify(u + 2, y + 5, na=1, nb=2, nk=0, f_basis=1, g_basis=1, orders=0,
+                          operating_point="mean", method="output_error", output_map="deadzone")
+    assert r.covariance is None and r.status == fohw.Status.RANK_DEFICIENT
+    assert "Not identified at the estimate" in r.message and "h_lower" in r.message
+    with pytest.raises(ValueError, match="rank deficient"):
+        r.standard_errors()

@@ -512,8 +512,10 @@ class IdentificationResult(ResultPresentation):
         if self.status == Status.RANK_DEFICIENT:
             raise ValueError("this fit is rank deficient, so some parameters are not identifiable "
                              "and have no standard errors; see `message` for which.")
-        raise ValueError(f"method {self.method!r} gives no covariance: standard errors are only "
-                         "defined at a least-squares optimum ('varpro', 'output_error').")
+        raise ValueError(f"this {self.method!r} fit has no covariance: standard errors are "
+                         "defined at a least-squares optimum ('varpro', 'structured', "
+                         "'output_error') whose information matrix is not singular; see "
+                         "`message`.")
 
     def standard_errors(self) -> dict:
         """Standard errors of the estimates and of the recovered ``a, b, p, q``.

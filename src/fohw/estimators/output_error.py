@@ -670,9 +670,20 @@ def fit_series(builder, linear0, params0, *, lower, upper, y0, n_init=0, max_nfe
     escaped = not np.isfinite(sse)
     if escaped:
         status = Status.FAILED
+    unidentified = ""
     try:
         _, G = simulation_jacobian(s, x[:n_lin], x[n_lin:], u, y0=y0)
         cov, s2 = parameter_covariance(G[window], sse, m)
+        if cov is None and not escaped:
+            # A limit outside the data's range (its column is 0), or a zone of width 0 beside
+            # an offset: the record does not identify every parameter at the estimate.
+            status = Status.RANK_DEFICIENT
+            names = s.linear_names + s.nonlinear_names
+            zero = [n for n, col in zip(names, G[window].T) if not np.any(col)]
+            unidentified = (" Not identified at the estimate (singular information matrix): "
+                            + (", ".join(zero) + " (no effect on the output)" if zero else
+                               "dependent parameters") + "; a map's limits outside the "
+                            "data's range, or a zone of width 0 beside an offset, do this")
     except SimulationDivergedError:
         cov, s2 = None, sse / max(m - x.shape[0], 1)
     active = ls.active_mask[n_lin:n_lin + n_free]
@@ -685,6 +696,7 @@ def fit_series(builder, linear0, params0, *, lower, upper, y0, n_init=0, max_nfe
     elif fell_back:
         message += ("; the search ended above its start's criterion, so the start is kept "
                     "(the fit never ends above the model it nests)")
+    message += unidentified
     return _OEFit(linear=x[:n_lin].copy(), params=x[n_lin:].copy(), sse=sse, start_shrink=1.0,
                   status=status, message=message, covariance=cov, noise_variance=s2,
                   nit=int(ls.njev), nfev=crit.n_simulations,
