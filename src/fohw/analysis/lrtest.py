@@ -322,7 +322,8 @@ def order_test(full):
     -------
     LRTest or None
         None when ``full`` has no ``details["integer_sse"]`` (another method, a given start,
-        no free order, or a bound of an order above 0).
+        no free order, a bound of an order above 0, or a series output map, whose fit starts
+        from the fit without the map instead: use :func:`lr_test` with both fits).
     """
     full = check_result(full, "full")
     if "integer_sse" not in full.details or not full.orders:
@@ -331,7 +332,7 @@ def order_test(full):
         return None
     fs = full.structure
     null, boundary, unidentified = null_orders(fs.orders)
-    rs = Structure(null, fs.f_basis, fs.g_basis, fs.offset, fs.past, fs.dt)
+    rs = Structure(null, fs.f_basis, fs.g_basis, fs.offset, fs.past, fs.dt, fs.output_map)
     rss_r = float(full.details["integer_sse"])
     rss_f, n = criterion(full)
     stat = _statistic(rss_r, rss_f, n)
