@@ -1,6 +1,7 @@
 """output_error's default chain of starts (issue 26) against the code before it, in one run.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_starts.py [--baseline main] [--rounds 1] [--full]
+        [--workloads fit,grid]
 
 The source tree of ``--baseline`` (``git archive REV src``, as ``bench_simulator.py --workloads``
 does) and this one run the same two workloads alternately, each in a fresh process:
@@ -80,6 +81,9 @@ def main(argv=None):
     ap.add_argument("--baseline", default="main", help="git revision of the 'before' tree")
     ap.add_argument("--rounds", type=int, default=1)
     ap.add_argument("--full", action="store_true", help="the docs' full 72-candidate grid")
+    ap.add_argument("--workloads", default="fit,grid",
+                    help="comma-separated: fit, grid (the fit workload needs a baseline with "
+                         "fohw.model.simulation, i.e. after issue 23)")
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="fohw_baseline_"))
     archive = subprocess.run(["git", "archive", args.baseline, "src"], cwd=HERE.parent,
@@ -88,7 +92,7 @@ def main(argv=None):
     trees = {"before": str(tmp / "src"), "after": str(HERE.parent / "src")}
     print(f"baseline {args.baseline}; {args.rounds} round(s), fresh processes, alternating; "
           f"cpus {os.cpu_count()}, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
-    for which in ("fit", "grid"):
+    for which in args.workloads.split(","):
         res = {k: [] for k in trees}
         for _ in range(args.rounds):
             for tree, src in trees.items():
