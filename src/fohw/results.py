@@ -512,10 +512,12 @@ class IdentificationResult(ResultPresentation):
         if self.status == Status.RANK_DEFICIENT:
             raise ValueError("this fit is rank deficient, so some parameters are not identifiable "
                              "and have no standard errors; see `message` for which.")
-        raise ValueError(f"this {self.method!r} fit has no covariance: standard errors are "
+        if self.method in ("varpro", "structured", "output_error"):
+            raise ValueError(f"this {self.method!r} fit has no covariance: its information "
+                             "matrix at the estimate is singular; see `message`.")
+        raise ValueError(f"method {self.method!r} gives no covariance: standard errors are only "
                          "defined at a least-squares optimum ('varpro', 'structured', "
-                         "'output_error') whose information matrix is not singular; see "
-                         "`message`.")
+                         "'output_error').")
 
     def standard_errors(self) -> dict:
         """Standard errors of the estimates and of the recovered ``a, b, p, q``.
