@@ -756,16 +756,38 @@ def lr_columns(rows, results, cands):
 
 
 def _pick(selection, cands, u, y, refit, envelope):
-    """The best row that simulated, refitted on all the data if asked.
-
-    A refit that raises, or whose free run on ``u`` diverges or is implausible, is not kept:
-    its row says why (``refit_*`` status) and the next ranked candidate is refitted.
-    """
+    """The best row that simulated, refitted on all the data if asked (:func:`pick_refitted`)."""
     from ..estimators.identify import identify
 
+    def refit_one(index):
+        best = identify(u, y, **cands[index])
+        return (best, *free_run_check(best, u, y, envelope)[1:])
+
+    def finish(row, best):
+        row["refit_status"] = best.status.name
+        if best.status.name == "RANK_DEFICIENT":
+            row["reason"] = ("refit on all the data ended RANK_DEFICIENT (its summary() names "
+                             "the parameters)" + (f"; {row['reason']}" if row["reason"] else ""))
+
+    pick_refitted(selection, refit_one, finish, refit=refit,
+                  keep=lambda w: not issubclass(w.category, ExtrapolationWarning))
+
+
+def pick_refitted(selection, refit_one, finish, *, refit, keep=lambda w: True):
+    """Set ``selection.best``: the best scored row, refitted on all the data if ``refit``.
+
+    ``refit_one(index) -> (fit, status, reason)`` refits candidate ``index`` and checks its
+    free run; ``finish(row, fit)`` records a kept refit in its row. A refit that raises, or
+    whose status is not ``"ok"``, is not kept: its row says why (``refit_*`` status, with its
+    warnings) and the next ranked candidate is refitted. The kept refit's warnings are the
+    user's (re-issued), those ``keep`` rejects excepted. Shared by :func:`select_structure`
+    and :func:`fohw.analysis.tf_selection.select_fractional_tf`.
+    """
+    col = SCORES[selection.score][0]
     rows = selection.rows
     for row in selection.ranked():
-        if row["status"] != "ok" or not np.isfinite(row[SCORES[selection.score][0]]):
+        if row["status"] != "ok" or not (isinstance(row[col], numbers.Real)
+                                         and np.isfinite(row[col])):
             break
         index = next(i for i, r in enumerate(rows) if r is row)
         if not refit:
@@ -774,23 +796,18 @@ def _pick(selection, cands, u, y, refit, envelope):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
-                best = identify(u, y, **cands[index])
-                _, status, reason = free_run_check(best, u, y, envelope)
+                best, status, reason = refit_one(index)
             except Exception as exc:                    # noqa: BLE001 - reported in the row
                 best, status, reason = None, "failed", f"{type(exc).__name__}: {exc}"
+        kept = [w for w in caught if keep(w)]
         if status != "ok":         # not kept: its warnings go to its row, not to the user
-            notes = sorted({str(w.message).split("\n")[0] for w in caught
-                            if not issubclass(w.category, ExtrapolationWarning)})
+            notes = sorted({str(w.message).split("\n")[0] for w in kept})
             row.update(status=f"refit_{status}", refit_status=status,
                        reason="; ".join([f"refit on all the data: {reason}", *notes,
                                          *([row["reason"]] if row["reason"] else [])]))
             continue
-        for w in caught:            # the kept refit's warnings are the user's (as identify's)
-            if not issubclass(w.category, ExtrapolationWarning):
-                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-        row["refit_status"] = best.status.name
-        if best.status.name == "RANK_DEFICIENT":
-            row["reason"] = ("refit on all the data ended RANK_DEFICIENT (its summary() names "
-                             "the parameters)" + (f"; {row['reason']}" if row["reason"] else ""))
+        for w in kept:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        finish(row, best)
         selection.best_index, selection.best = index, best
         return

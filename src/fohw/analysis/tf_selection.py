@@ -31,7 +31,14 @@ from .._validation import check_array, check_same_length, check_scalar
 from ..estimators.tf_fit import fit_fractional_tf
 from ..exceptions import ParameterError, SimulationDivergedError
 from .metrics import aic, bic, fit_percent, rmse
-from .selection import SCORES, Selection, expand_candidates, split_validation, warn_nothing_selected
+from .selection import (
+    SCORES,
+    Selection,
+    expand_candidates,
+    pick_refitted,
+    split_validation,
+    warn_nothing_selected,
+)
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
 __all__ = ["select_fractional_tf"]
@@ -261,30 +268,11 @@ def select_fractional_tf(u, y, candidates, *, dt, validation=0.25, score="fit", 
 
 def _pick(selection, cands, u, y, dt, refit, envelope):
     """The best scored row, refitted on all the data if asked (a rejected refit: the next)."""
-    col = SCORES[selection.score][0]
-    rows = selection.rows
-    for row in selection.ranked():
-        if row["status"] != "ok" or not (isinstance(row[col], numbers.Real)
-                                         and np.isfinite(row[col])):
-            break
-        index = next(i for i, r in enumerate(rows) if r is row)
-        if not refit:
-            selection.best_index, selection.best = index, selection.results[index]
-            return
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                best = fit_fractional_tf(u, y, dt=dt, **cands[index])
-                _, status, reason, _ = _free_run(best, u, y, envelope)
-            except Exception as exc:                 # noqa: BLE001 - reported in the row
-                best, status, reason = None, "failed", f"{type(exc).__name__}: {exc}"
-        if status != "ok":
-            row.update(status=f"refit_{status}", refit_status=status,
-                       reason="; ".join([f"refit on all the data: {reason}", *_notes(caught),
-                                         *([row["reason"]] if row["reason"] else [])]))
-            continue
-        for w in caught:                             # the kept refit's warnings are the user's
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    def refit_one(index):
+        best = fit_fractional_tf(u, y, dt=dt, **cands[index])
+        return (best, *_free_run(best, u, y, envelope)[1:3])
+
+    def finish(row, best):
         row["refit_status"] = "converged" if best.converged else "budget"
-        selection.best_index, selection.best = index, best
-        return
+
+    pick_refitted(selection, refit_one, finish, refit=refit)
