@@ -222,33 +222,12 @@ class ThetaLayout:
                [ 0.,  0.,  1.],
                [-1.,  2.,  0.]])
         """
-        if self.b_groups is not None:
-            return self._group_recover_jacobian(theta)
-        qa, pb = self.blocks(theta)
-        a, b, p, q = self.recover(theta)
-        na, nb, k = self.na, self.nb, self.n_output_params
-        rows = []
-        for i in range(na):
-            r = np.zeros(self.n_params)
-            r[i] = 1.0
-            rows.append(r)
-        for i in range(nb):
-            r = np.zeros(self.n_params)
-            r[k + i] = 1.0
-            rows.append(r)
-        for j in range(1, self.n_f):
-            r = np.zeros(self.n_params)
-            r[k + j * nb:k + (j + 1) * nb] = 1.0 / (nb * b)
-            r[k:k + nb] = -pb[j] / (nb * b**2)
-            rows.append(r)
-        for j in range(1, self.n_g):
-            r = np.zeros(self.n_params)
-            r[j * na:(j + 1) * na] = 1.0 / (na * a)
-            r[:na] = -qa[j] / (na * a**2)
-            rows.append(r)
-        return np.array(rows)
+        if self.b_groups is None:
+            self.recover(theta)          # Eqs. (39)-(40) defined: the same errors as recover
+        return self._recover_jacobian(theta)
 
-    def _group_recover_jacobian(self, theta):
+    def _recover_jacobian(self, theta):
+        """:meth:`recover_jacobian`, one block of rows per input (a single input: one group)."""
         qa, _ = self.blocks(theta)
         a = qa[0]
         na = self.na
