@@ -39,12 +39,11 @@ import numpy as np
 
 import fohw
 from fohw.model import _compiled, simulation
-from fohw.model._online import HalfMerge, divide_and_conquer
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from bench_simulator import data, load, merges, timed  # noqa: E402
+from bench_simulator import data, load, merge_floor, merges, timed  # noqa: E402
 
 # ruff: noqa: B023   (the timed lambdas run inside their loop iteration)
 
@@ -116,18 +115,7 @@ def side_by_side(sizes):
 
 def floor_of(A, alpha, n, leaf_size):
     """The FFT merges alone of a recursion feeding back ``A.shape[0]`` signals (one order)."""
-    out_terms = [(i, alpha) for i in range(1, A.shape[1] + 1)]
-    size = max(1, min(leaf_size, n))
-
-    def floor():
-        acc = simulation.accumulators(A, out_terms, 1.0, n)
-        merge = HalfMerge(acc.betas, acc.memory)
-        z = np.zeros((A.shape[0], n))
-        dz = np.zeros((acc.count, n))
-        with np.errstate(over="ignore", invalid="ignore"):
-            divide_and_conquer(n, size, lambda lo, hi: None,
-                               lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
-    return floor
+    return merge_floor(A, [(i, alpha) for i in range(1, A.shape[1] + 1)], n, leaf_size)
 
 
 PAPER = r"""

@@ -26,7 +26,6 @@ first when numba is installed (as ``bench_simulator.py`` does):
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import time
@@ -36,11 +35,10 @@ import numpy as np
 
 import fohw
 from fohw.model import _compiled, simulation
-from fohw.model._online import HalfMerge, divide_and_conquer
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from bench_simulator import data, load, merges  # noqa: E402
+from bench_simulator import data, load, merge_floor, merges, timed  # noqa: E402
 
 # ruff: noqa: B023   (the timed lambdas run inside their loop iteration)
 
@@ -73,29 +71,7 @@ def structure_floor(structure, params, u, v, leaf_size):
     A = qa if qa.shape[0] <= qa.shape[1] else np.eye(qa.shape[1])
     alpha = float(params[-1])
     out_terms = [(t.lag, alpha) for t in structure.orders.output]
-    n = u.shape[0]
-    size = max(1, min(leaf_size, n))
-
-    def floor():
-        acc = simulation.accumulators(A, out_terms, 1.0, n)
-        merge = HalfMerge(acc.betas, acc.memory)
-        z = np.zeros((A.shape[0], n))
-        dz = np.zeros((acc.count, n))
-        with np.errstate(over="ignore", invalid="ignore"):
-            divide_and_conquer(n, size, lambda lo, hi: None,
-                               lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
-    return floor
-
-
-def timed(fns, repeats):
-    """Medians over ``repeats`` rounds, each round running every callable once (interleaved)."""
-    times = {name: [] for name in fns}
-    for _ in range(repeats):
-        for name, fn in fns.items():
-            t0 = time.perf_counter()
-            fn()
-            times[name].append(time.perf_counter() - t0)
-    return {name: statistics.median(t) for name, t in times.items()}
+    return merge_floor(A, out_terms, u.shape[0], leaf_size)
 
 
 def baseline_time(src, n, repeats):

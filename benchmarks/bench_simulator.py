@@ -79,13 +79,21 @@ def merges(model, u, v, leaf_size):
     in_terms = [(i, model.alpha) for i in range(1, model.b.shape[0] + 1)]
     w = simulation.forcing(np.outer(model.p, model.b), in_terms, None, out_terms, model.f_basis,
                            model.g_basis, u, v, 1.0, 0.0, (0.0, 0.0))
-    n = w.shape[0]
+    return merge_floor(model.a[None, :], out_terms, w.shape[0], leaf_size)
+
+
+def merge_floor(A, out_terms, n, leaf_size):
+    """The callable running the FFT merges alone for ``A.shape[0]`` fed-back signals.
+
+    The divide and conquer of :func:`fohw.model.simulation.recursion` (its setup included) on
+    ``n`` samples with a leaf that does nothing. Used by the other simulator benchmarks too.
+    """
     size = max(1, min(leaf_size, n))
 
     def floor():
-        acc = simulation.accumulators(model.a[None, :], out_terms, 1.0, n)
+        acc = simulation.accumulators(A, out_terms, 1.0, n)
         merge = HalfMerge(acc.betas, acc.memory)
-        z = np.zeros((1, n))
+        z = np.zeros((A.shape[0], n))
         dz = np.zeros((acc.count, n))
         with np.errstate(over="ignore", invalid="ignore"):
             divide_and_conquer(n, size, lambda lo, hi: None,
