@@ -208,8 +208,8 @@ def test_cli_simulate_takes_the_initial_state(tmp_path, capsys):
     assert cli(["simulate", "--model", str(tmp_path / "m.json"), "--input",
                 str(tmp_path / "u.txt"), "--initial", "rest", "-q"]) == 0
     y = np.array(capsys.readouterr().out.split(), dtype=float)
-    np.testing.assert_allclose(y, fohw.simulate(est.model, d.u) if est.model.past == (0, 0)
-                               else fohw.compare(est.model, d.u, d.y, initial="rest").simulated)
+    assert est.model.past != (0.0, 0.0)         # the levels exist, so "rest" is a choice
+    np.testing.assert_allclose(y, fohw.compare(est.model, d.u, d.y, initial="rest").simulated)
 
 
 def test_initial_states_of_a_fit_with_a_series_output_map():
@@ -230,9 +230,11 @@ def test_initial_states_of_a_fit_with_a_series_output_map():
     np.testing.assert_allclose(fitted, fohw.simulate(r.structure, u,
                                                      params=np.r_[r.linear, r.nonlinear]),
                                atol=1e-12)
-    assert np.sqrt(np.mean((fitted - y) ** 2)) < 1e-3 * np.std(y)
+    # Noise-free data from a model in the class: the fit and the state estimate recover it to
+    # the solvers' tolerances (1e-8 relative, as the exactness tests above; measured ~1e-16).
+    assert np.sqrt(np.mean((fitted - y) ** 2)) < 1e-8 * np.std(y)
     st = r.initial_state(u, fitted, "estimate")              # noise-free: its own levels back
-    np.testing.assert_allclose(st.past, r.nonlinear[1:3], atol=1e-5)
-    assert fohw.compare(r, u, y, initial="estimate").rmse < 1e-3 * np.std(y)
+    np.testing.assert_allclose(st.past, r.nonlinear[1:3], atol=1e-6)
+    assert fohw.compare(r, u, y, initial="estimate").rmse < 1e-8 * np.std(y)
     with pytest.raises(fohw.ParameterError, match="result.simulate"):
         fohw.simulate(r, u, initial="estimate")

@@ -193,7 +193,8 @@ def test_fit_reports_the_map_parameters_and_operating_point_units():
     assert res.estimate_names[-2:] == ("h_lower", "h_upper")
     assert "h_lower" in res.summary() and "saturation" in res.summary()
     lo, hi = res.output_map_params.values()
-    assert abs(lo - 4.2) < 0.02 and abs(hi - 5.9) < 0.02      # in volts: 5 - 0.8, 5 + 0.9
+    se = res.standard_errors()              # in volts: the truth is 5 - 0.8, 5 + 0.9
+    assert abs(lo - 4.2) < 4 * se["h_lower"] and abs(hi - 5.9) < 4 * se["h_upper"], se
     assert res.simulate(u).max() <= hi + 1e-12
 
 
@@ -222,14 +223,17 @@ def _crb_statistics(kind, seeds):
 def test_recovered_within_the_cramer_rao_bound_over_seeds(kind):
     """Output noise on a saturation / dead zone with free limits after a fractional block.
 
-    An efficient estimator has (x - x*)^T F (x - x*) ~ chi2_d per seed: over M seeds the pooled
-    ratio sqrt(mean / d) stays below 1.2 times the 99 % point of sqrt(chi2_{dM} / (dM)), and
-    each parameter's RMS error over its bound below 1.2 times that of sqrt(chi2_M / M).
+    An efficient estimator has (x - x*)^T F (x - x*) ~ chi2_d per seed. The issue's 1.2 x CRB
+    (in standard deviation) is checked on the pooled ratio sqrt(mean / d) over M seeds, whose
+    sampling spread is small (the 99 % point of sqrt(chi2_{dM} / (dM)) is below 1.2 for these
+    d and M, asserted); each parameter's RMS error over its bound stays below the 99 % point of
+    sqrt(chi2_M / M), Bonferroni over the d parameters (efficiency, the seeds' spread only).
     """
     seeds = 50
     pooled, per, d = _crb_statistics(kind, seeds)
-    assert pooled <= 1.2 * np.sqrt(stats.chi2.ppf(0.99, d * seeds) / (d * seeds)), pooled
-    assert np.all(per <= 1.2 * np.sqrt(stats.chi2.ppf(0.99, seeds) / seeds)), per
+    assert np.sqrt(stats.chi2.ppf(0.99, d * seeds) / (d * seeds)) < 1.2
+    assert pooled <= 1.2, pooled
+    assert np.all(per <= np.sqrt(stats.chi2.ppf(1 - 0.01 / d, seeds) / seeds)), per
 
 
 def test_equation_error_methods_refuse_a_series_map():
@@ -328,7 +332,9 @@ def test_compare_and_predict_apply_the_map():
                         output_map="saturation")
     v = fohw.compare(res, u, y)
     np.testing.assert_array_equal(v.simulated, res.simulate(u))
-    assert v.rmse_simulation < 0.03                            # the noise is 0.02
+    # the noise is 0.02: the free run of a good fit leaves about that (RMS of 600 noise
+    # samples spreads by 1/sqrt(2 * 600) = 3 %; 4 of those)
+    assert v.rmse_simulation < 0.02 * (1 + 4 / np.sqrt(2 * 600))
     lo, hi = res.output_map_params.values()
     yhat = res.predict(u, y)
     assert lo - 1e-12 <= yhat.min() and yhat.max() <= hi + 1e-12

@@ -584,9 +584,9 @@ def test_lr_column_of_the_mixed_class_is_nan_unless_davies_is_cheap(paper):
     assert oe.rows[1]["lr_reference"].startswith("not computed vs orders=0: order(s) alpha not "
                                                  "identified under the null")
     vp = fohw.select_structure(paper.u, paper.y, {"orders": [0, "mixed"]}, **kw)
-    if vp.results[1] is not None:
-        assert vp.rows[1]["lr_pvalue"] == fohw.lr_test(vp.results[0], vp.results[1]).pvalue
-        assert vp.rows[1]["lr_reference"].startswith("Davies bound")
+    assert vp.results[1] is not None, vp.rows[1]["reason"]
+    assert vp.rows[1]["lr_pvalue"] == fohw.lr_test(vp.results[0], vp.results[1]).pvalue
+    assert vp.rows[1]["lr_reference"].startswith("Davies bound")
 
 
 def docs_select_example():
