@@ -27,9 +27,13 @@ def test_true_structure_beats_integer_and_a_failed_candidate_is_a_row(record):
     assert status == ["ok", "ok", "failed"]
     assert "every coefficient is free" in sel.rows[2]["reason"]
     assert sel.best_index == 1
-    assert sel.rows[1]["fit"] > sel.rows[0]["fit"] + 10      # the integer order cannot bend
+    # The integer order 1 cannot bend to s^0.6: its model error, not the noise, sets its fit.
+    # 10 points is a chosen margin (the held-back fits were 89.4 and 67.4 when written), not a
+    # derived bound; the order itself is checked against its standard error below.
+    assert sel.rows[1]["fit"] > sel.rows[0]["fit"] + 10
     assert isinstance(sel.best, fohw.FractionalTFFit)
-    assert abs(sel.best.estimates["alpha0"] - 0.6) < 0.05    # refitted on all the data
+    se = sel.best.standard_errors()["alpha0"]                  # refitted on all the data
+    assert abs(sel.best.estimates["alpha0"] - 0.6) < 4 * se, se
     assert sel.best.residuals.size == u.size
     table = sel.to_markdown()
     assert "| den_orders=[0.5, 0.0] | ok |" in table.splitlines()[2]
