@@ -19,6 +19,7 @@ from .analysis.selection import Selection, select_structure
 from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
 from .estimators.circuit_fit import CircuitFit, fit_circuit
+from .estimators.fit import fit
 from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
@@ -47,8 +48,10 @@ from .exceptions import (
     RankDeficiencyWarning,
     SimulationDivergedError,
 )
+from .fit_result import FitResult
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
+from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
 from .model.fotf import FractionalTF
@@ -57,6 +60,7 @@ from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
 from .model.output_map import CustomMap, DeadZone, PiecewiseLinear, PolynomialMap, Saturation
+from .model.parameters import Parameter, Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
@@ -84,6 +88,12 @@ def _installed_version():
 __version__ = _installed_version()
 
 __all__ = [
+    "Model",
+    "Parameter",
+    "Parameters",
+    "register_model",
+    "fit",
+    "FitResult",
     "identify_many",
     "Validation",
     "compare",
