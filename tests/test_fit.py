@@ -286,3 +286,23 @@ def test_the_lagged_kind_fits_through_the_same_engine_as_identify():
     se = res.standard_errors()
     for name, value in (("a1", 0.3), ("b1", 1.0), ("b2", 0.5), ("alpha", 0.4)):
         assert abs(res.parameters[name].value - value) < 4 * se[name]
+
+
+def test_parameters_given_in_another_order_keep_the_kinds_order():
+    u, y = _record(seed=4)
+    reordered = fohw.Parameters(list(Lag().parameters.values())[::-1])
+    res = fohw.fit(Lag().with_parameters(reordered), u, y)
+    assert res.parameters.names == ("a", "b") and res.status == fohw.Status.CONVERGED
+    assert res.parameters["a"].value == pytest.approx(fohw.fit(Lag(), u, y).parameters["a"].value,
+                                                      rel=1e-9)
+
+
+def test_a_tied_parameter_has_its_sources_standard_error_times_the_factor():
+    u, y = _record(seed=6, model=Lag(0.5, 1.0))
+    tied = Lag().parameters.replace("b", tie=("a", 2.0))
+    res = fohw.fit(Lag().with_parameters(tied), u, y)
+    se = res.standard_errors()
+    assert res.free_names == ("a",)
+    assert res.parameters["b"].value == pytest.approx(2 * res.parameters["a"].value)
+    assert se["b"] == pytest.approx(2 * se["a"], rel=1e-12)
+

@@ -125,11 +125,19 @@ class FitResult(metaclass=abc.ABCMeta):
         return self.model.dt
 
     def standard_errors(self) -> dict:
-        """``{name: standard error}`` of the free parameters (raises when there is no covariance)."""
+        """``{name: standard error}`` of the free parameters and of the tied ones.
+
+        A tied parameter ``factor * source`` has ``|factor|`` times its source's standard error
+        (a tie to a fixed parameter, 0). Raises when there is no covariance.
+        """
         if self.covariance is None:
             raise ParameterError(f"this fit has no covariance (status {self.status.name}: "
                                  f"{self.message}); no standard errors.")
-        return dict(zip(self.free_names, np.sqrt(np.diag(self.covariance)).tolist()))
+        se = dict(zip(self.free_names, np.sqrt(np.diag(self.covariance)).tolist()))
+        for name, par in self.parameters.items():
+            if par.tie is not None:
+                se[name] = abs(par.tie[1]) * se.get(par.tie[0], 0.0)
+        return se
 
     def confidence_intervals(self, level=0.95) -> dict:
         """``{name: (low, high)}`` Wald intervals ``estimate ± z se`` of the free parameters."""
