@@ -110,6 +110,19 @@ def test_parameters_follow_the_terms_as_given_and_the_default_preset():
     np.testing.assert_array_equal(G.simulate(np.ones(5), initial="rest"), G.simulate(np.ones(5)))
 
 
+def test_linear_start_solves_the_coefficients_or_gives_none():
+    G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0], dt=0.05)
+    u = np.random.default_rng(6).standard_normal(300)
+    start = _model([0.0], [0.6, 0.0], 0.05, bounds={"a0": (0.0, 1.5)})
+    solved = start.linear_start(u, G.simulate(u))        # a0 = 2 solved, clipped to its bound
+    assert solved.parameters["a0"].value == 1.5 and solved.parameters["a0"].bounds == (0.0, 1.5)
+    exact = _model([0.0], [0.6, 0.0], 0.05).linear_start(u, G.simulate(u))
+    np.testing.assert_allclose([exact.parameters[n].value for n in ("b0", "a0")], [1.0, 2.0],
+                               rtol=1e-9)
+    assert _model([0.0], [0.6, 0.0], 0.05, free=["alpha0"]).linear_start(u, u) is None
+    assert start.linear_start(u, np.full(300, 1e300)) is None         # its equations overflow
+
+
 # ---------------------------------------------------------------- fits
 def test_noiseless_two_term_non_commensurate_system_is_recovered():
     G = fohw.FractionalTF([1.5], [0.0], [0.8, 1.2, 1.0], [1.4, 0.45, 0.0])

@@ -496,15 +496,21 @@ class FractionalTF(Model):
         names = params.names
         free_idx = np.array([names.index(f) for f in params.free_names], dtype=int)
         lower, upper = params.free_bounds()
-        cols = [-causal_product(operator_weights([1.0], [nu], h, n), ud, n) for nu in beta]
-        cols += [causal_product(operator_weights([1.0], [nu], h, n), y, n) for nu in alpha]
-        mat = np.column_stack(cols)
-        base = theta[coef_idx] - t_coef[:, free_coef] @ theta[free_idx[free_coef]]
-        lhs = mat @ t_coef[:, free_coef]
-        rhs = -mat @ base
-        scale = np.linalg.norm(lhs, axis=0)
+        with np.errstate(over="ignore", invalid="ignore"):
+            cols = [-causal_product(operator_weights([1.0], [nu], h, n), ud, n) for nu in beta]
+            cols += [causal_product(operator_weights([1.0], [nu], h, n), y, n) for nu in alpha]
+            mat = np.column_stack(cols)
+            base = theta[coef_idx] - t_coef[:, free_coef] @ theta[free_idx[free_coef]]
+            lhs = mat @ t_coef[:, free_coef]
+            rhs = -mat @ base
+            scale = np.linalg.norm(lhs, axis=0)
         scale[scale == 0] = 1.0
-        sol = np.linalg.lstsq(lhs / scale, rhs, rcond=None)[0] / scale
+        if not (np.all(np.isfinite(lhs)) and np.all(np.isfinite(rhs)) and np.all(np.isfinite(scale))):
+            return None                  # the equations overflow: no linear start, not an error
+        try:
+            sol = np.linalg.lstsq(lhs / scale, rhs, rcond=None)[0] / scale
+        except np.linalg.LinAlgError:
+            return None
         p = theta[free_idx].copy()
         p[free_coef] = np.clip(sol, lower[free_coef], upper[free_coef])
         p = np.where(np.isfinite(p), p, theta[free_idx])
