@@ -189,7 +189,7 @@ class FitResult(metaclass=abc.ABCMeta):
     # --- files -------------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """JSON-ready values (:func:`fohw.save_result` writes them)."""
-        return {"model": self.model.to_dict(), "covariance": None if self.covariance is None
+        return {"model": Model.to_dict(self.model), "covariance": None if self.covariance is None
                 else self.covariance.tolist(), "status": self.status.name, "sse": self.sse,
                 "n_samples": self.n_samples, "message": self.message, "nfev": self.nfev,
                 "jacobian": self.jacobian,

@@ -44,7 +44,7 @@ from ..model.base import Model
 from ..results import Status
 from ._common import bounded_least_squares, dependent_columns_note
 
-__all__ = ["fit", "free_jacobian", "data_digest", "MAX_SCAN"]
+__all__ = ["fit", "free_jacobian", "data_digest", "stationary", "MAX_SCAN"]
 
 #: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model).
 MAX_SCAN = 20_000
@@ -114,6 +114,23 @@ def free_jacobian(model, u, *, exact=True):
         cols.append((np.asarray(y_up) - np.asarray(y_down)) / (up[j] - down[j]))
     jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
     return yhat, jac, "finite differences"
+
+
+def stationary(jac, r, x, lower, upper, rtol=1e-6):
+    """Whether ``x`` is a stationary point of ``||r||^2`` within its bounds (Gauss–Newton).
+
+    The reduction a Gauss–Newton step predicts, ``||P r||^2`` (``P`` the projection onto the
+    columns of ``jac`` not held at an active bound), is below ``rtol`` times ``||r||^2``: a
+    search that ends where it started there has converged (an estimate on a bound with a zero
+    projected gradient included); elsewhere it is stuck.
+    """
+    g = jac.T @ r                                   # d (||r||^2 / 2) / d x is -g
+    free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
+    if not np.any(free):
+        return True
+    q, _ = np.linalg.qr(jac[:, free])
+    pred = float(np.sum((q.T @ r) ** 2))
+    return pred <= rtol * float(r @ r)
 
 
 def _order_grid(model, grid):
@@ -286,11 +303,12 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
-    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and np.max(np.abs(ls.grad)) > 0:
+    yhat, jac, how_cov = free_jacobian(fitted, u, exact=(how == "exact"))
+    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, y - yhat, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
-    yhat, jac, how_cov = free_jacobian(fitted, u, exact=(how == "exact"))
     bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > 1e8 * y_scale))
     if bad.size:
         status = Status.FAILED

@@ -25,6 +25,7 @@ from .._types import ArrayLike, PairLike, RandomStateLike
 from .._validation import (
     check_array,
     check_inputs,
+    check_pair,
     check_random_state,
     check_same_length,
     check_scalar,
@@ -32,9 +33,9 @@ from .._validation import (
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
+from .base import Model
 from .gl import causal_convolve, gl_weights, gl_weights_unchecked, past_transient
 from .structure import Structure
-from .system import HammersteinWiener, check_pair
 
 __all__ = ["simulate", "simulate_predictor", "equation_noise", "free_run", "forcing", "recursion",
            "accumulators", "output_terms", "Accumulators", "apply_output_map",
@@ -52,7 +53,7 @@ LEAF_SIZE = 256
 LEAF_SIZE_COMPILED = 256
 
 
-def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
+def simulate(model: Model | Structure | Any, u: ArrayLike, *,
              params: ArrayLike | Mapping[str, float] | None = None,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
@@ -166,11 +167,10 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         raise ParameterError(f"`initial` is for an identification result; got it with a "
                              f"{type(model).__name__} (fohw.compare takes `initial` for a "
                              "HammersteinWiener too).")
-    if isinstance(model, HammersteinWiener):
-        _only_for_structure(params, operating_point, "a HammersteinWiener")
-        return _simulate_model(model, u, noise=noise, noise_std=noise_std,
-                               random_state=random_state,
-                               divergence_threshold=divergence_threshold, history=history)
+    if isinstance(model, Model):        # a model kind (the lagged HammersteinWiener among them)
+        _only_for_structure(params, operating_point, f"a {type(model).__name__}")
+        return model.simulate(u, noise=noise, noise_std=noise_std, random_state=random_state,
+                              divergence_threshold=divergence_threshold, history=history)
     if isinstance(model, Structure):
         if params is None:
             raise ParameterError("simulating a Structure needs its parameter values `params` "
@@ -221,8 +221,8 @@ def _split_params(structure, params):
     return params[:k], params[k:]
 
 
-def _simulate_model(model, u, *, noise, noise_std, random_state, divergence_threshold,
-                    history):
+def simulate_model(model, u, *, noise=None, noise_std=0.0, random_state=None,
+                   divergence_threshold=None, history=None):
     """A model through its rank-one blocks: ``gbar`` is the one output signal fed back."""
     u = check_array(u, "u")
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
