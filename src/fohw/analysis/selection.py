@@ -334,8 +334,7 @@ class Selection:
         ``lr_reference`` (the reference distribution and the nested candidate, or why the
         p-value was not computed).
     best : IdentificationResult or None
-        The winner refitted on all the data given as estimation data (a
-        :class:`fohw.FractionalTFFit` from :func:`fohw.select_fractional_tf`). ``None`` means nothing
+        The winner refitted on all the data given as estimation data. ``None`` means nothing
         was selected: every candidate failed, or every refit was rejected (a
         :class:`fohw.ConvergenceWarning` says so).
     best_index : int or None
@@ -402,7 +401,7 @@ class Selection:
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
             cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
-        if columns is None:        # rows of fohw.select_fractional_tf have no in_range, ...
+        if columns is None:        # rows without an in_range, ... column leave it out
             cols = [c for c in cols if any(c in r for r in self.rows)]
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
@@ -473,8 +472,7 @@ def split_validation(u, y, validation):
 
     A fraction or a number of samples held back at the end (``score_from`` is where they
     start), or a separate record ``(u_val, y_val)`` (``score_from`` 0); checked, with a
-    :class:`fohw.ParameterError` naming ``validation``. Shared with
-    :func:`fohw.select_fractional_tf`.
+    :class:`fohw.ParameterError` naming ``validation``.
     """
     n = len(y)
     if isinstance(validation, Record):
@@ -780,8 +778,7 @@ def pick_refitted(selection, refit_one, finish, *, refit, keep=lambda w: True):
     free run; ``finish(row, fit)`` records a kept refit in its row. A refit that raises, or
     whose status is not ``"ok"``, is not kept: its row says why (``refit_*`` status, with its
     warnings) and the next ranked candidate is refitted. The kept refit's warnings are the
-    user's (re-issued), those ``keep`` rejects excepted. Shared by :func:`select_structure`
-    and :func:`fohw.analysis.tf_selection.select_fractional_tf`.
+    user's (re-issued), those ``keep`` rejects excepted. Used by :func:`select_structure`.
     """
     col = SCORES[selection.score][0]
     rows = selection.rows
