@@ -147,7 +147,9 @@ def test_commensurate_tie_and_fixed_orders():
                       ties={"alpha0": ("alpha1", 2.0)}), u, y)
     assert _value(fit, "alpha1") == pytest.approx(0.7, rel=1e-6)
     assert _value(fit, "alpha0") == 2 * _value(fit, "alpha1")
-    assert set(fit.standard_errors()) == {"b0", "a0", "a1", "alpha1"}
+    se = fit.standard_errors()
+    assert set(se) == {"b0", "a0", "a1", "alpha1", "alpha0"}
+    assert se["alpha0"] == pytest.approx(2 * se["alpha1"], rel=1e-12)    # the tie's delta method
     assert fit.parameters["alpha0"].tie == ("alpha1", 2.0)
     # coefficients only ("n" mode of FOMCON's fid): orders stay where they were given
     fit = _fit(_model([0.0], [1.4, 0.7, 0.0], 0.05, free=["b0", "a0", "a1"]), u, y)
