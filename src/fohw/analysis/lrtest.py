@@ -480,7 +480,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                   bootstrap=boot)
 
 
-def _nested_fits(restricted, full):
+def nested_fits(restricted, full):
     """``(fixed names, boundary names)`` of two FitResults, or a ParameterError saying why not.
 
     Same kind and settings, one record (its fingerprint, ``n_samples`` and ``dt``), and
@@ -532,7 +532,7 @@ def _nested_fits(restricted, full):
 
 def _lr_fits(restricted, full, reference, u, y):
     """:func:`lr_test` of two :class:`fohw.FitResult` (any kind but the lagged one)."""
-    fixed, boundary = _nested_fits(restricted, full)
+    fixed, boundary = nested_fits(restricted, full)
     if reference not in ("auto", "mixture"):
         raise ParameterError(f"`reference={reference!r}` is for the lagged kind's orders; a fit "
                              f"of a {type(full.model).__name__} is tested against chi2 (or the "

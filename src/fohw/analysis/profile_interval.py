@@ -380,8 +380,9 @@ def _profile_fit(result, name, level, u, y, n_grid, xtol):
         lo = lo if math.isfinite(lo) else est - SCAN_STANDARD_ERRORS * se
         hi = hi if math.isfinite(hi) else est + SCAN_STANDARD_ERRORS * se
 
-    def stat(value):
-        return max(n * math.log(sse_with_fixed(result, u, y, {name: value}) / rss_hat), 0.0)
+    def stat(value):     # no finite free run there (sse inf): far past any quantile, finite
+        value = n * math.log(sse_with_fixed(result, u, y, {name: value}) / rss_hat)
+        return min(max(value, 0.0), 1e12)
 
     grid = np.unique(np.r_[np.linspace(lo, hi, n_grid), est])
     values = np.array([stat(v) for v in grid])

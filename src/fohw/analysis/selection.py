@@ -52,7 +52,7 @@ from ..exceptions import (
 )
 from ..model.base import Model
 from ..record import Record
-from .lrtest import cancelled_orders, lr_test, null_orders
+from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
@@ -587,7 +587,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         …), simulated by its own ``simulate`` over the whole record (or from rest on a
         separate one) and scored the same way; the winner is refitted on all the data from
         its estimate, and ``.best`` is a :class:`fohw.FitResult`. Rows then have ``kind`` and
-        no ``in_range``; ``lr_pvalue`` is NaN (call :func:`fohw.lr_test` on two fits).
+        no ``in_range``; ``lr_pvalue`` tests a candidate against the nested one (same kind,
+        some of its free parameters fixed) with the most free parameters, if any
+        (:func:`fohw.lr_test` of the estimation fits).
     validation : float, int or (u_val, y_val), optional
         The held-back part: a fraction (default 0.25, a float in (0, 1)) or a number of
         samples (an int, at least 2) at the end of the record. Each candidate is fitted on the
@@ -814,6 +816,33 @@ def _fit_and_score_model(u_est, y_est, u_sim, y_score, score_from, model, option
                           seconds=time.perf_counter() - t0), None
 
 
+def model_lr_columns(rows, results):
+    """Fill ``lr_pvalue`` and ``lr_reference`` of model candidates (in place).
+
+    Each fit is tested against the nested candidate of most free parameters (the same kind
+    with some of them fixed) by :func:`fohw.lr_test` on the estimation part (no refits).
+    """
+    fitted = [(i, r) for i, r in enumerate(results) if r is not None]
+    for i, full in fitted:
+        nested = []
+        for j, restricted in fitted:
+            try:
+                nested_fits(restricted, full)
+            except ParameterError:
+                continue
+            nested.append((restricted.n_free, j))
+        if not nested:
+            continue
+        j = max(nested)[1]
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            test = lr_test(results[j], full)
+        rows[i]["lr_pvalue"] = test.pvalue
+        rows[i]["lr_reference"] = (f"{test.distribution}, {test.criterion} vs "
+                                   f"{rows[j]['candidate']} ({test.hypothesis})"
+                                   + "".join(f"; {w.message}" for w in caught))
+
+
 def _select_models(u, y, models, validation, score, refit, executor, progress, envelope,
                    common):
     """:func:`select_structure` of model candidates (any kind), fitted by :func:`fohw.fit`."""
@@ -855,6 +884,7 @@ def _select_models(u, y, models, validation, score, refit, executor, progress, e
             row, res = outcome
         rows.append(dict(candidate=label, kind=type(m).__name__, **row))
         results.append(res)
+    model_lr_columns(rows, results)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
 
