@@ -173,6 +173,11 @@ def test_a_damaged_file_is_refused_naming_the_field(case, tmp_path):
     with pytest.raises(fohw.DataFileError, match="outside its bounds"):
         fohw.load_result(tmp_path / "bad.json")
     d = json.loads((tmp_path / "r.json").read_text())
+    d["model"]["kind"] = "NoSuchKind"
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match="no model kind 'NoSuchKind' is registered"):
+        fohw.load_result(tmp_path / "bad.json")
+    d = json.loads((tmp_path / "r.json").read_text())
     d["covariance"][0][0] = -1.0
     (tmp_path / "bad.json").write_text(json.dumps(d))
     with pytest.raises(fohw.DataFileError, match="covariance"):

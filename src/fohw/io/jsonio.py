@@ -254,6 +254,10 @@ def _is_generic_result(body):
 
 def _generic_model_from_dict(body, version, path, field="the file"):
     """A Model of a registered kind from its ``{"kind", "config", "parameters"}``, checked."""
+    if version != MODEL_FORMAT_VERSION:
+        raise DataFileError(f"{path}: a model of kind {body['kind']!r} in a version-{version} "
+                            f"file; models of any kind are written from version "
+                            f"{MODEL_FORMAT_VERSION} on.")
     _require_fields(body, GENERIC_MODEL_FIELDS, "fohw-model", version, path)
     if not isinstance(body["kind"], str):
         _bad(body, "kind", "the name of a registered model kind (a string)", path)
@@ -264,7 +268,8 @@ def _generic_model_from_dict(body, version, path, field="the file"):
     try:
         stored = Parameters.from_dict(body["parameters"])
         model = Model.from_dict(body)
-    except (ParameterError, DimensionError, TypeError, ValueError, KeyError) as exc:
+    except (ParameterError, DimensionError, TypeError, ValueError, KeyError,
+            AttributeError) as exc:
         raise DataFileError(f"{path}: cannot rebuild the {body['kind']!r} model of {field}: "
                             f"{exc}") from None
     if model.parameters != stored:
