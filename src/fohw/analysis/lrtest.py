@@ -507,6 +507,9 @@ def nested_fits(restricted, full):
                              f"{full.data_digest or 'none'}): their criteria are of different "
                              "data, so their ratio tests nothing.")
     rp, fp = restricted.parameters, full.parameters
+    if rp.names != fp.names:
+        raise ParameterError(f"`restricted` and `full` have different parameters ({list(rp)} and "
+                             f"{list(fp)}): they are not one model with some of them fixed.")
     fixed, boundary = [], []
     for name, f in fp.items():
         r = rp[name]
@@ -533,6 +536,8 @@ def nested_fits(restricted, full):
 def _lr_fits(restricted, full, reference, u, y):
     """:func:`lr_test` of two :class:`fohw.FitResult` (any kind but the lagged one)."""
     fixed, boundary = nested_fits(restricted, full)
+    if reference not in REFERENCES:
+        raise ParameterError(f"`reference` must be one of {REFERENCES}; got {reference!r}.")
     if reference not in ("auto", "mixture"):
         raise ParameterError(f"`reference={reference!r}` is for the lagged kind's orders; a fit "
                              f"of a {type(full.model).__name__} is tested against chi2 (or the "
