@@ -311,6 +311,54 @@ def test_the_command_line_simulates_a_model_of_any_kind(case, tmp_path, capsys):
     assert "--initial is for the lagged" in capsys.readouterr().err
 
 
+class TwoGains(fohw.Model):
+    """``y = k1 u1 + k2 u2``: a kind with two input columns (as a circuit's current and SOC)."""
+
+    def __init__(self, k1=1.0, k2=1.0):
+        self.k1, self.k2 = float(k1), float(k2)
+
+    n_inputs = 2
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("k1", self.k1), fohw.Parameter("k2", self.k2)])
+
+    def with_parameters(self, values):
+        v = self.parameters.with_values(values).valuesdict()
+        return TwoGains(v["k1"], v["k2"])
+
+    def simulate(self, u, *, initial=None):
+        u = self.check_input(u)
+        return self.k1 * u[:, 0] + self.k2 * u[:, 1]
+
+
+def test_the_command_line_takes_one_column_per_input(tmp_path, capsys):
+    model = TwoGains(0.5, -2.0)
+    fohw.save_model(model, tmp_path / "m.json")
+    u = np.random.default_rng(0).standard_normal((20, 3))
+    np.savetxt(tmp_path / "u.txt", u, fmt="%.17g", header="t i soc", comments="")
+    assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
+                 str(tmp_path / "u.txt"), "--column", "i,soc", "--output",
+                 str(tmp_path / "y.txt"), "--quiet"]) == 0
+    np.testing.assert_array_equal(np.loadtxt(tmp_path / "y.txt"), model.simulate(u[:, 1:]))
+    assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
+                 str(tmp_path / "u.txt")]) == 2                 # the default: one column
+    assert "--column needs 2 entries" in capsys.readouterr().err
+
+
+def test_select_on_a_separate_validation_record(case):
+    fresh = _case(case.factory, seed=2)
+    wrong = _with(case.start, case.order, value=case.true.parameters[case.order].value + 0.2,
+                  fixed=True)
+    sel = fohw.select_structure(case.u, case.y, [wrong, case.start],
+                                validation=(fresh.u, fresh.y))
+    assert sel.best_index == 1 and sel.best is sel.results[1]     # nothing left to refit
+    assert f"{case.order}=" in sel.rows[0]["candidate"]          # its fixed value labels it
+    assert f"{case.order}=" not in sel.rows[1]["candidate"]
+    assert sel.rows[1]["fit"] == pytest.approx(fohw.compare(sel.best, fresh.u, fresh.y).fit,
+                                               rel=1e-12)
+
+
 def test_crb_names_the_parameters_an_input_cannot_identify():
     # A zero input moves no parameter: the bound names them instead of inverting (JᵀJ = 0).
     model = fractional_lag()[0]
