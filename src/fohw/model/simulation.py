@@ -220,9 +220,8 @@ def generic_model(obj):
     :class:`fohw.FitResult`, whatever its kind): the verbs' generic branches take it; a
     HammersteinWiener, a Structure and an IdentificationResult keep the lagged paths.
     """
-    if isinstance(obj, (HammersteinWiener, Structure)) or \
-            isinstance(getattr(obj, "structure", None), Structure):
-        return None
+    if isinstance(obj, Structure) or isinstance(getattr(obj, "structure", None), Structure):
+        return None                    # the lagged kind: a Structure, a model or a result of one
     if isinstance(obj, Model):
         return obj
     inner = getattr(obj, "model", None)
