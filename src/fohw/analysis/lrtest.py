@@ -496,7 +496,13 @@ def nested_fits(restricted, full):
         raise ParameterError(f"`restricted` and `full` were fitted at different step sizes "
                              f"(dt {rm.dt!r} and {fm.dt!r}): their criteria are of different "
                              "records, so their ratio tests nothing.")
-    if type(rm) is not type(fm) or rm.config() != fm.config():
+    same = type(rm) is type(fm)
+    if same:        # the settings apart from the values (a kind's config may hold values too)
+        try:
+            same = rm.with_parameters(fm.parameters.valuesdict()).config() == fm.config()
+        except ParameterError:
+            same = False
+    if not same:
         raise ParameterError(f"`restricted` and `full` must be fits of one model kind with the "
                              f"same settings; got a {type(rm).__name__} {rm.config()!r} and a "
                              f"{type(fm).__name__} {fm.config()!r}.")
