@@ -201,7 +201,8 @@ class FitResult(metaclass=abc.ABCMeta):
                 else self.covariance.tolist(), "status": self.status.name, "sse": self.sse,
                 "n_samples": self.n_samples, "message": self.message, "nfev": self.nfev,
                 "jacobian": self.jacobian,
-                "starts": [[dict(s), float(v)] for s, v in self.starts],
+                "starts": [[dict(s), float(v) if math.isfinite(v) else None]
+                           for s, v in self.starts],
                 "residuals": None if self.residuals is None else self.residuals.tolist(),
                 "data_digest": self.data_digest, "options": _jsonable(dict(self.options))}
 
@@ -221,7 +222,8 @@ class FitResult(metaclass=abc.ABCMeta):
                    status=status, sse=float(d["sse"]), n_samples=int(d["n_samples"]),
                    message=str(d.get("message", "")), nfev=int(d.get("nfev", 0)),
                    jacobian=str(d.get("jacobian", "exact")),
-                   starts=tuple((dict(s), float(v)) for s, v in d.get("starts", [])),
+                   starts=tuple((dict(s), math.inf if v is None else float(v))
+                                for s, v in d.get("starts", [])),
                    residuals=None if res is None else np.array(res, dtype=float),
                    data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}))
 
