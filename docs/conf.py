@@ -30,6 +30,13 @@ myst_enable_extensions = ["dollarmath", "amsmath"]
 myst_heading_anchors = 3
 numpydoc_show_class_members = False
 numpydoc_validation_checks = set()
+# Parameter types link where an inventory has them (Python's builtins, SciPy); NumPy has none here,
+# so its names in numpydoc's default aliases are mapped to plain text.
+numpydoc_xref_param_type = True
+numpydoc_xref_ignore = "all"
+numpydoc_xref_aliases = {name: name for name in (
+    "array", "ndarray", "np.ndarray", "array-like", "array_like", "scalar", "dtype",
+    "RandomState", "np.random.RandomState", "random_state", "matplotlib_axes", "Axes", "Figure")}
 autodoc_default_options = {"undoc-members": False}
 autodoc_typehints = "none"
 autosummary_generate = True
