@@ -163,13 +163,14 @@ def example_page(script, outdir, run, page_dir, docs_dir):
         proc, seconds = run
         lines += [".. admonition:: Executed while these pages were built", "   :class: note", "",
                   f"   ``python examples/{script.name} --outdir OUT --fast`` ran in {seconds:.1f} s. "
-                  "``--fast`` shrinks the records and the number of seeds, so the numbers and figures "
-                  "below are a quick run's, not the full run's that the study pages discuss.", ""]
+                  "``--fast`` makes a smaller run (fewer samples, seeds or candidates), so the numbers "
+                  "and figures below are a quick run's, not the full run's that the study pages discuss.", ""]
     else:
         lines += [".. admonition:: Not executed while these pages were built", "   :class: warning", "",
-                  "   This example takes the longest of all even with ``--fast``, so the build does "
-                  "not run it; the figures below are the committed ones in ``docs/figures/`` that the "
-                  "study pages show (made by the full run). Run it yourself with "
+                  "   This example is one of the two slowest even with ``--fast`` "
+                  "(``fohw_gallery_not_executed`` in ``docs/conf.py``), so the build does not run it; "
+                  "the figures below are the committed ones in ``docs/figures/`` that the study pages "
+                  "show (made by the full run). Run it yourself with "
                   f"``python examples/{script.name} --outdir OUT --fast``.", ""]
     for fig in figures:
         rel = os.path.relpath(fig, page_dir).replace(os.sep, "/")
