@@ -20,7 +20,8 @@ import fohw
 ROOT = Path(__file__).resolve().parents[1]
 DOCS_PACKAGES = ("sphinx", "myst_parser", "numpydoc", "pydata_sphinx_theme", "sphinx-mathjax-offline")
 
-# Any TCP/UDP connection made by the build (Sphinx, an extension, an example it runs) raises.
+# Any name lookup (but localhost's) and any TCP/UDP connection made by the build (Sphinx, an
+# extension, an example it runs) raises.
 NO_NETWORK = textwrap.dedent('''
     import socket
 
@@ -29,9 +30,15 @@ NO_NETWORK = textwrap.dedent('''
             raise OSError(f"the docs build tried the network: {address!r}")
         return _connect(self, address, *args)
 
-    _connect = socket.socket.connect
+    def _no_lookup(host, *args, **kwargs):
+        if host not in (None, "localhost", b"localhost", "127.0.0.1", "::1"):
+            raise OSError(f"the docs build tried the network: lookup of {host!r}")
+        return _getaddrinfo(host, *args, **kwargs)
+
+    _connect, _getaddrinfo = socket.socket.connect, socket.getaddrinfo
     socket.socket.connect = _refuse
     socket.socket.connect_ex = _refuse
+    socket.getaddrinfo = _no_lookup
 ''')
 
 
@@ -43,12 +50,13 @@ def test_tutorial_runs(tmp_path):
     assert proc.stderr == ""
 
 
-def test_network_guard_refuses_a_connection(tmp_path):
-    # The guard below is what makes "offline" testable: check that it does refuse.
+@pytest.mark.parametrize("code", ["socket.create_connection(('127.0.0.1', 9), timeout=1)",
+                                  "socket.getaddrinfo('example.org', 443)"])
+def test_network_guard_refuses(code, tmp_path):
+    # The guard is what makes "offline" testable: check that it refuses a connection and a lookup.
     (tmp_path / "sitecustomize.py").write_text(NO_NETWORK)
-    code = "import socket; socket.create_connection(('127.0.0.1', 9), timeout=1)"
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                          env={"PYTHONPATH": str(tmp_path), "PATH": ""})
+    proc = subprocess.run([sys.executable, "-c", "import socket; " + code], capture_output=True,
+                          text=True, timeout=60, env={"PYTHONPATH": str(tmp_path), "PATH": ""})
     assert proc.returncode != 0
     assert "the docs build tried the network" in proc.stderr
 
