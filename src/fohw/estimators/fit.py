@@ -26,6 +26,7 @@ only steps that lower the criterion), so a fit started at a simpler model's esti
 from __future__ import annotations
 
 import hashlib
+import inspect
 import itertools
 import warnings
 
@@ -54,14 +55,33 @@ MAX_SCAN = 20_000
 DATA_RANGE = (1e-150, 1e150)
 
 
-def data_digest(u, y, dt):
-    """A fingerprint of a record (lengths, values and ``dt``) to check two fits used one record."""
+def data_digest(u, y, dt, sample_weight=None):
+    """A fingerprint of a record (lengths, values, ``dt``, weights) to check two fits used one record."""
     h = hashlib.sha1()
-    for a in (np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64)):
+    arrays = [u, y] + ([] if sample_weight is None else [sample_weight])
+    for a in arrays:
+        a = np.ascontiguousarray(a, dtype=np.float64)
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
     h.update(repr(float(dt)).encode())
     return h.hexdigest()[:16]
+
+
+def check_weight(sample_weight, y):
+    """``sample_weight`` checked against ``y`` (non-negative, one per sample, some positive)."""
+    w = check_array(sample_weight, "sample_weight")
+    check_same_length(y, w, "y", "sample_weight")
+    if np.any(w < 0) or not np.any(w > 0):
+        raise ParameterError("`sample_weight` must be non-negative with at least one positive "
+                             f"entry; got values from {w.min()!r} to {w.max()!r}.")
+    return w
+
+
+def _hook(method, u, y, weight):
+    """Call a kind's ``starts``/``linear_start``, with ``sample_weight`` if given and it takes one."""
+    if weight is not None and "sample_weight" in inspect.signature(method).parameters:
+        return method(u, y, sample_weight=weight)
+    return method(u, y)
 
 
 def check_record(model, u, y):
@@ -136,8 +156,8 @@ def _order_grid(model, grid):
             for combo in itertools.product(*axes)]
 
 
-def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=1e-10,
-        exact_jacobian=True):
+def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3, max_nfev=200,
+        tol=1e-10, exact_jacobian=True):
     """Fit any :class:`fohw.Model` to a record by simulation (output) error.
 
     Parameters
@@ -154,6 +174,11 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     start : Model or sequence of Model, optional
         Further start models of the same kind (e.g. a simpler model's estimate: the fit never
         ends above the best start).
+    sample_weight : array_like, shape (N,), optional
+        Non-negative weights of the squared errors (default 1). Zeros hold samples back from
+        the criterion while the simulation still runs through them (a held-back block inside
+        the record). The kind's :meth:`~fohw.Model.starts` and
+        :meth:`~fohw.Model.linear_start` get them when they take a ``sample_weight`` keyword.
     order_grid : int, optional
         Scan points per free order for each start (its own value is always among them); 1 skips
         the scan. At most ``MAX_SCAN`` points in all.
@@ -198,9 +223,13 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     if not names:
         raise ParameterError("every parameter of the model is fixed or tied: nothing to fit. Free "
                              "some with model.with_parameters(parameters) (Parameter(fixed=False)).")
-    if y.size <= len(names):
-        raise DimensionError(f"`y` has {y.size} samples for {len(names)} free parameters "
-                             f"({', '.join(names)}); need more samples than parameters.")
+    weight = None if sample_weight is None else check_weight(sample_weight, y)
+    sw = 1.0 if weight is None else np.sqrt(weight)
+    n_used = y.size if weight is None else int(np.count_nonzero(weight))
+    if n_used <= len(names):
+        raise DimensionError(f"`y` has {n_used} samples{'' if weight is None else ' of positive weight'} "
+                             f"for {len(names)} free parameters ({', '.join(names)}); need more "
+                             "samples than parameters.")
     extra = [] if start is None else [start] if isinstance(start, Model) else list(start)
     for s in extra:
         if type(s) is not type(model) or s.parameters.names != params.names:
@@ -208,7 +237,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
                                  f"`model` ({type(model).__name__}); got {type(s).__name__}.")
     # The user's settings (fixed flags, bounds, ties) hold for every start.
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
-             for m in list(model.starts(u, y)) + extra]
+             for m in list(_hook(model.starts, u, y, weight)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
     penalty = np.full(y.size, 1e4 * y_scale)
     lower, upper = params.free_bounds()
@@ -227,7 +256,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > 1e8 * y_scale:
             return penalty
-        return y - yhat
+        return (y - yhat) * sw
 
     how = "exact" if exact_jacobian and model.jacobian(u) is not None else "finite differences"
 
@@ -241,6 +270,8 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
                     jac = free_jacobian(m, u, exact=False)[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return np.zeros((y.size, len(names)))
+        if weight is not None:
+            jac = jac * sw[:, None]
         return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
@@ -249,7 +280,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
         for m in _order_grid(base, order_grid):
             candidates.append(m)
             with np.errstate(all="ignore"):
-                solved = m.linear_start(u, y)
+                solved = _hook(m.linear_start, u, y, weight)
             if solved is not None:
                 candidates.append(solved.with_parameters(params.with_values(
                     {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None})))
@@ -302,14 +333,14 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
         if note:
             status = Status.FAILED
             messages.append(note)
-        inverse, fac = _linalg.inverse_gram(jac)
+        inverse, fac = _linalg.inverse_gram(jac if weight is None else jac * sw[:, None])
         if inverse is None:
             status = Status.RANK_DEFICIENT
             note = dependent_columns_note(fac, list(names))
             messages.append(note[0].upper() + note[1:])
             covariance = None
         else:
-            covariance = sse / (y.size - len(names)) * inverse
+            covariance = sse / (n_used - len(names)) * inverse
     message = " ".join(messages)
     if status == Status.RANK_DEFICIENT:
         warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
@@ -318,8 +349,9 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
         warnings.warn(f"fohw.fit({type(model).__name__}): {' '.join(messages[1:])}",
                       ConvergenceWarning, stacklevel=2)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
-                     status=status, sse=sse, n_samples=y.size, message=message,
+                     status=status, sse=sse, n_samples=n_used, message=message,
                      nfev=counter["nfev"], jacobian=how_cov, starts=starts, residuals=y - yhat,
-                     data_digest=data_digest(u, y, model.dt),
+                     data_digest=data_digest(u, y, model.dt, weight),
                      options=dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev,
-                                  tol=tol, exact_jacobian=exact_jacobian))
+                                  tol=tol, exact_jacobian=exact_jacobian,
+                                  sample_weight=None if weight is None else weight.tolist()))
