@@ -247,25 +247,38 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     def at(x):
         return model.with_parameters(params.with_free(np.clip(x, lower, upper)))
 
-    def residual(x):
+    # In the local search the solver asks for the Jacobian at (nearly) every point whose residual
+    # it computed; a kind's exact Jacobian comes with its output, so both are computed at once
+    # there and the Jacobian kept for the solver's call at the same x.
+    last = {}
+
+    def residual(x, with_jacobian=False):
         counter["nfev"] += 1
         try:
             with np.errstate(all="ignore"):
-                yhat = np.asarray(at(x).simulate(u), dtype=float)
+                m = at(x)
+                out = m.jacobian(u) if with_jacobian and exact_jacobian else None
+                if out is not None:
+                    yhat = np.asarray(out[0], dtype=float)
+                    last["x"], last["jac"] = np.array(x, dtype=float), out[1]
+                else:
+                    yhat = np.asarray(m.simulate(u), dtype=float)
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > 1e8 * y_scale:
             return penalty
         return (y - yhat) * sw
 
-    how = "exact" if exact_jacobian and model.jacobian(u) is not None else "finite differences"
-
     def jacobian(x):
         m = at(x)
         try:
             with np.errstate(all="ignore"):
-                if how == "exact":
-                    jac = np.asarray(m.jacobian(u)[1], dtype=float) @ t_matrix
+                if "x" in last and np.array_equal(last["x"], x):
+                    out = (None, last["jac"])
+                else:
+                    out = m.jacobian(u) if exact_jacobian else None
+                if out is not None:
+                    jac = np.asarray(out[1], dtype=float) @ t_matrix
                 else:
                     jac = free_jacobian(m, u, exact=False)[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
@@ -299,10 +312,11 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     for sse0, x0 in table[:n_starts]:
         if not np.isfinite(sse0):
             continue
-        x, status, ls = bounded_least_squares(residual, np.array(x0), jac=jacobian, lower=lower,
-                                              upper=upper, ftol=tol, xtol=tol, gtol=tol,
-                                              max_nfev=max_nfev)
-        r = residual(x)
+        x, status, ls = bounded_least_squares(lambda x: residual(x, True), np.array(x0),
+                                              jac=jacobian, lower=lower, upper=upper, ftol=tol,
+                                              xtol=tol, gtol=tol, max_nfev=max_nfev)
+        # The solver's last residual is at ls.x; x differs only where it was put on a bound.
+        r = ls.fun if np.array_equal(x, ls.x) else residual(x)
         sse = float(r @ r) if r is not penalty else np.inf
         if best is None or sse < best[0]:
             best = (sse, x, status, ls, sse0)
@@ -321,7 +335,7 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
-    yhat, jac, how_cov = free_jacobian(fitted, u, exact=(how == "exact"))
+    yhat, jac, how_cov = free_jacobian(fitted, u, exact=exact_jacobian)
     bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > 1e8 * y_scale))
     if bad.size:
         status = Status.FAILED
