@@ -679,6 +679,15 @@ class EquivalentCircuit(Model):
             out.append(self.with_parameters({n: x for n, x in values.items() if n not in tied}))
         return out
 
+    def check_fitted(self, u, y):
+        """A sentence when every resistance ended at 0 (the voltage does not answer the current)."""
+        rs = [self.r0] + [e.sigma if e.kind == "warburg" else e.R for e in self.elements]
+        if any(r > 0 for r in rs):
+            return None
+        return ("Every resistance of the fitted circuit is 0: its voltage does not answer the "
+                "current as a cell's does (a charge current, u[:, 0] > 0, raises it). Check the "
+                "sign convention and the units of the current.")
+
     def config(self) -> dict:
         """The structure and settings: element kinds, current map, OCV table, ``dt``, scan grid.
 
