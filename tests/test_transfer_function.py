@@ -9,7 +9,7 @@ from tf_reference import SYSTEMS, literal_simulation, mittag_leffler
 import fohw
 from fohw.exceptions import DimensionError, ParameterError, SimulationDivergedError
 from fohw.model.fotf_stability import commensurate_base, rhp_zero_count
-from fohw.model.series_division import series_divide, series_reciprocal
+from fohw.model.kernels import series_divide, series_reciprocal
 
 RNG = np.random.default_rng(20250)
 

@@ -39,7 +39,7 @@ from ..model.basis import as_basis
 from ..model.fotf import FractionalTF, delay_samples, operator_weights
 from ..model.fotf_hw import FractionalHW, OutputMap
 from ..model.gl import gl_weights, gl_weights_derivative
-from ..model.series_division import causal_product, series_divide, series_reciprocal
+from ..model.kernels import causal_product, series_divide, series_reciprocal
 
 __all__ = ["fit_fractional_hw", "fractional_hw_crb", "FractionalHWFit", "HWParametrisation"]
 

@@ -45,8 +45,8 @@ from ..exceptions import ParameterError
 from .base import Model
 from .frequency_response import gl_operator_response, operator_response
 from .gl import gl_weights_derivative, gl_weights_unchecked
+from .kernels import causal_product, series_divide
 from .parameters import Parameter, Parameters
-from .series_division import causal_product, series_divide
 
 __all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS"]
 
@@ -149,7 +149,7 @@ class ZARC:
     -----
     ``(tau/dt)^alpha sum_{j=0}^{k} beta_j(alpha) x[k-j] + x[k] = R i[k]`` (``beta`` the GL weights,
     paper Eq. 3), solved for all ``k`` at once by power-series division
-    (:func:`fohw.model.series_division.series_divide`, ``O(N log^2 N)``).
+    (:func:`fohw.model.kernels.series_divide`, ``O(N log^2 N)``).
 
     Examples
     --------

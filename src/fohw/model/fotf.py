@@ -26,9 +26,9 @@ from .base import Model
 from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
 from .frequency_response import gl_operator_response, operator_response
 from .gl import gl_weights, gl_weights_derivative
+from .kernels import causal_product, series_divide, series_reciprocal
 from .orders import ORDER_RANGE
 from .parameters import Parameter, Parameters
-from .series_division import causal_product, series_divide, series_reciprocal
 
 __all__ = ["FractionalTF", "operator_weights", "delay_samples", "NUM_ORDER_RANGE"]
 
@@ -228,7 +228,7 @@ class FractionalTF(Model):
     Simulation: the GL discretisation of ``sum_i a_i D^{alpha_i} y = sum_j b_j D^{beta_j} u`` with
     the current sample on both sides, ``sum_k c[k] y[n-k] = sum_k d[k] u[n-k]`` where ``c`` and
     ``d`` are the combined weights :func:`operator_weights`. The recursion is solved as a power
-    series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log^2 N)``. The
+    series quotient (:func:`fohw.model.kernels.series_divide`), ``O(N log^2 N)``. The
     method is first order in ``dt`` (measured in ``docs/transfer_functions.md``). Sample
     alignment: see the module docstring.
 

@@ -23,13 +23,12 @@ from .._validation import check_array, check_inputs, check_int, check_same_lengt
 from ..exceptions import DimensionError, ParameterError
 from .basis import BasisLike
 from .gl import (
-    CausalConvolution,
-    convolution_at,
     gl_weights,
     gl_weights_derivative,
     past_transient,
     sampling_scale,
 )
+from .kernels import CausalConvolution, convolution_at
 from .orders import ORDER_RANGE, OrdersLike
 from .structure import Structure
 
@@ -58,7 +57,7 @@ class WindowKernel:
 
         ``signals[:, t]`` holds the basis signals at time ``t``, for at least ``t = 0..k-1``;
         each weight vector has at least ``k`` entries. The GL sums are evaluated by
-        :func:`fohw.model.gl.convolution_at` (the whole past, no FFT).
+        :func:`fohw.model.kernels.convolution_at` (the whole past, no FFT).
         """
         n_rows = min(innovation_length, k + 1)
         if k == 0:
