@@ -177,9 +177,10 @@ def test_result_plot_returns_figure(data2000):
     import matplotlib.pyplot as plt
 
     res = paper_identify(data2000.u[:300], data2000.y[:300])
-    fig, axes = res.plot(theta_true=fohw.datasets.paper_model().theta)
-    assert len(axes) == 3
-    plt.close(fig)
+    before = plt.get_fignums()
+    fig = res.plot(theta_true=fohw.datasets.paper_model().theta)
+    assert len(fig.axes) == 3
+    assert plt.get_fignums() == before          # never registered with pyplot
 
 
 def test_hybrid_identifier_estimator(data2000):

@@ -631,12 +631,12 @@ def _save_identified(args, res, check):
 
         save_result(res, args.save)
     if args.plot:
-        fig, axes = check.plot() if check is not None else (None, None)
-        if fig is None:
+        if check is None:
             raise UsageError("--plot: the result has no model to simulate (see the message "
                              "above); no figure written.")
-        axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
-                          "one-step prediction", fontsize=10)
+        fig = check.plot()
+        fig.suptitle(f"fohw identify ({res.method}) on the estimation record: free run and "
+                     "one-step prediction", fontsize=10)
         save_figure(fig, args.plot, dpi=120)
 
 
@@ -691,8 +691,7 @@ def _select(args):
     if args.csv:
         sel.to_csv(args.csv)
     if args.plot:
-        fig, _ = sel.plot()
-        save_figure(fig, args.plot, dpi=120)
+        save_figure(sel.plot(), args.plot, dpi=120)
     return 0
 
 

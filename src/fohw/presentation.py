@@ -101,7 +101,7 @@ class ResultPresentation:
                 f"  static gain H(1) = {gain:.6g}{why}",
                 f"  stability: {block.stability()}"]
 
-    def bode(self, omega=None, *, others=None, title=None):
+    def bode(self, omega=None, *, others=None, title=None, ax=None):
         """Bode diagram of the linear block (:meth:`fohw.IdentificationResult.linear_block`).
 
         Parameters
@@ -114,12 +114,15 @@ class ResultPresentation:
             the same axes, e.g. the true model beside the estimate.
         title : str, optional
             Figure title.
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
 
         Returns
         -------
-        fig, axes
-            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); the figure is
-            not registered with pyplot, so it is never shown (save it with ``fig.savefig``).
+        matplotlib.figure.Figure
+            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); a new figure
+            is not registered with pyplot (no window; ``fig.savefig`` writes it) and shows as
+            the last expression of a notebook cell.
         """
         from .analysis.frequency import bode_plot
         from .model.hw_frequency import LinearBlock, linear_block
@@ -130,7 +133,7 @@ class ResultPresentation:
         for label, other in (others or {}).items():
             other = other if isinstance(other, LinearBlock) else linear_block(other)
             curves[label] = other.frequency_response(omega)
-        return bode_plot(omega, curves, title=title)
+        return bode_plot(omega, curves, title=title, ax=ax)
 
     def _estimate_table(self, names, est):
         """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""
@@ -158,29 +161,42 @@ class ResultPresentation:
                 f"{orders + ', ' if orders else ''}J={self.J:.6g}, status={self.status.name}, "
                 f"nit={self.nit}, n_params={self.theta.shape[0]})")
 
-    def plot(self, theta_true=None):
+    def plot(self, theta_true=None, *, ax=None):
         """Histories of theta (or delta, given ``theta_true``), alpha and J.
+
+        A batch method (no per-sample history) shows its estimates, the profile of J over
+        alpha where it has one, and J over the evaluations.
+
+        Parameters
+        ----------
+        theta_true : array_like, optional
+            The true theta: the first panel then shows the relative error delta(k).
+        ax : matplotlib Axes or sequence of three Axes, optional
+            One Axes receives the first panel only; three receive all (default: a new figure).
 
         Returns
         -------
-        fig, axes
-            Matplotlib figure and its three axes; nothing is shown.
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
         """
-        import matplotlib.pyplot as plt
+        from ._plotting import axes_for
 
-        fig, axes = plt.subplots(3, 1, figsize=(8, 7))
+        fig, axes = axes_for(ax, 3, figsize=(8, 7))
+        axes = axes + [None] * (3 - len(axes))
         if self.theta_history is None:       # batch methods: no per-sample history
             self._plot_batch(axes)
         else:
             self._plot_recursive(axes, theta_true)
-        fig.tight_layout()
-        return fig, axes
+        return fig
 
     def _plot_batch(self, axes):
         names = ("alpha",) + self.parameter_names
         axes[0].bar(range(len(names)), [self.alpha, *self.theta])
         axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
         axes[0].set_ylabel("estimate")
+        if axes[1] is None:
+            return
         if self.alpha_profile is not None:
             axes[1].plot(*self.alpha_profile, marker=".")
             axes[1].set_xlabel("alpha")
@@ -198,6 +214,8 @@ class ResultPresentation:
             axes[0].semilogy(k, self.relative_error(theta_true, history=True))
             axes[0].set_ylabel("delta(k)")
         axes[0].set_xlabel("sample k (last pass)")
+        if axes[1] is None:
+            return
         axes[1].plot(k, self.alpha_sample_history)
         axes[1].set_ylabel("alpha(k)")
         axes[1].set_xlabel("sample k (last pass)")

@@ -32,6 +32,7 @@ import io
 import itertools
 import numbers
 import re
+import textwrap
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -436,13 +437,22 @@ class Selection:
         return pd.DataFrame(self.rows)
 
     def plot(self, ax=None):
-        """Held-back fit % of every candidate (failed ones marked), the winner highlighted."""
-        from .._plotting import subplots
+        """Held-back fit % of every candidate (failed ones marked), the winner highlighted.
 
-        if ax is None:
-            fig, ax = subplots(figsize=(8, 0.32 * len(self.rows) + 1.5))
-        else:
-            fig = ax.figure
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: a new figure, its height growing with the candidates).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
+        """
+        from .._plotting import axes_for
+
+        fig, (ax,) = axes_for(ax, 1, figsize=(8, 0.32 * len(self.rows) + 1.5))
         rows = self.ranked()[::-1]
         y = np.arange(len(rows))
         fits = np.array([r["fit"] if r["status"] == "ok" else np.nan for r in rows], float)
@@ -455,9 +465,10 @@ class Selection:
                 ax.text(0, yi, f" {r['status']}", va="center", fontsize=7)
         ax.set_yticks(y, [r["candidate"] for r in rows], fontsize=7)
         ax.set_xlabel("free-run fit % on the held-back part")
-        ax.set_title(f"Structure selection ({self.validation})", fontsize=10)
-        fig.tight_layout()
-        return fig, ax
+        # wrapped to the axes' width (about 11 characters an inch at 10 pt): never clipped
+        width = max(30, int(11 * ax.get_position().width * fig.get_figwidth()))
+        ax.set_title(textwrap.fill(f"Structure selection ({self.validation})", width), fontsize=10)
+        return fig
 
 
 def _cell(v):

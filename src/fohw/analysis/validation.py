@@ -197,14 +197,25 @@ class Validation:
         return "\n".join(out) + "\n"
 
     def plot(self, ax=None, *, dt=None):
-        """Measured output, free run and one-step prediction; their errors below."""
-        from .._plotting import subplots
+        """Measured output, free run and one-step prediction; their errors below.
 
-        if ax is None:
-            fig, axes = subplots(2, 1, figsize=(9, 5.5), sharex=True)
-        else:
-            axes = ax
-            fig = axes[0].figure
+        Parameters
+        ----------
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes receives the outputs only; two receive the outputs and the errors
+            (default: a new figure with both).
+        dt : float, optional
+            Sampling time: the horizontal axis is then time in its unit, else the sample index.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
+        """
+        from .._plotting import axes_for
+
+        fig, axes = axes_for(ax, 2, figsize=(9, 5.5), sharex=True)
         t = np.arange(self.y.size) * (1.0 if dt is None else dt)
         axes[0].plot(t, self.y, "k", lw=1.2, label="measured")
         if self.simulated is not None:
@@ -215,20 +226,23 @@ class Validation:
         if self.predicted is not None:
             axes[0].plot(t, self.predicted, "C1--", lw=0.9,
                          label=f"one step: fit {self.fit_prediction:.1f} %")
-        axes[0].legend(fontsize=8)
+        # legends above the panels: a record fills its axes, a legend inside would cover it
+        above = dict(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8,
+                     frameon=False, borderaxespad=0.2)
+        axes[0].legend(**above)
         axes[0].set_ylabel("output")
-        if self.simulated is not None:
-            axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
-        if self.predicted is not None:
-            axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
+        if len(axes) > 1:
+            if self.simulated is not None:
+                axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
+            if self.predicted is not None:
+                axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
+            axes[1].set_ylabel("error")
+            axes[1].legend(**above)
         if self.n_init:
             for a in axes:
                 a.axvspan(t[0], t[min(self.n_init, t.size - 1)], color="0.9")
-        axes[1].set_ylabel("error")
-        axes[1].set_xlabel("sample k" if dt is None else "time")
-        axes[1].legend(fontsize=8)
-        fig.tight_layout()
-        return fig, axes
+        axes[-1].set_xlabel("sample k" if dt is None else "time")
+        return fig
 
 
 def _one_step(model, u, y):

@@ -722,8 +722,8 @@ class FractionalTF:
                                 np.concatenate([o1, o2]), dt, 0.0)
 
     # ------------------------------------------------------------------ figures and export
-    def bode(self, omega=None, *, others=None, title=None):
-        """Bode diagram; returns ``(fig, axes)`` without showing it.
+    def bode(self, omega=None, *, others=None, title=None, ax=None):
+        """Bode diagram; returns the figure (a notebook shows it, pyplot never sees it).
 
         Parameters
         ----------
@@ -733,17 +733,19 @@ class FractionalTF:
             Further models drawn on the same axes (e.g. an estimate beside the truth).
         title : str, optional
             Figure title.
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
 
         Returns
         -------
-        fig, axes
+        matplotlib.figure.Figure
             See :func:`fohw.analysis.frequency.bode_plot`.
 
         Examples
         --------
         >>> import fohw
-        >>> fig, axes = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
-        >>> axes[0].get_ylabel()
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
+        >>> fig.axes[0].get_ylabel()
         'magnitude [dB]'
         """
         from ..analysis.frequency import bode_plot
@@ -752,10 +754,10 @@ class FractionalTF:
         curves = {str(self): self.frequency_response(omega)}
         for label, model in (others or {}).items():
             curves[label] = model.frequency_response(omega)
-        return bode_plot(omega, curves, title=title)
+        return bode_plot(omega, curves, title=title, ax=ax)
 
-    def nyquist(self, omega=None, *, title=None):
-        """Nyquist diagram; returns ``(fig, ax)`` without showing it.
+    def nyquist(self, omega=None, *, title=None, ax=None):
+        """Nyquist diagram; returns the figure (a notebook shows it, pyplot never sees it).
 
         Parameters
         ----------
@@ -763,21 +765,23 @@ class FractionalTF:
             Positive frequencies (default :meth:`default_frequencies`).
         title : str, optional
             Figure title.
+        ax : matplotlib Axes, optional
+            Where to draw (default: a new figure).
 
         Returns
         -------
-        fig, ax
+        matplotlib.figure.Figure
             See :func:`fohw.analysis.frequency.nyquist_plot`.
 
         Examples
         --------
         >>> import fohw
-        >>> fig, ax = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
         """
         from ..analysis.frequency import nyquist_plot
 
         omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
-        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title)
+        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title, ax=ax)
 
     def oustaloup(self, band=(1e-3, 1e3), order=5, method="oustaloup"):
         """Integer-order approximation in a frequency band (FOMCON ``oustapp``).

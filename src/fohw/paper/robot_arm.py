@@ -110,7 +110,6 @@ def show(value):
 
 
 def save(fig, outdir, name):
-    fig.tight_layout()
     save_figure(fig, outdir / name, dpi=120)
 
 
