@@ -22,15 +22,26 @@ class ResultPresentation:
         return list(self.structure.nonlinear_names) + list(self.structure.linear_names)
 
     def _repr_html_(self):
+        """The notebook view: what :meth:`summary` shows, its estimates as a table."""
         import html
 
-        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
-        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{est[n]:.6g}</td></tr>"
-                       for n in self._display_names())
-        return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
-                f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
-                f"<small>{html.escape(self.message)}</small>"
-                f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
+        from ._repr import html_table
+
+        paragraphs = self.summary().split("\n\n")       # head, estimates, then the rest
+        names = self._display_names()
+        est = (self._estimates() if self.model is not None
+               else dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear])))
+        if self.covariance is not None:
+            se, ci = self.standard_errors(), self.confidence_intervals()
+            header = ["parameter", "estimate", "std err", "95% CI low", "95% CI high"]
+            rows = [(n, f"{est[n]:.6g}", f"{se[n]:.3g}", f"{ci[n][0]:.6g}", f"{ci[n][1]:.6g}")
+                    for n in names]                      # as summary() writes them
+        else:
+            header = ["parameter", "estimate"]
+            rows = [(n, f"{est[n]:.6g}") for n in names]
+        head = [line.strip() for line in paragraphs[0].splitlines()]
+        table = html_table(head[0], header, rows, lines=head[1:])
+        return table + "".join(f"<pre>{html.escape(p)}</pre>" for p in paragraphs[2:])
 
     def summary(self, linear_block=True) -> str:
         """A text table of the estimates and the run's diagnostics.

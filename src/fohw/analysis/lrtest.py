@@ -112,6 +112,23 @@ class LRTest:
     note: str = ""
     bootstrap: np.ndarray | None = field(default=None, repr=False)
 
+    def __repr__(self):
+        return (f"LRTest(statistic={self.statistic:.4g}, df={self.df}, pvalue={self.pvalue:.4g}, "
+                f"distribution={self.distribution!r}, criterion={self.criterion!r}, n={self.n})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [("LR statistic", self.statistic), ("degrees of freedom", self.df),
+                ("p-value", self.pvalue), ("reference", self.distribution),
+                ("criterion", f"{self.criterion}, n = {self.n}"),
+                ("RSS restricted / full", f"{self.rss_restricted:.6g} / {self.rss_full:.6g}")]
+        rows += [("on the boundary", ", ".join(self.boundary))] if self.boundary else []
+        rows += [("unidentified under the null", ", ".join(self.unidentified))] \
+            if self.unidentified else []
+        return html_table("LR test of the fractional orders against orders 0", ["", "value"], rows,
+                          notes=[self.note])
+
     def __str__(self):
         text = (f"LR test of the fractional orders against orders 0: LR = {self.statistic:.4g} "
                 f"({self.criterion}, n = {self.n}), df = {self.df}, p = {self.pvalue:.4g} "

@@ -162,6 +162,20 @@ class ProfileInterval:
     def __iter__(self):
         return iter((self.low, self.high))
 
+    def __repr__(self):
+        side = f", one-sided: {self.one_sided}" if self.one_sided else ""
+        return (f"ProfileInterval({self.name} = {self.estimate:.4g}, {self.level:.0%} interval "
+                f"[{self.low:.4g}, {self.high:.4g}]{side}; {self.grid.size} refits)")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        return html_table(f"Profile-likelihood interval of {self.name}",
+                          ["order", "estimate", f"{self.level:.0%} low", f"{self.level:.0%} high",
+                           "one-sided"],
+                          [(self.name, self.estimate, self.low, self.high, self.one_sided or "no")],
+                          notes=[f"n log(RSS(nu) / RSS_hat) on {self.grid.size} refits"])
+
 
 def _fixed_value_ok(orders, name, value):
     """Whether fixing ``name`` at ``value`` leaves distinct terms (the mixed class at 0 does not)."""

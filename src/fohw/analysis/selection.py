@@ -359,6 +359,28 @@ class Selection:
     validation: str = ""
     seconds: float = 0.0
 
+    def __repr__(self):
+        n_ok = sum(r["status"] == "ok" for r in self.rows)
+        best = ("nothing selected" if self.best_row is None else
+                f"best {self.best_row['candidate']!r}, {self.score} "
+                f"{_cell(self.best_row.get(SCORES[self.score][0], float('nan')))}")
+        return (f"Selection({len(self.rows)} candidates, {n_ok} scored, {best}; "
+                f"{self.validation}; {self.seconds:.1f} s)")
+
+    def _repr_html_(self, top=20):
+        from .._repr import html_table
+
+        lines = self.to_markdown(top=top).splitlines()
+        header = [c.strip() for c in lines[0].strip("|").split("|")]
+        rows = [[c.strip() for c in line.strip("|").split("|")] for line in lines[2:] if line]
+        more = len(self.rows) - len(rows)
+        best = ("nothing selected" if self.best_row is None else
+                f"best: {self.best_row['candidate']} (refitted on all the data)")
+        return html_table(f"Selection of {len(self.rows)} candidates", header, rows,
+                          lines=[f"{self.validation}; ranked by {self.score}; {self.seconds:.1f} s",
+                                 best],
+                          notes=[f"... {more} more (Selection.to_markdown())" if more > 0 else ""])
+
     @property
     def best_row(self):
         """The winner's row (``None`` if every candidate failed)."""

@@ -171,6 +171,26 @@ class Validation:
         """The free run's RMSE in the data's units (:attr:`rmse_simulation`)."""
         return self.rmse_simulation
 
+    def __repr__(self):
+        free = (f"fit {self.fit_simulation:.1f} %, RMSE {self.rmse_simulation:.4g}"
+                if self.simulated is not None else self.status)
+        return (f"Validation(N={self.y.size}, free run: {free}; one step: fit "
+                f"{self.fit_prediction:.1f} %, RMSE {self.rmse_prediction:.4g}; "
+                f"status={self.status!r})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        ok = self.simulated is not None
+        rows = [("free-run simulation", f"{self.fit_simulation:.1f}" if ok else self.status,
+                 f"{self.rmse_simulation:.4g}" if ok else self.status),
+                ("one-step prediction", f"{self.fit_prediction:.1f}",
+                 f"{self.rmse_prediction:.4g}")]                # as to_markdown() writes them
+        notes = [line for line in self.to_markdown().splitlines()[5:] if line]
+        return html_table(f"Validation on {self.y.size} samples"
+                          + (f" ({self.n_init} start-up samples left out)" if self.n_init else ""),
+                          ["", "fit %", "RMSE"], rows, notes=notes)
+
     def to_markdown(self, unit=""):
         """A two-row table (free run, one step) and the residual tests."""
         u = f" ({unit})" if unit else ""

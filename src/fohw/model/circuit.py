@@ -493,3 +493,10 @@ class EquivalentCircuit:
     def __str__(self):
         parts = [f"{n} = {v:.6g}" for n, v in zip(self.names, self.values)]
         return f"EquivalentCircuit({'+'.join(self.kinds) or 'R0 only'}: {', '.join(parts)})"
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        return html_table(f"EquivalentCircuit ({'+'.join(self.kinds) or 'R0 only'})",
+                          ["parameter", "value"], list(zip(self.names, self.values)),
+                          lines=["OCV map: " + ("given" if self.ocv is not None else "none")])

@@ -247,6 +247,16 @@ class FractionalTF:
         return (f"FractionalTF({fmt(self._num)}, {fmt(self._num_orders)}, {fmt(self._den)}, "
                 f"{fmt(self._den_orders)}, dt={self._dt!r}, delay={self._delay!r})")
 
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = ([("numerator", c, o) for c, o in zip(self._num, self._num_orders)]
+                + [("denominator", c, o) for c, o in zip(self._den, self._den_orders)])
+        extra = ", ".join(f"{k} = {v:g}" for k, v in (("dt", self._dt), ("delay", self._delay))
+                          if v)
+        return html_table("FractionalTF", ["", "coefficient", "order of s"], rows,
+                          lines=[f"G(s) = {self}", extra])
+
     def __str__(self):
         num = _poly_text(self._num, self._num_orders)
         den = _poly_text(self._den, self._den_orders)
