@@ -160,7 +160,7 @@ __all__ = [
     "PiecewiseLinear",
     "PolynomialMap",
     "CustomMap",
-    # issue 27
+    # battery cells: the fractional equivalent circuit
     "EquivalentCircuit",
     "RC",
     "ZARC",

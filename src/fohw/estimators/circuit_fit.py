@@ -10,7 +10,7 @@ over its parameters, within physical bounds (resistances ``>= 0``, time constant
    linearly (``a, b, R0, c3`` and the resistances) are solved by linear least squares (from one
    Gram matrix of all the grid's unit responses); combinations with a negative resistance are
    dropped. Without it, local searches of RC + ZARC mixtures were seen to end at ``alpha -> 1``
-   (issue 27's prototype) or ``alpha -> 0``.
+   (in a prototype fit of this record) or ``alpha -> 0``.
 2. **Local search** from the ``n_starts`` best distinct grid points: ``scipy.optimize.least_squares``
    (trust-region reflective, bounds, the exact Jacobian; time constants searched in ``log tau``).
 3. **Standard errors** from ``sigma^2 (J^T J)^-1``, ``sigma^2 = RSS / (n - d)``: they assume white
