@@ -23,8 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_int, check_scalar
 from ..estimators.circuit_fit import CircuitFit, fit_circuit

@@ -43,8 +43,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.special
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state

@@ -24,8 +24,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..estimators.identify import identify

@@ -25,7 +25,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.optimize
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ParameterError

@@ -25,8 +25,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
-import scipy.optimize
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from ..exceptions import ConvergenceWarning, DimensionError, ParameterError
 from ..model.fotf import FractionalTF, delay_samples, operator_weights

@@ -12,7 +12,7 @@ is ``O(N log^2 N)``. :func:`fohw.model.simulation.recursion` (the simulator) and
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 __all__ = ["HalfMerge", "divide_and_conquer"]
 

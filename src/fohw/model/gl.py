@@ -16,7 +16,7 @@ import math
 import os
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._types import ArrayLike
 from .._validation import check_array, check_int, check_scalar

@@ -10,7 +10,7 @@ divide and conquer (the "relaxed" or online convolution: van der Hoeven 2002), i
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 __all__ = ["causal_product", "series_reciprocal", "series_divide"]
 
