@@ -87,6 +87,14 @@ def _stage(args, message):
         print(f"fohw: {message}", file=sys.stderr, flush=True)
 
 
+def _bars(args):
+    """Progress bars of the library for the command: a terminal's default, none otherwise.
+
+    In a pipe or a file the stage messages (:func:`_stage`) say what runs; ``--quiet``: nothing.
+    """
+    return None if sys.stderr.isatty() and not getattr(args, "quiet", False) else False
+
+
 def _duration(seconds):
     return f"{seconds:.1f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
 
@@ -604,7 +612,7 @@ def _fit_and_check(args, u, y, options, dt):
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
                        offset=args.offset, operating_point=args.operating_point, dt=dt,
                        output_map=args.output_map,
-                       nk=args.nk, inputs=getattr(args, "inputs", None))
+                       nk=args.nk, inputs=getattr(args, "inputs", None), progress=_bars(args))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -769,7 +777,7 @@ def _run_selection(args, u, y, candidates, dt):
             sel = select_structure(u, y, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
                                    operating_point=args.operating_point, dt=dt,
-                                   executor=pool)
+                                   executor=pool, progress=_bars(args))
     finally:
         if pool is not None:
             pool.shutdown()

@@ -45,7 +45,9 @@ def identify_many(records, *, executor=None, progress=None, **kwargs):
         Where to run them (a ``ProcessPoolExecutor``, dask's ``Client.get_executor()``);
         default serially. The results do not depend on the backend.
     progress : bool, optional
-        A progress bar on stderr; default: when stderr is a terminal.
+        A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
+        otherwise): True from the start, False never; default (None) once the work has run
+        for 2 s.
     **kwargs
         Keywords of :func:`fohw.identify` (``na``, ``nb``, ``f_basis``, ``g_basis``, …).
 

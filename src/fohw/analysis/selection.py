@@ -636,7 +636,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         default serially. Basis functions must then be picklable (module-level functions, not
         lambdas). The table does not depend on the backend.
     progress : bool, optional
-        A progress bar on stderr; default: when stderr is a terminal.
+        A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
+        otherwise): True from the start, False never; default (None) once the work has run
+        for 2 s.
     envelope : float or None
         Plausibility factor (default 10, :data:`fohw.analysis.validation.ENVELOPE`): a free
         run (on the estimation input or the held-back part) that goes more than ``envelope``
