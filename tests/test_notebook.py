@@ -36,6 +36,8 @@ def test_getting_started_notebook_shows_figures_and_tables(tmp_path, monkeypatch
                    resources={"metadata": {"path": str(tmp_path)}}).execute()
     for cell in code:
         assert not [o for o in cell.outputs if o.output_type == "error"], cell.source
+        stderr = "".join(o.get("text", "") for o in cell.outputs if o.get("name") == "stderr")
+        assert "Warning" not in stderr, (cell.source, stderr)   # progress lines only
     for cell in figures:
         pngs = [o for o in cell.outputs if "image/png" in o.get("data", {})]
         assert len(pngs) == 1, (cell.source, [o.get("data", {}).keys() for o in cell.outputs])

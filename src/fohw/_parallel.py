@@ -110,11 +110,27 @@ def progress_bar(total, label, enabled=None):
     return _Counter(total, label, delay)
 
 
+def _auto_tqdm():
+    """``tqdm.auto.tqdm``, or None without tqdm.
+
+    In a notebook without ipywidgets tqdm.auto falls back to its text bar with a TqdmWarning
+    ("IProgress not found"); the text bar is what fohw shows then, so that warning is not passed on.
+    """
+    import warnings
+
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="IProgress not found")
+            from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return tqdm
+
+
 def _tqdm(total, label, delay):
     """A ``tqdm.auto`` bar on stderr (a notebook widget where ipywidgets is installed), or None."""
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
+    tqdm = _auto_tqdm()
+    if tqdm is None:
         return None
     tty = sys.stderr.isatty()
     kwargs = dict(total=total, desc=label, file=sys.stderr, delay=delay,
@@ -255,10 +271,7 @@ class heartbeat:
         if self.stop.wait(self.delay):
             return
         self.shown = True
-        try:
-            from tqdm.auto import tqdm
-        except ImportError:
-            tqdm = None
+        tqdm = _auto_tqdm()
         if tqdm is not None:
             try:
                 bar = tqdm(desc=self.label, file=sys.stderr, bar_format="{desc}: running, {elapsed}")
