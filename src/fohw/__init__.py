@@ -16,9 +16,9 @@ from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
-from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
 from .estimators.circuit_fit import CircuitFit, fit_circuit
+from .estimators.fit import fit
 from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
@@ -31,7 +31,6 @@ from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
 from .estimators.structured import StructuredOptions
-from .estimators.tf_fit import FractionalTFFit, fit_fractional_tf, fractional_tf_crb
 from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
@@ -47,8 +46,10 @@ from .exceptions import (
     RankDeficiencyWarning,
     SimulationDivergedError,
 )
+from .fit_result import FitResult
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
+from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
 from .model.fotf import FractionalTF
@@ -57,6 +58,7 @@ from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
 from .model.output_map import CustomMap, DeadZone, PiecewiseLinear, PolynomialMap, Saturation
+from .model.parameters import Parameter, Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
@@ -90,13 +92,18 @@ def __getattr__(name):
     raise AttributeError(f"module 'fohw' has no attribute {name!r}")
 
 __all__ = [
+    "Model",
+    "Parameter",
+    "Parameters",
+    "register_model",
+    "fit",
+    "FitResult",
     "identify_many",
     "Validation",
     "compare",
     "read_record",
     "Selection",
     "select_structure",
-    "select_fractional_tf",
     "Basis",
     "InputBases",
     "CRBResult",
@@ -149,13 +156,10 @@ __all__ = [
     "InitialState",
     "initial_state",
     "FractionalTF",
-    "FractionalTFFit",
-    "fit_fractional_tf",
     "LRTest",
     "lr_test",
     "ProfileInterval",
     "profile_interval",
-    "fractional_tf_crb",
     "FractionalHW",
     "FractionalHWFit",
     "OutputMap",

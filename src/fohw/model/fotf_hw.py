@@ -7,7 +7,7 @@ static maps):
 
 - ``f``: a :class:`fohw.Basis` with coefficients ``p``, **normalised by** ``p_1 = 1`` (the gain
   lives in ``G``, whose lowest-order denominator coefficient is the fit's normaliser, as in
-  :func:`fohw.fit_fractional_tf`);
+  :attr:`fohw.FractionalTF.parameters`);
 - ``G``: a :class:`fohw.FractionalTF`, simulated by its GL discretisation with the current
   sample on both sides (implicit; sample alignment of :mod:`fohw.model.fotf`);
 - ``h``: a static output map in **series** (:class:`OutputMap`): the identity, a polynomial

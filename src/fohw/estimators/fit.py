@@ -1,0 +1,348 @@
+"""One simulation-error fit for every model kind (:func:`fohw.fit`).
+
+Output-error least squares: the free parameters of a :class:`fohw.Model` minimise
+``sum_k (y[k] - yhat[k])^2`` where ``yhat`` is the model's free run for the input. The steps
+are the same for every kind:
+
+1. the record is checked (lengths, finite values, excitation, a non-constant output, a range
+   of magnitudes doubles can square);
+2. starts: the kind's :meth:`~fohw.Model.starts` and the user's, each with its free orders
+   scanned on a grid inside their bounds, and each also with its linear parameters solved
+   (:meth:`~fohw.Model.linear_start`), ranked by their simulation error;
+3. the best few are refined by bounded least squares (:func:`bounded_least_squares`, the one
+   wrapper every fohw estimator runs) with the kind's exact Jacobian, or central finite
+   differences when it has none;
+4. the status: a search that made no step from its start is ``FAILED``, one whose fitted model
+   does not simulate finitely on its own record is ``FAILED`` naming the sample, a
+   rank-deficient Jacobian is ``RANK_DEFICIENT`` naming the parameters (through
+   :mod:`fohw._linalg`), and the covariance ``s^2 (J^T J)^{-1}`` comes from the same
+   factorisation.
+
+Nesting: every start is a point the search never ends above (the trust-region method accepts
+only steps that lower the criterion), so a fit started at a simpler model's estimate
+(:func:`fohw.lr_test` does this) never ends above it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import warnings
+
+import numpy as np
+
+from .. import _linalg
+from .._validation import check_array, check_int, check_same_length, check_scalar
+from ..exceptions import (
+    ConvergenceWarning,
+    DimensionError,
+    ParameterError,
+    RankDeficiencyWarning,
+)
+from ..fit_result import FitResult
+from ..model.base import Model
+from ..results import Status
+from ._common import bounded_least_squares, dependent_columns_note
+
+__all__ = ["fit", "free_jacobian", "data_digest", "stationary", "MAX_SCAN", "ESCAPE", "PENALTY"]
+
+#: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model).
+MAX_SCAN = 20_000
+
+#: A free run beyond this many times the largest measured ``|y|`` is out of range: the search
+#: treats it as a penalty (a residual of ``PENALTY`` times ``max |y|`` at every sample, larger
+#: than any run inside the range), and a fitted model whose free run leaves it is ``FAILED``.
+ESCAPE = 1e3
+PENALTY = 1e4
+
+#: Magnitudes of the data fohw fits without rescaling: beyond them sums of squares of the
+#: simulation error overflow or underflow in double precision.
+DATA_RANGE = (1e-150, 1e150)
+
+
+def data_digest(u, y, dt):
+    """A fingerprint of a record (lengths, values and ``dt``) to check two fits used one record."""
+    h = hashlib.sha1()
+    for a in (np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64)):
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    h.update(repr(float(dt)).encode())
+    return h.hexdigest()[:16]
+
+
+def check_record(model, u, y):
+    """``u`` (as the model takes it) and ``y`` checked for a fit; raises naming what is wrong."""
+    if not isinstance(model, Model):
+        raise ParameterError(f"`model` must be a fohw.Model (a model kind); got {type(model).__name__}.")
+    u = model.check_input(u)
+    y = check_array(y, "y")
+    check_same_length(u, y, "u", "y")
+    uu = u.reshape(u.shape[0], -1)
+    if not np.any(uu):
+        raise ParameterError("`u` is zero at every sample: the record has no excitation, so no "
+                             "parameter of the model can be identified from it.")
+    if np.ptp(y) == 0.0:
+        raise ParameterError(f"`y` is constant ({y[0]!r} at all {y.size} samples): it carries no "
+                             "information on the dynamics; fit a record in which the output moves.")
+    for name, x in (("u", uu), ("y", y)):
+        big = float(np.max(np.abs(x)))
+        if big > DATA_RANGE[1] or 0.0 < big < DATA_RANGE[0]:
+            raise ParameterError(
+                f"`{name}` has magnitudes near {big:.3g}, outside [{DATA_RANGE[0]:g}, "
+                f"{DATA_RANGE[1]:g}], where squared simulation errors leave the range of doubles; "
+                f"rescale `{name}` (e.g. to an RMS near 1): the model's parameters rescale with it.")
+    return u, y
+
+
+def free_jacobian(model, u, *, exact=True):
+    """``(yhat, J, how)``: the free run and ``d yhat / d free`` at ``model``'s values.
+
+    ``how`` is ``"exact"`` when the kind's :meth:`~fohw.Model.jacobian` gave it, else
+    ``"finite differences"`` (central, step ``eps**(1/3) max(|p|, 1)``, one-sided at a bound).
+    """
+    params = model.parameters
+    t = params.tie_matrix()
+    out = model.jacobian(u) if exact else None
+    if out is not None:
+        yhat, jac = out
+        return np.asarray(yhat, dtype=float), np.asarray(jac, dtype=float) @ t, "exact"
+    x = params.free_values()
+    lo, hi = params.free_bounds()
+    yhat = np.asarray(model.simulate(u), dtype=float)
+    cols = []
+    for j in range(x.size):
+        step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
+        up, down = x.copy(), x.copy()
+        up[j] = min(x[j] + step, hi[j])
+        down[j] = max(x[j] - step, lo[j])
+        y_up = model.with_parameters(params.with_free(up)).simulate(u)
+        y_down = model.with_parameters(params.with_free(down)).simulate(u)
+        cols.append((np.asarray(y_up) - np.asarray(y_down)) / (up[j] - down[j]))
+    jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
+    return yhat, jac, "finite differences"
+
+
+def stationary(jac, r, x, lower, upper, rtol=1e-6):
+    """Whether ``x`` is a stationary point of ``||r||^2`` within its bounds (Gauss–Newton).
+
+    The reduction a Gauss–Newton step predicts, ``||P r||^2`` (``P`` the projection onto the
+    columns of ``jac`` not held at an active bound), is below ``rtol`` times ``||r||^2``: a
+    search that ends where it started there has converged (an estimate on a bound with a zero
+    projected gradient included); elsewhere it is stuck.
+    """
+    g = jac.T @ r                                   # d (||r||^2 / 2) / d x is -g
+    free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
+    if not np.any(free):
+        return True
+    q, _ = np.linalg.qr(jac[:, free])
+    pred = float(np.sum((q.T @ r) ** 2))
+    return pred <= rtol * float(r @ r)
+
+
+def _order_grid(model, grid):
+    """``model`` with its free orders moved to each point of a grid inside their bounds."""
+    params = model.parameters
+    orders = [n for n in params.free_names if params[n].order]
+    if grid <= 1 or not orders:
+        return [model]
+    axes = []
+    for name in orders:
+        lo, hi = params[name].bounds
+        lo, hi = max(lo, -2.0), min(hi, 2.0)
+        values = lo + (hi - lo) * (np.arange(grid) + 0.5) / grid
+        axes.append(np.unique(np.r_[values, params[name].value]))
+    n_points = int(np.prod([a.size for a in axes], dtype=float))
+    if n_points > MAX_SCAN:
+        raise ParameterError(f"`order_grid` = {grid} scans {n_points} points for {len(orders)} free "
+                             f"orders, more than {MAX_SCAN}; use a smaller grid (or give starts).")
+    return [model.with_parameters(params.with_values(dict(zip(orders, combo))))
+            for combo in itertools.product(*axes)]
+
+
+def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=1e-10,
+        exact_jacobian=True):
+    """Fit any :class:`fohw.Model` to a record by simulation (output) error.
+
+    Parameters
+    ----------
+    model : Model
+        The kind, its start values, and which parameters are free, fixed, tied or bounded (its
+        :attr:`~fohw.Model.parameters`; pass ``model.with_parameters(parameters)`` to change
+        them).
+    u : array_like
+        Input, as the kind takes it (1-D, or ``(N, m)`` for ``m`` input columns; a circuit takes
+        ``[current, state of charge]``).
+    y : array_like, shape (N,)
+        Measured output.
+    start : Model or sequence of Model, optional
+        Further start models of the same kind (e.g. a simpler model's estimate: the fit never
+        ends above the best start).
+    order_grid : int, optional
+        Scan points per free order for each start (its own value is always among them); 1 skips
+        the scan. At most ``MAX_SCAN`` points in all.
+    n_starts : int, optional
+        How many of the best-ranked starts are refined by least squares.
+    max_nfev : int, optional
+        Simulation budget of each refinement.
+    tol : float, optional
+        ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in ``(0, 1)``.
+    exact_jacobian : bool, optional
+        Use the kind's exact Jacobian where it has one (default); False forces finite differences.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ParameterError, DimensionError
+        Bad input (named): no excitation, a constant output, data beyond the range of doubles,
+        fewer samples than free parameters, nothing free, or no start with a finite simulation.
+
+    Warns
+    -----
+    ConvergenceWarning
+        The search used its budget, or failed (stuck at its start, or a fitted model that
+        does not simulate finitely).
+    RankDeficiencyWarning
+        Some free parameters are not identifiable from the record (named).
+
+    Examples
+    --------
+    See :class:`fohw.Model` for a kind written in a dozen lines and fitted with this function.
+    """
+    u, y = check_record(model, u, y)
+    order_grid = check_int(order_grid, "order_grid", minimum=1)
+    n_starts = check_int(n_starts, "n_starts", minimum=1)
+    max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
+    tol = check_scalar(tol, "tol", lower=np.finfo(float).eps, upper=1.0, upper_inclusive=False)
+    params = model.parameters
+    names = params.free_names
+    if not names:
+        raise ParameterError("every parameter of the model is fixed or tied: nothing to fit. Free "
+                             "some with model.with_parameters(parameters) (Parameter(fixed=False)).")
+    if y.size <= len(names):
+        raise DimensionError(f"`y` has {y.size} samples for {len(names)} free parameters "
+                             f"({', '.join(names)}); need more samples than parameters.")
+    extra = [] if start is None else [start] if isinstance(start, Model) else list(start)
+    for s in extra:
+        if type(s) is not type(model) or s.parameters.names != params.names:
+            raise ParameterError(f"`start` must hold models of the same kind and parameters as "
+                                 f"`model` ({type(model).__name__}); got {type(s).__name__}.")
+    # The user's settings (fixed flags, bounds, ties) hold for every start.
+    bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
+             for m in list(model.starts(u, y)) + extra]
+    y_scale = max(float(np.max(np.abs(y))), 1e-300)
+    penalty = np.full(y.size, PENALTY * y_scale)
+    lower, upper = params.free_bounds()
+    counter = {"nfev": 0}
+
+    def at(x):
+        return model.with_parameters(params.with_free(np.clip(x, lower, upper)))
+
+    def residual(x):
+        counter["nfev"] += 1
+        try:
+            with np.errstate(all="ignore"):
+                yhat = np.asarray(at(x).simulate(u), dtype=float)
+        except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+            return penalty
+        if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
+            return penalty
+        return y - yhat
+
+    has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
+
+    def jacobian(x):
+        m = at(x)
+        try:
+            with np.errstate(all="ignore"):
+                jac = free_jacobian(m, u, exact=has_exact)[1]
+        except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+            return np.zeros((y.size, len(names)))
+        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
+
+    # Starts: each base, its orders on a grid, each also with its linear part solved.
+    candidates = []
+    for base in bases:
+        for m in _order_grid(base, order_grid):
+            candidates.append(m)
+            try:
+                with np.errstate(all="ignore"):
+                    solved = m.linear_start(u, y)
+            except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+                solved = None
+            if solved is not None:
+                candidates.append(solved.with_parameters(params.with_values(
+                    {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None})))
+    ranked = {}
+    for m in candidates:
+        x = m.parameters.free_values()
+        if np.any(x < lower) or np.any(x > upper):
+            continue
+        r = residual(x)
+        sse = float(r @ r) if r is not penalty else np.inf
+        ranked.setdefault(tuple(x.tolist()), sse)
+    table = sorted(((sse, x) for x, sse in ranked.items()), key=lambda row: row[0])
+    order_names = [n for n in names if params[n].order]
+    starts = tuple(({n: x[names.index(n)] for n in order_names}, sse) for sse, x in table)
+    best = None
+    for sse0, x0 in table[:n_starts]:
+        if not np.isfinite(sse0):
+            continue
+        x, status, ls = bounded_least_squares(residual, np.array(x0), jac=jacobian, lower=lower,
+                                              upper=upper, ftol=tol, xtol=tol, gtol=tol,
+                                              max_nfev=max_nfev)
+        r = residual(x)
+        sse = float(r @ r) if r is not penalty else np.inf
+        if best is None or sse < best[0]:
+            best = (sse, x, status, ls, sse0)
+    if best is None:
+        raise ParameterError(
+            f"no start of the {type(model).__name__} gave a finite simulation of this record "
+            f"({len(table)} tried); give a start whose free run stays bounded (`start=`), or "
+            "narrower bounds on its parameters.")
+    sse, x, status, ls, sse0 = best
+    fitted = at(x)
+    messages = [f"simulation-error fit (scipy.optimize.least_squares): {ls.message}"]
+    if status == Status.MAX_ITER:
+        messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
+                        "`tol`; raise `max_nfev` or give a better start.")
+    yhat, jac, how_cov = free_jacobian(fitted, u, exact=has_exact)
+    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, y - yhat, x, lower, upper):
+        status = Status.FAILED
+        messages.append("The search is stuck at its start: it made no step that lowered the "
+                        "simulation error, so the estimate is where it started, not a minimum.")
+    bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > ESCAPE * y_scale))
+    if bad.size:
+        status = Status.FAILED
+        messages.append(f"The fitted model's free run on its own input leaves the range of the data "
+                        f"at sample {int(bad[0])} (|yhat| beyond {ESCAPE:g} max|y| or not finite).")
+        covariance = None
+    else:
+        note = fitted.check_fitted(u, y)
+        if note:
+            status = Status.FAILED
+            messages.append(note)
+        inverse, fac = _linalg.inverse_gram(jac)
+        if inverse is None:
+            status = Status.RANK_DEFICIENT
+            note = dependent_columns_note(fac, list(names))
+            messages.append(note[0].upper() + note[1:])
+            covariance = None
+        else:
+            covariance = sse / (y.size - len(names)) * inverse
+    message = " ".join(messages)
+    if status == Status.RANK_DEFICIENT:
+        warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
+                      stacklevel=2)
+    elif status in (Status.MAX_ITER, Status.FAILED):
+        warnings.warn(f"fohw.fit({type(model).__name__}): {' '.join(messages[1:])}",
+                      ConvergenceWarning, stacklevel=2)
+    return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
+                     status=status, sse=sse, n_samples=y.size, message=message,
+                     nfev=counter["nfev"], jacobian=how_cov, starts=starts, residuals=y - yhat,
+                     data_digest=data_digest(u, y, model.dt),
+                     options=dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev,
+                                  tol=tol, exact_jacobian=exact_jacobian))

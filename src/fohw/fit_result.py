@@ -1,0 +1,252 @@
+"""The result of fitting any model kind (returned by :func:`fohw.fit`): one vocabulary.
+
+:class:`FitResult` holds the fitted :class:`fohw.Model`, its :class:`fohw.Parameters`, the
+covariance of the free ones, the status, the simulation error ``sse`` and the noise variance;
+it simulates, summarises itself and writes itself to JSON. The lagged kind's
+:class:`fohw.IdentificationResult` speaks the same vocabulary (``model``, ``parameters``,
+``covariance``, ``standard_errors()``, ``status``, ``sse``, ``noise_variance``, ``simulate``,
+``summary``, ``to_dict``) and counts as a :class:`FitResult` (``isinstance`` holds).
+"""
+
+from __future__ import annotations
+
+import abc
+import html
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from .exceptions import ParameterError
+from .model.base import Model
+from .model.parameters import Parameters
+from .results import IdentificationResult, Status
+
+__all__ = ["FitResult"]
+
+
+def _readonly(a):
+    if a is None:
+        return None
+    a = np.array(a, dtype=np.float64, copy=True)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, repr=False, eq=False, kw_only=True)
+class FitResult(metaclass=abc.ABCMeta):
+    """A fitted model of any kind with its uncertainty and diagnostics.
+
+    Attributes
+    ----------
+    model : Model
+        The fitted model (its ``parameters`` are :attr:`parameters`).
+    parameters : Parameters
+        Every parameter at its estimate, with the bounds, fixed flags and ties of the fit.
+    covariance : ndarray or None
+        Covariance of the free parameters (``free_names`` order), ``s^2 (J^T J)^{-1}`` at the
+        estimate; ``None`` when the Jacobian is rank deficient (:attr:`status`
+        ``RANK_DEFICIENT``; the message names the parameters).
+    status : Status
+        ``CONVERGED``, ``MAX_ITER``, ``FAILED`` (stuck at its start, or a fitted model whose
+        free run is not finite) or ``RANK_DEFICIENT``.
+    sse : float
+        Sum of squared simulation errors ``sum (y - yhat)^2`` over the record.
+    n_samples : int
+        Samples in the criterion.
+    noise_variance : float
+        ``sse / (n_samples - n_free)``.
+    message : str
+        What happened, in words.
+    nfev : int
+        Simulations the search used.
+    jacobian : str
+        ``"exact"`` (the kind's :meth:`~fohw.Model.jacobian`) or ``"finite differences"``.
+    starts : tuple of (dict, float)
+        The scanned starts (free order values) and their SSE, best first.
+    residuals : ndarray
+        ``y - yhat`` at the estimate.
+    data_digest : str
+        A fingerprint of the record ``(u, y)`` the fit used (tests of two fits check it).
+    options : dict
+        The fit's settings.
+    """
+
+    model: Model
+    parameters: Parameters
+    covariance: np.ndarray | None
+    status: Status
+    sse: float
+    n_samples: int
+    message: str = ""
+    nfev: int = 0
+    jacobian: str = "exact"
+    starts: tuple = ()
+    residuals: np.ndarray | None = None
+    data_digest: str = ""
+    options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        object.__setattr__(self, "covariance", _readonly(self.covariance))
+        object.__setattr__(self, "residuals", _readonly(self.residuals))
+        object.__setattr__(self, "options", MappingProxyType(dict(self.options)))
+
+    # --- derived facts --------------------------------------------------------------------
+    @property
+    def free_names(self) -> tuple[str, ...]:
+        """The estimated parameters, in the covariance's order."""
+        return self.parameters.free_names
+
+    @property
+    def n_free(self) -> int:
+        """Number of estimated parameters."""
+        return len(self.free_names)
+
+    @property
+    def noise_variance(self) -> float:
+        """``sse / (n_samples - n_free)``: the residual variance with the fitted parameters counted."""
+        dof = self.n_samples - self.n_free
+        return self.sse / dof if dof > 0 else math.nan
+
+    @property
+    def rmse(self) -> float:
+        """Root mean squared simulation error ``sqrt(sse / n_samples)`` (the data's units)."""
+        return math.sqrt(self.sse / self.n_samples)
+
+    @property
+    def converged(self) -> bool:
+        """True when :attr:`status` is ``CONVERGED``."""
+        return self.status == Status.CONVERGED
+
+    @property
+    def dt(self) -> float:
+        """The model's sampling time."""
+        return self.model.dt
+
+    def standard_errors(self) -> dict:
+        """``{name: standard error}`` of the free parameters and of the tied ones.
+
+        A tied parameter ``factor * source`` has ``|factor|`` times its source's standard error
+        (a tie to a fixed parameter, 0). Raises when there is no covariance.
+        """
+        if self.covariance is None:
+            raise ParameterError(f"this fit has no covariance (status {self.status.name}: "
+                                 f"{self.message}); no standard errors.")
+        se = dict(zip(self.free_names, np.sqrt(np.diag(self.covariance)).tolist()))
+        for name, par in self.parameters.items():
+            if par.tie is not None:
+                se[name] = abs(par.tie[1]) * se.get(par.tie[0], 0.0)
+        return se
+
+    def confidence_intervals(self, level=0.95) -> dict:
+        """``{name: (low, high)}`` Wald intervals ``estimate ± z se`` of the free parameters."""
+        from scipy.stats import norm
+
+        if not 0.0 < level < 1.0:
+            raise ParameterError(f"`level` must be in (0, 1); got {level!r}.")
+        z = float(norm.ppf(0.5 + level / 2.0))
+        return {n: (self.parameters[n].value - z * s, self.parameters[n].value + z * s)
+                for n, s in self.standard_errors().items()}
+
+    def simulate(self, u, *, initial=None):
+        """The fitted model's free run for ``u`` (:meth:`fohw.Model.simulate`)."""
+        return self.model.simulate(u, initial=initial)
+
+    # --- reading -----------------------------------------------------------------------------
+    def _rows(self):
+        se = self.standard_errors() if self.covariance is not None else {}
+        rows = []
+        for name, par in self.parameters.items():
+            how = ("fixed" if par.fixed else f"= {par.tie[1]:g} * {par.tie[0]}" if par.tie
+                   else "")
+            rows.append((name, par.value, se.get(name), how))
+        return rows
+
+    def summary(self) -> str:
+        """A text table of the estimates (with standard errors) and the fit's diagnostics."""
+        lines = [f"fohw fit: {type(self.model).__name__}, N = {self.n_samples}, "
+                 f"{self.n_free} free parameters, Jacobian {self.jacobian}",
+                 f"  status = {self.status.name}, sse = {self.sse:.6g}, rmse = {self.rmse:.6g}, "
+                 f"noise variance = {self.noise_variance:.6g}, simulations = {self.nfev}",
+                 f"  {self.message}", ""]
+        width = max(12, max((len(n) for n in self.parameters), default=0) + 2)
+        lines.append(f"  {'parameter':<{width}}{'estimate':>14}{'std err':>14}")
+        for name, value, se, how in self._rows():
+            se_text = f"{se:>14.4g}" if se is not None else f"{how:>14}"
+            lines.append(f"  {name:<{width}}{value:>14.6g}{se_text}")
+        return "\n".join(lines)
+
+    def __repr__(self):
+        est = ", ".join(f"{n}={self.parameters[n].value:.4g}" for n in self.free_names[:6])
+        more = ", …" if self.n_free > 6 else ""
+        return (f"<FitResult {type(self.model).__name__} {self.status.name} sse={self.sse:.4g} "
+                f"N={self.n_samples}: {est}{more}>")
+
+    def _repr_html_(self):
+        rows = "".join(
+            f"<tr><td>{html.escape(n)}</td><td>{v:.6g}</td>"
+            f"<td>{'' if se is None else f'{se:.4g}'}</td><td>{html.escape(how)}</td></tr>"
+            for n, v, se, how in self._rows())
+        return (f"<div><b>FitResult</b> {html.escape(type(self.model).__name__)}, "
+                f"N={self.n_samples}, status={self.status.name}, sse={self.sse:.6g}, "
+                f"rmse={self.rmse:.6g}, Jacobian {html.escape(self.jacobian)}<br>"
+                f"<small>{html.escape(self.message)}</small><table><tr><th>parameter</th>"
+                f"<th>estimate</th><th>std err</th><th></th></tr>{rows}</table></div>")
+
+    # --- files -------------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """JSON-ready values (:func:`fohw.save_result` writes them)."""
+        return {"model": Model.to_dict(self.model), "covariance": None if self.covariance is None
+                else self.covariance.tolist(), "status": self.status.name, "sse": self.sse,
+                "n_samples": self.n_samples, "message": self.message, "nfev": self.nfev,
+                "jacobian": self.jacobian,
+                "starts": [[dict(s), float(v) if math.isfinite(v) else None]
+                           for s, v in self.starts],
+                "residuals": None if self.residuals is None else self.residuals.tolist(),
+                "data_digest": self.data_digest, "options": _jsonable(dict(self.options))}
+
+    @classmethod
+    def from_dict(cls, d) -> FitResult:
+        """Inverse of :meth:`to_dict`."""
+        model = Model.from_dict(d["model"])
+        cov = d.get("covariance")
+        res = d.get("residuals")
+        try:
+            status = Status[d["status"]]
+        except KeyError:
+            raise ParameterError(f"unknown status {d['status']!r}; one of "
+                                 f"{[s.name for s in Status]}.") from None
+        return cls(model=model, parameters=model.parameters,
+                   covariance=None if cov is None else np.array(cov, dtype=float),
+                   status=status, sse=float(d["sse"]), n_samples=int(d["n_samples"]),
+                   message=str(d.get("message", "")), nfev=int(d.get("nfev", 0)),
+                   jacobian=str(d.get("jacobian", "exact")),
+                   starts=tuple((dict(s), math.inf if v is None else float(v))
+                                for s, v in d.get("starts", [])),
+                   residuals=None if res is None else np.array(res, dtype=float),
+                   data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}))
+
+    def __reduce__(self):
+        return (_rebuild, (self.to_dict(),))
+
+
+def _rebuild(d):
+    return FitResult.from_dict(d)
+
+
+def _jsonable(value):
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    return repr(value)
+
+
+# The lagged kind's result speaks the same vocabulary (model, parameters, covariance, status,
+# sse, noise_variance, standard_errors, simulate, summary, to_dict): it is a FitResult.
+FitResult.register(IdentificationResult)

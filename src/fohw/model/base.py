@@ -1,0 +1,296 @@
+"""The protocol every model kind follows (:class:`fohw.Model`) and the registry of kinds.
+
+A kind is a class that provides its :attr:`~Model.parameters` (a :class:`fohw.Parameters`), a
+copy with new values (:meth:`~Model.with_parameters`) and a simulator
+(:meth:`~Model.simulate`). Everything else fohw does with a model is written once on top of
+these three: :func:`fohw.fit`, :func:`fohw.crb`, :func:`fohw.lr_test`,
+:func:`fohw.profile_interval`, :func:`fohw.select_structure`, :func:`fohw.compare`,
+:func:`fohw.simulate`, the JSON files and the batch runs. A kind may also give an exact
+:meth:`~Model.jacobian` (else finite differences are used, and results say so) and better
+starts for the fit (:meth:`~Model.starts`, :meth:`~Model.linear_start`).
+
+Subclasses are registered by name when they are defined, so :func:`fohw.load_model` can
+rebuild them; :func:`register_model` registers one explicitly (e.g. defined with
+``register=False``).
+"""
+
+from __future__ import annotations
+
+import abc
+import inspect
+
+import numpy as np
+
+from .._validation import check_array
+from ..exceptions import DimensionError, ParameterError
+from .parameters import Parameters
+
+__all__ = ["Model", "register_model", "model_class", "registered_kinds"]
+
+_REGISTRY: dict[str, type] = {}
+
+
+def register_model(cls, name=None):
+    """Register a :class:`Model` subclass under ``name`` (default its ``kind``) for files.
+
+    Usable as a decorator. Registering another class under a name that is taken raises,
+    unless it is the same class (re-registering is harmless) or a class of the same module
+    and qualified name (a module reloaded in a notebook).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> class Gain(fohw.Model, register=False):
+    ...     def __init__(self, k=1.0):
+    ...         self.k = k
+    ...     @property
+    ...     def parameters(self):
+    ...         return fohw.Parameters([fohw.Parameter("k", self.k)])
+    ...     def with_parameters(self, values):
+    ...         return Gain(self.parameters.with_values(values)["k"].value)
+    ...     def simulate(self, u, *, initial=None):
+    ...         return self.k * self.check_input(u)
+    >>> fohw.register_model(Gain) is Gain
+    True
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Model)):
+        raise ParameterError(f"register_model takes a subclass of fohw.Model; got {cls!r}.")
+    if inspect.isabstract(cls):
+        missing = sorted(cls.__abstractmethods__)
+        raise ParameterError(f"{cls.__name__} does not implement {missing}; a model kind provides "
+                             "`parameters`, `with_parameters` and `simulate`.")
+    name = cls.kind_name() if name is None else name
+    if not isinstance(name, str) or not name:
+        raise ParameterError(f"a model kind's name must be a non-empty string; got {name!r}.")
+    old = _REGISTRY.get(name)
+    if old is not None and old is not cls and (old.__module__, old.__qualname__) != \
+            (cls.__module__, cls.__qualname__):
+        raise ParameterError(f"the model kind name {name!r} is taken by {old.__module__}."
+                             f"{old.__qualname__}; give {cls.__qualname__} another `kind`.")
+    _REGISTRY[name] = cls
+    return cls
+
+
+def model_class(name):
+    """The registered :class:`Model` subclass called ``name`` (raises naming the known kinds)."""
+    try:
+        return _REGISTRY[name]
+    except (KeyError, TypeError):
+        raise ParameterError(f"no model kind {name!r} is registered; known kinds: "
+                             f"{sorted(_REGISTRY)}. Import the module that defines it, or call "
+                             "fohw.register_model(cls), before loading.") from None
+
+
+def registered_kinds():
+    """The names of the registered model kinds."""
+    return tuple(sorted(_REGISTRY))
+
+
+_SETTINGS = "_fohw_parameter_settings"
+
+
+def _overlay_settings(fget):
+    def parameters(self):
+        own = fget(self)
+        settings = getattr(self, _SETTINGS, None)
+        if settings is None:
+            return own
+        return settings.with_values({n: p.value for n, p in own.items() if p.tie is None
+                                     and settings[n].tie is None})
+    parameters.__wrapped__ = fget
+    return parameters
+
+
+def _keep_settings(method):
+    def with_parameters(self, values):
+        new = method(self, values)
+        if isinstance(values, Parameters):
+            # in the kind's own order (the Jacobian's columns follow it)
+            settings = new.parameters.merged(values)
+        else:
+            settings = getattr(self, _SETTINGS, None)
+        if settings is not None and new is not self:
+            try:
+                object.__setattr__(new, _SETTINGS, settings)
+            except AttributeError:
+                raise ParameterError(f"{type(new).__name__} keeps no attributes (__slots__); fixed "
+                                     "flags, bounds and ties given through fohw.Parameters cannot "
+                                     "be kept. Declare them in the kind's `parameters`.") from None
+        return new
+    with_parameters.__wrapped__ = method
+    with_parameters.__doc__ = method.__doc__
+    return with_parameters
+
+
+class Model(abc.ABC):
+    """A model kind: parameters, a copy with new values, a simulator.
+
+    Subclass it and provide :attr:`parameters`, :meth:`with_parameters` and :meth:`simulate`;
+    every fohw verb then works for the new kind. The class is registered under its ``kind``
+    (default: the class name) when it is defined; pass ``register=False`` in the class
+    statement to skip that and call :func:`fohw.register_model` later.
+
+    Optional hooks: :attr:`dt` (the sampling time; 1 by default), :attr:`n_inputs`,
+    :meth:`jacobian` (exact ``d yhat / d parameters``; finite differences otherwise),
+    :meth:`starts` and :meth:`linear_start` (where :func:`fohw.fit` starts), :meth:`config`
+    (the settings that are not parameters, for files) and :meth:`check_fitted` (a kind's own
+    sanity check of a fitted model).
+
+    Examples
+    --------
+    A first-order lag ``y[k] = a y[k-1] + b u[k-1]``, a kind of its own in a dozen lines:
+
+    >>> import numpy as np
+    >>> import fohw
+    >>> class Lag(fohw.Model):
+    ...     def __init__(self, a=0.5, b=1.0):
+    ...         self.a, self.b = a, b
+    ...     @property
+    ...     def parameters(self):
+    ...         return fohw.Parameters([fohw.Parameter("a", self.a, bounds=(-0.99, 0.99)),
+    ...                                 fohw.Parameter("b", self.b)])
+    ...     def with_parameters(self, values):
+    ...         v = self.parameters.with_values(values).valuesdict()
+    ...         return Lag(v["a"], v["b"])
+    ...     def simulate(self, u, *, initial=None):
+    ...         u = self.check_input(u)
+    ...         y = np.zeros_like(u)
+    ...         for k in range(1, u.size):
+    ...             y[k] = self.a * y[k - 1] + self.b * u[k - 1]
+    ...         return y
+    >>> u = np.random.default_rng(0).standard_normal(200)
+    >>> y = Lag(0.8, 2.0).simulate(u)
+    >>> fit = fohw.fit(Lag(), u, y)
+    >>> print(fit.status.name, np.round([fit.parameters["a"].value, fit.parameters["b"].value], 6))
+    CONVERGED [0.8 2. ]
+    """
+
+    #: The name the kind is registered and written to files under (default: the class name).
+    kind: str | None = None
+
+    def __init_subclass__(cls, register=True, **kwargs):
+        super().__init_subclass__(**kwargs)
+        # A kind writes `parameters` and `with_parameters` for values only; the settings of a
+        # fohw.Parameters given to `with_parameters` (fixed flags, bounds, ties) ride along here,
+        # so every kind keeps them without writing a line for it.
+        if isinstance(cls.__dict__.get("parameters"), property):
+            cls.parameters = property(_overlay_settings(cls.__dict__["parameters"].fget),
+                                      doc=cls.__dict__["parameters"].__doc__)
+        if "with_parameters" in cls.__dict__:
+            cls.with_parameters = _keep_settings(cls.__dict__["with_parameters"])
+        if register and not inspect.isabstract(cls):
+            register_model(cls)
+
+    @classmethod
+    def kind_name(cls) -> str:
+        """The registry name: :attr:`kind` if the class sets it, else the class name."""
+        return cls.__dict__.get("kind") or cls.__name__
+
+    # --- the three a kind must provide ---------------------------------------------------
+    @property
+    @abc.abstractmethod
+    def parameters(self) -> Parameters:
+        """Every number of the model, with bounds, fixed flags and ties."""
+
+    @abc.abstractmethod
+    def with_parameters(self, values) -> Model:
+        """A new model with new parameter values.
+
+        ``values`` is a mapping ``name -> float``, or a :class:`fohw.Parameters` (whose bounds,
+        fixed flags and ties the new model keeps, so :func:`fohw.fit` holds its fixed ones).
+        """
+
+    @abc.abstractmethod
+    def simulate(self, u, *, initial=None) -> np.ndarray:
+        """The model's output for the input ``u`` (free run from ``initial``; default rest)."""
+
+    # --- optional hooks --------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        """Sampling time (default 1)."""
+        return 1.0
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of input columns ``u`` has (default 1: a 1-D signal)."""
+        return 1
+
+    def jacobian(self, u):
+        """``(yhat, J)``: the output and ``d yhat / d value`` of every parameter, or ``None``.
+
+        ``J`` has one column per parameter in :attr:`parameters` order (fixed and tied ones
+        included). ``None`` (the default) makes :func:`fohw.fit` use central finite differences
+        and say so in its result.
+        """
+        return None
+
+    def starts(self, u, y):
+        """Candidate start models for :func:`fohw.fit` (default: the model itself)."""
+        return [self]
+
+    def linear_start(self, u, y):
+        """A start whose linear parameters are solved for ``y`` (or ``None``: no such step)."""
+        return None
+
+    def check_fitted(self, u, y):
+        """A sentence saying why this fitted model is not trustworthy, or ``None`` (default)."""
+        return None
+
+    def config(self) -> dict:
+        """The settings that are not parameters, as keyword arguments of the constructor.
+
+        The default (``{}``) suits a kind whose constructor needs no arguments besides its
+        parameters' values; :meth:`from_dict` calls ``cls(**config)`` and then
+        :meth:`with_parameters`.
+        """
+        return {}
+
+    def check_input(self, u) -> np.ndarray:
+        """``u`` as a float array with :attr:`n_inputs` columns (1-D for one input), or raise."""
+        if self.n_inputs == 1:
+            if np.ndim(u) == 2 and np.shape(u)[1] == 1:
+                u = np.asarray(u)[:, 0]
+            return check_array(u, "u")
+        arr = check_array(u, "u", ndim=2)
+        if arr.shape[1] != self.n_inputs:
+            raise DimensionError(f"`u` must have {self.n_inputs} columns for this "
+                                 f"{type(self).__name__}; got shape {arr.shape}.")
+        return arr
+
+    # --- files -------------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """``{"kind", "config", "parameters"}``: what :func:`fohw.save_model` writes."""
+        return {"kind": self.kind_name(), "config": self.config(),
+                "parameters": self.parameters.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d) -> Model:
+        """Rebuild a model written by :meth:`to_dict` (of this class or a registered kind)."""
+        if not isinstance(d, dict) or not {"kind", "parameters"} <= set(d):
+            raise ParameterError("a model file entry needs 'kind' and 'parameters'; got "
+                                 f"{sorted(d) if isinstance(d, dict) else type(d).__name__}.")
+        kind = model_class(d["kind"])
+        if cls is not Model and not issubclass(kind, cls):
+            raise ParameterError(f"the entry is a {d['kind']!r} model, not a {cls.__name__}.")
+        config = d.get("config") or {}
+        if not isinstance(config, dict):
+            raise ParameterError(f"a model's 'config' must be a mapping; got {config!r}.")
+        try:
+            base = kind.from_config(config)
+        except TypeError as exc:
+            raise ParameterError(f"cannot rebuild a {d['kind']!r} model from its config "
+                                 f"{config!r}: {exc}") from None
+        params = base.parameters.merged(Parameters.from_dict(d["parameters"]))
+        return base.with_parameters(params)
+
+    @classmethod
+    def from_config(cls, config) -> Model:
+        """A model of this kind from :meth:`config`'s settings (parameters at their defaults)."""
+        return cls(**config)
+
+    def __eq__(self, other):
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.config() == other.config() and self.parameters == other.parameters
+
+    __hash__ = None
