@@ -42,9 +42,10 @@ def _cpu_of(cmd, env):
 def import_seconds(src):
     """``(wall, cpu)`` seconds of ``import fohw`` in one fresh interpreter, ``src`` on the path.
 
-    wall: the cumulative time of the ``fohw`` line of ``-X importtime``; cpu: the child's user +
-    system CPU time minus that of an interpreter that imports nothing (CPU time is what a quiet
-    machine's wall time would be; on a loaded one the wall time waits for the CPU too).
+    wall: the cumulative time of the ``fohw`` line of ``-X importtime`` (the number to read);
+    cpu: the child's user + system CPU time minus that of an interpreter that imports nothing
+    (less sensitive to the machine's load, but it also counts numpy's BLAS threads starting, so
+    it can exceed the wall time).
     """
     env = {**os.environ, "PYTHONPATH": str(src)}
     cpu, proc = _cpu_of([sys.executable, "-X", "importtime", "-c", "import fohw"], env)
