@@ -136,6 +136,17 @@ def test_figure_3_draws_each_innovation_length_apart(runs):
     assert np.ptp(tails) / (hi - lo) > 0.8
 
 
+def test_validation_time_axis_in_the_models_units():
+    data = fohw.datasets.paper_example(200, random_state=0)
+    res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3, dt=0.5)
+    v = fohw.compare(res, data.u, data.y)
+    assert v.dt == 0.5
+    ax = v.plot().axes[-1]
+    assert ax.get_xlabel() == "time" and ax.get_lines()[0].get_xdata()[-1] == 199 * 0.5
+    plain = fohw.compare(fohw.datasets.paper_model(), data.u, data.y)      # dt = 1: sample index
+    assert plain.dt is None and plain.plot().axes[-1].get_xlabel() == "sample k"
+
+
 # ---------------------------------------------------------------- ax=
 def test_ax_takes_one_axes_or_all_panels():
     data = fohw.datasets.paper_example(200, random_state=0)

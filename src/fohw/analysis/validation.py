@@ -148,6 +148,8 @@ class Validation:
         The state the free run started from (:func:`fohw.initial_state`): for
         ``initial="estimate"`` the levels (and window) fitted to this record's output, and
         ``initial.n_estimated`` values so fitted.
+    dt : float or None
+        The model's sampling time when it has one other than 1 (:meth:`plot`'s time axis).
     """
 
     y: np.ndarray
@@ -165,6 +167,7 @@ class Validation:
     status: str = "ok"
     notes: tuple = ()
     initial: InitialState | None = None
+    dt: float | None = None
 
     @property
     def fit(self) -> float:
@@ -232,7 +235,8 @@ class Validation:
             One Axes receives the outputs only; two receive the outputs and the errors
             (default: a new figure with both).
         dt : float, optional
-            Sampling time: the horizontal axis is then time in its unit, else the sample index.
+            Sampling time: the horizontal axis is then time in its unit (default: the model's
+            :attr:`dt` when it is not 1), else the sample index.
 
         Returns
         -------
@@ -243,6 +247,7 @@ class Validation:
         from .._plotting import axes_for
 
         fig, axes = axes_for(ax, 2, figsize=(9, 5.5), sharex=True)
+        dt = self.dt if dt is None else dt
         t = np.arange(self.y.size) * (1.0 if dt is None else dt)
         axes[0].plot(t, self.y, "k", lw=1.2, label="measured")
         if self.simulated is not None:
@@ -270,6 +275,16 @@ class Validation:
                 a.axvspan(t[0], t[min(self.n_init, t.size - 1)], color="0.9")
         axes[-1].set_xlabel("sample k" if dt is None else "time")
         return fig
+
+
+def _sampling_time(model):
+    """The model's sampling time if it is not 1 (the sample index is then the time), else None."""
+    dt = getattr(model, "dt", None)
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError):
+        return None
+    return dt if np.isfinite(dt) and dt > 0 and dt != 1.0 else None
 
 
 def _one_step(model, u, y):
@@ -390,8 +405,18 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     """
     other = generic_model(model)
     if other is not None:
-        return _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
-                              max_lag=max_lag, confidence=confidence, envelope=envelope)
+        out = _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
+                             max_lag=max_lag, confidence=confidence, envelope=envelope)
+        out.dt = _sampling_time(other)
+        return out
+    out = _compare_lagged(model, u, y, initial=initial, history=history, n_init=n_init,
+                          max_lag=max_lag, confidence=confidence, envelope=envelope)
+    out.dt = _sampling_time(model)
+    return out
+
+
+def _compare_lagged(model, u, y, *, initial, history, n_init, max_lag, confidence, envelope):
+    """:func:`compare` of a result or a :class:`fohw.HammersteinWiener` (the lagged kind)."""
     is_model = isinstance(model, HammersteinWiener)
     if not is_model and not all(callable(getattr(model, name, None))
                                 for name in ("simulate", "predict")):
