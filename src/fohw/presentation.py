@@ -202,10 +202,15 @@ class ResultPresentation:
         return fig
 
     def _plot_batch(self, axes):
-        names = ("alpha",) + self.parameter_names
-        axes[0].bar(range(len(names)), [self.alpha, *self.theta])
+        names = self._display_names()             # the free orders first, then theta
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        yerr = None
+        if self.covariance is not None:           # 95 % intervals, as summary() gives them
+            ci = self.confidence_intervals()
+            yerr = np.array([[est[n] - ci[n][0] for n in names], [ci[n][1] - est[n] for n in names]])
+        axes[0].bar(range(len(names)), [est[n] for n in names], yerr=yerr, capsize=2)
         axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
-        axes[0].set_ylabel("estimate")
+        axes[0].set_ylabel("estimate" if yerr is None else "estimate, 95 % interval")
         if axes[1] is None:
             return
         if self.alpha_profile is not None:
