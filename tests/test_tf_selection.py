@@ -1,10 +1,5 @@
 """Fractional transfer-function structures chosen by held-back free run: fohw.select_structure
 with FractionalTF candidates (models, each fitted by fohw.fit).
-
-Every test here is marked ``xfail(raises=ParameterError, strict=True)`` until the generic
-``select_structure`` (candidates may be Models) lands: today it refuses a model candidate with a
-ParameterError. When it lands the tests pass, strict xfail turns that into a failure, and the
-mark is removed.
 """
 
 import warnings
@@ -15,9 +10,6 @@ import pytest
 import fohw
 
 DT = 0.05
-
-pending = pytest.mark.xfail(raises=fohw.ParameterError, strict=True,
-                            reason="select_structure takes Model candidates on branch `verbs`")
 
 
 def _model(den_orders, *, den=None, free=None, bounds=None, dt=DT):
@@ -41,16 +33,22 @@ def record():
     return u, y + 0.01 * rng.standard_normal(u.size)
 
 
-@pending
+def test_a_candidate_that_cannot_take_the_record_is_refused_before_any_fit(record):
+    u, y = record
+    cands = [_model([0.5, 0.0]), _model([0.5, 0.0], dt=None)]
+    with pytest.raises(fohw.ParameterError, match="no sampling time"):
+        fohw.select_structure(u, y, cands)
+
+
 def test_true_structure_beats_integer_and_a_failed_candidate_is_a_row(record):
     u, y = record
     cands = [_model([1.0, 0.0], free=["b0", "a0"]),               # integer order 1
              _model([0.5, 0.0]),                                   # the true structure
-             _model([0.5, 0.0], dt=None)]                          # raises: no sampling time
+             _model([0.5, 0.0], free=[])]                          # fails: nothing free
     sel = fohw.select_structure(u, y, cands)
     status = [r["status"] for r in sel.rows]
     assert status == ["ok", "ok", "failed"]
-    assert "no sampling time" in sel.rows[2]["reason"]
+    assert "nothing to fit" in sel.rows[2]["reason"]
     assert sel.best_index == 1
     # The integer order 1 cannot bend to s^0.6: its model error, not the noise, sets its fit.
     # 10 points is a chosen margin (the held-back fits were 89.4 and 67.4 when written), not a
@@ -63,7 +61,6 @@ def test_true_structure_beats_integer_and_a_failed_candidate_is_a_row(record):
     assert "failed" in sel.to_markdown()
 
 
-@pending
 def test_bic_prefers_the_true_structure_to_a_two_term_one(record):
     # The two-term denominator nests the truth (alpha1 -> 0), so its held-back fit % equals
     # the truth's within the noise; BIC charges its two extra parameters.
@@ -75,7 +72,6 @@ def test_bic_prefers_the_true_structure_to_a_two_term_one(record):
     assert sel.best is sel.results[1]
 
 
-@pending
 def test_an_implausible_free_run_is_not_scored(record):
     # 1 / (-s^alpha + 1), alpha in [0.9, 1.1], coefficients fixed: unstable, its free run
     # grows like e^t (e^12 over the record), far outside 10 times the output's range.
@@ -89,7 +85,6 @@ def test_an_implausible_free_run_is_not_scored(record):
     assert sel.best_index == 1
 
 
-@pending
 def test_nothing_selected_warns(record):
     u, y = record
     with warnings.catch_warnings(record=True) as caught:

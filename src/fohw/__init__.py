@@ -10,14 +10,12 @@ matrix, and the paper's estimators.
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
 from .analysis.batch import identify_many
-from .analysis.circuit_checks import circuit_lr_test, circuit_order_interval
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
-from .estimators.circuit_fit import CircuitFit, fit_circuit
 from .estimators.fit import fit
 from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
@@ -51,7 +49,7 @@ from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
-from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
+from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW, OutputMap
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
@@ -172,11 +170,8 @@ __all__ = [
     "CustomMap",
     # battery cells: the fractional equivalent circuit
     "EquivalentCircuit",
+    "OCVTable",
     "RC",
     "ZARC",
     "Warburg",
-    "CircuitFit",
-    "fit_circuit",
-    "circuit_lr_test",
-    "circuit_order_interval",
 ]

@@ -39,7 +39,7 @@ import numpy as np
 from .._linalg import inverse_gram, inverse_gram_triangular, triangular
 from .._types import ArrayLike, RandomStateLike
 from .._validation import check_array, check_int, check_random_state, check_scalar
-from ..estimators.fit import free_jacobian
+from ..estimators.fit import free_jacobian, rank_rcond
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
@@ -303,7 +303,7 @@ def _crb_model(model, u, noise_variance, parametrisation, noise, n_realizations,
     if not (np.all(np.isfinite(yhat)) and np.all(np.isfinite(jac))):
         raise ParameterError(f"the {kind}'s free run or its sensitivity on `u` is not finite: "
                              "no bound at a model that does not simulate this input.")
-    cov = _named(*inverse_gram(jac), sigma2, names)
+    cov = _named(*inverse_gram(jac, rcond=rank_rcond(how, *jac.shape)), sigma2, names)
     values = model.parameters.free_values()
     orders = [i for i, n in enumerate(names) if model.parameters[n].order]
     std = np.sqrt(np.diag(cov))
