@@ -159,7 +159,7 @@ def choose_and_fit(cell, est, elements, cubic, tau_max, fit_kw, holdout):
 
 
 def goal_alpha(alpha, interval):
-    """The issue's goal for the order: inside (0.3, 0.7), its interval off the bounds 0.05 and 1."""
+    """The goal for the order: inside (0.3, 0.7), its interval off the bounds 0.05 and 1."""
     return "met" if 0.3 < alpha < 0.7 and interval.low > 0.05 and interval.high < 1 else "not met"
 
 

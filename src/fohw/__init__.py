@@ -81,7 +81,13 @@ def _installed_version():
         return "0+unknown"
 
 
-__version__ = _installed_version()
+def __getattr__(name):
+    # The version is read from the distribution's metadata when first asked for, not at
+    # `import fohw` (importlib.metadata and the lookup cost about 40 ms: benchmarks/bench_import.py).
+    if name == "__version__":
+        globals()["__version__"] = version = _installed_version()
+        return version
+    raise AttributeError(f"module 'fohw' has no attribute {name!r}")
 
 __all__ = [
     "Model",
@@ -162,7 +168,7 @@ __all__ = [
     "PiecewiseLinear",
     "PolynomialMap",
     "CustomMap",
-    # issue 27
+    # battery cells: the fractional equivalent circuit
     "EquivalentCircuit",
     "OCVTable",
     "RC",

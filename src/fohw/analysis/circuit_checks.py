@@ -24,8 +24,7 @@ import math
 import warnings
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_int, check_scalar
 from ..estimators.fit import fit as fohw_fit

@@ -31,8 +31,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
-import scipy.optimize
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from ..exceptions import ConvergenceWarning, DimensionError, ParameterError
 from ..model.basis import as_basis

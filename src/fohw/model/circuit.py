@@ -38,7 +38,7 @@ import math
 from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
-import scipy.signal
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ParameterError
@@ -767,6 +767,16 @@ class EquivalentCircuit(Model):
     def __str__(self):
         parts = [f"{n} = {v:.6g}" for n, v in self.parameters.valuesdict().items()]
         return f"EquivalentCircuit({'+'.join(self.kinds) or 'R0 only'}: {', '.join(parts)})"
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [(n, p.value, f"[{p.bounds[0]:g}, {p.bounds[1]:g}]")
+                for n, p in self.parameters.items()]
+        return html_table(f"EquivalentCircuit ({'+'.join(self.kinds) or 'R0 only'})",
+                          ["parameter", "value", "bounds"], rows,
+                          lines=[f"dt = {self.dt:g} s; OCV map: "
+                                 + ("given" if self.ocv is not None else "none")])
 
 
 def _check_rest(initial):

@@ -225,6 +225,13 @@ class FractionalHW:
         return (f"FractionalHW({self.G!r}, p={self.p.tolist()!r}, f_basis={self.f_basis!r}, "
                 f"output_map={self.output_map!r})")
 
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [(f"p{j}", n, v) for j, (n, v) in enumerate(zip(self.f_basis.names, self.p), 1)]
+        return html_table("FractionalHW", ["parameter", "basis", "value"], rows,
+                          lines=[str(self), f"G(s) = {self.G}", str(self.output_map)])
+
     def input_signal(self, u):
         """``w = fbar(u) = sum_j p_j f_j(u)``."""
         return self.p @ self.f_basis.evaluate(np.asarray(u, dtype=np.float64), "u")

@@ -25,6 +25,7 @@ from .kernels import causal_convolve
 __all__ = ["gl_weights", "gl_weights_unchecked", "gl_weights_derivative", "gl_difference",
            "past_transient", "sampling_scale", "check_length"]
 
+
 def _memory_bytes():
     """The physical memory of this machine in bytes, or None where the system does not say."""
     try:

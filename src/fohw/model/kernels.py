@@ -17,7 +17,7 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 __all__ = ["CausalConvolution", "causal_convolve", "convolution_at", "causal_product",
            "HalfMerge", "divide_and_conquer", "series_divide", "series_reciprocal"]

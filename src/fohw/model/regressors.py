@@ -16,7 +16,7 @@ estimated, and the offset adds a column of ones.
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._types import ArrayLike, PairLike
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
