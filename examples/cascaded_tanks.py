@@ -80,7 +80,7 @@ def validate(candidate, est, val):
     with warnings.catch_warnings():      # rank and convergence notes are in the table's rows
         warnings.simplefilter("ignore")
         res = fohw.identify(est.u, est.y, **COMMON, **candidate)
-        v = res.validate(val.u, val.y)
+        v = fohw.compare(res, val.u, val.y)
     row = dict(result=res, rmse=v.rmse_simulation, fit=v.fit_simulation, ysim=v.simulated)
     if v.diverged:
         return dict(row, status=v.diverged.split(":")[0])

@@ -73,7 +73,7 @@ def validate(row, est, val):
     with warnings.catch_warnings():          # convergence notes: in the selection's rows
         warnings.simplefilter("ignore")
         res = fohw.identify(est.u, est.y, **COMMON, **cand)
-        v = res.validate(val.u, val.y)
+        v = fohw.compare(res, val.u, val.y)
     return dict(result=res, candidate=cand, held_back=row["fit"], rmse=v.rmse_simulation,
                 fit=v.fit_simulation, ysim=v.simulated,
                 rmse_est=rmse(est.y, res.simulate(est.u)), diverged=v.diverged)

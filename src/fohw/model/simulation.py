@@ -58,7 +58,6 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
              divergence_threshold: float | None = None,
-             history: tuple[ArrayLike, ArrayLike] | None = None,
              initial: Any = None) -> np.ndarray:
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
@@ -98,14 +97,12 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
         exceeds this or is not finite. Default: ``1e8`` times the largest magnitude that drives
         the recursion (input branch, noise, offset, past levels, history), so the test means the
         same in every unit.
-    history : (u_past, y_past), optional
-        Measured input and output just before ``u`` (same units): the simulation continues
-        from them, its GL memory holding that history, in free run from the first sample of
-        ``u``. The model's past levels (if any) apply before the history.
-    initial : str, tuple or InitialState, optional
-        With an identification result: its initial state, as ``result.simulate(u,
-        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit). With
-        a model of another kind: passed to its ``simulate`` (what it accepts is the kind's).
+    initial : tuple, str or InitialState, optional
+        A measured history ``(u_past, y_past)`` just before ``u`` (same units): the simulation
+        continues from it, its GL memory holding that history, in free run from the first
+        sample of ``u`` (the model's past levels, if any, apply before the history). With an
+        identification result, any of its initial states, as ``result.simulate(u,
+        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit).
 
     Returns
     -------
@@ -167,7 +164,7 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
     if other is not None:
         lagged = {"params": params, "operating_point": operating_point, "noise": noise,
                   "noise_std": noise_std or None, "random_state": random_state,
-                  "divergence_threshold": divergence_threshold, "history": history}
+                  "divergence_threshold": divergence_threshold}
         given = [f"{k}={v!r}" for k, v in lagged.items() if v is not None]
         if given:
             raise ParameterError(f"{', '.join(given)}: these keywords are for the lagged "
@@ -175,19 +172,19 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
                                  "by its own simulate(u, initial=...) (add noise to the output "
                                  "yourself).")
         return other.simulate(u, initial=initial)
-    if initial == "estimate" or (isinstance(initial, tuple) and initial[:1] == ("estimate",)):
+    if (isinstance(initial, str) and initial == "estimate") or (
+            isinstance(initial, tuple) and initial and isinstance(initial[0], str)
+            and initial[0] == "estimate"):
         raise ParameterError("initial='estimate' fits the record's initial state to its "
                              "measured output, which fohw.simulate does not take: use "
                              "result.simulate(u, initial='estimate', y=y) or "
                              "fohw.compare(result, u, y, initial='estimate').")
-    if initial is not None and not callable(getattr(model, "initial_state", None)):
-        raise ParameterError(f"`initial` is for an identification result; got it with a "
-                             f"{type(model).__name__} (fohw.compare takes `initial` for a "
-                             "HammersteinWiener too).")
+    result = callable(getattr(model, "initial_state", None))
+    history = None if result else measured_history(initial, type(model).__name__)
     if isinstance(model, Model):        # a model kind (the lagged HammersteinWiener among them)
         _only_for_structure(params, operating_point, f"a {type(model).__name__}")
         return model.simulate(u, noise=noise, noise_std=noise_std, random_state=random_state,
-                              divergence_threshold=divergence_threshold, history=history)
+                              divergence_threshold=divergence_threshold, initial=history)
     if isinstance(model, Structure):
         if params is None:
             raise ParameterError("simulating a Structure needs its parameter values `params` "
@@ -202,13 +199,28 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
             and isinstance(model.structure, Structure):
         _only_for_structure(params, operating_point, "an identification result")
         kwargs = dict(noise=noise, noise_std=noise_std, random_state=random_state,
-                      divergence_threshold=divergence_threshold, history=history)
+                      divergence_threshold=divergence_threshold)
         own = getattr(model, "simulate", None)
         if callable(own):          # a result: its own checks (input range), then this engine
             return own(u, **kwargs) if initial is None else own(u, initial=initial, **kwargs)
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
+
+
+def measured_history(initial, what):
+    """``initial`` of a model or a structure: ``None`` or a measured pair ``(u_past, y_past)``.
+
+    The other initial states (``"rest"``, ``"fitted"``, ``"estimate"``, an InitialState) belong
+    to an identification result, whose fitted levels they read.
+    """
+    if initial is None:
+        return None
+    if isinstance(initial, str) or not isinstance(initial, (tuple, list)) or len(initial) != 2:
+        raise ParameterError(f"`initial` of a {what} is a measured history (u_past, y_past); "
+                             f"the initial states {initial!r}-like belong to an identification "
+                             "result (result.simulate(u, initial=...), or fohw.compare).")
+    return tuple(initial)
 
 
 def generic_model(obj):
