@@ -25,6 +25,8 @@ Y = np.zeros(50)
 M = fohw.datasets.paper_model
 _U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
+_G34 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0])
+_CIRC34 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015)
 
 
 def _bad_file(tmp, text, name="bad.dat"):
@@ -697,6 +699,59 @@ API = [
     ("BatteryCell.ocv", "a state of charge above 1",
      lambda t: fohw.datasets.battery_cell().ocv(1.2), fohw.ParameterError,
      "`soc` must be in [0, 1]"),
+    # issue 34 (io): transfer functions #1-6, circuits #21 and the rest of their class
+    ("FractionalTF", "issue 34 #1: a denominator order of 1e6 (was OverflowError in simulate)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1e6, 0.0]), fohw.ParameterError,
+     "`den_orders` must lie in [0, 20]; got 1000000.0 at index 0"),
+    ("FractionalTF", "issue 34 #1: a numerator order of -25",
+     lambda t: fohw.FractionalTF([1.0], [-25.0], [1.0, 1.0], [0.5, 0.0]), fohw.ParameterError,
+     "`num_orders` must lie in [-20, 20]; got -25.0 at index 0"),
+    ("FractionalTF.frequency_response", "issue 34 #2: a string (the error did not name omega)",
+     lambda t: _G34.frequency_response(["a"]), fohw.ParameterError,
+     "`omega` must be an array of real numbers; got an array of strings"),
+    ("FractionalTF.frequency_response", "issue 34 #3: omega = 0 at a pole at s = 0 (was inf+nanj)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0], [0.5]).frequency_response([0.0, 1.0]),
+     fohw.ParameterError, "`omega` = 0.0 (index 0): G has a pole at s = 0 (dcgain = inf, G ~ s^-0.5"),
+    ("FractionalTF.frequency_response", "issue 34 #4: a NaN frequency (was returned as NaN)",
+     lambda t: _G34.frequency_response([np.nan, 1.0]), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("FractionalTF.discrete_frequency_response", "issue 34 #4: an infinite frequency",
+     lambda t: _G34.discrete_frequency_response([np.inf], dt=0.1), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("FractionalTF.oustaloup", "issue 34 #5: a band of 600 decades (its response was nan+nanj)",
+     lambda t: _G34.oustaloup(band=(1e-300, 1e300)), fohw.ParameterError,
+     "`band` = (1e-300, 1e+300) spans 600 decades: with order N = 5 the approximation cannot be "
+     "represented in double precision"),
+    ("FractionalTF.oustaloup", "issue 34 #5: a band of 60 decades (finite coefficients, response not)",
+     lambda t: _G34.oustaloup(band=(1e-30, 1e30)), fohw.ParameterError,
+     "(its response in the band is not finite)"),
+    ("OustaloupApproximation.frequency_response", "issue 34 #4: a NaN frequency",
+     lambda t: _G34.oustaloup().frequency_response([np.nan]), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("OustaloupApproximation.errors", "issue 34 #5: points_per_decade = 10**9 (a hang)",
+     lambda t: _G34.oustaloup().errors(points_per_decade=10**9), fohw.ParameterError,
+     "`points_per_decade` must be at most 10000"),
+    ("FractionalTF.simulate", "issue 34 #6: an unstable improper model with a delay (was 1e51, "
+     "unchecked)",
+     lambda t: fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3)
+     .simulate(np.random.default_rng(1).standard_normal(200), dt=0.1),
+     fohw.SimulationDivergedError, "diverged at sample k = 39"),
+    ("FractionalHW.frequency_response", "issue 34 #4: a NaN frequency",
+     lambda t: fohw.FractionalHW(_G34).frequency_response([1.0, np.nan]), fohw.ParameterError,
+     "`omega` must contain only finite values; got np.float64(nan) at index 1"),
+    ("LinearBlock.frequency_response", "issue 34 #3: omega = 0 of an integrator (was inf+nanj)",
+     lambda t: fohw.model.hw_frequency.LinearBlock([1.0], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)
+     .frequency_response([0.0, 1.0]), fohw.ParameterError,
+     "`omega` = 0.0: the block's response is infinite there"),
+    ("EquivalentCircuit.impedance", "issue 34 #21: a NaN frequency (was NaN with a RuntimeWarning)",
+     lambda t: _CIRC34.impedance(np.array([np.nan, 1.0])), fohw.ParameterError,
+     "`f` must contain only finite values"),
+    ("EquivalentCircuit.impedance", "issue 34 #21: f = 0 with capacity= (was inf with a RuntimeWarning)",
+     lambda t: _CIRC34.impedance([0.0, 1.0], capacity=5.0), fohw.ParameterError,
+     "`f` = 0.0 (index 0): the impedance of the open-circuit voltage (capacity=) is infinite"),
+    ("Warburg.impedance", "issue 34 #21: f = 0 (was inf+nanj)",
+     lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
+     "the impedance of a Warburg element is infinite there"),
 ]
 
 CLI = [

@@ -538,3 +538,41 @@ def test_the_atomic_writer_names_the_file_not_its_temporary(tmp_path, monkeypatc
         files.write_text("x", tmp_path / "y.txt")
     assert info.value.filename == str(tmp_path / "y.txt") and ".tmp" not in str(info.value)
     assert os.listdir(tmp_path) == []
+
+
+# issue 34 (io)
+@pytest.mark.parametrize("model", [
+    fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3),   # unstable
+    fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], delay=0.2),
+    fohw.FractionalTF([1.0, 0.5], [0.0, -0.5], [2.0, 1.0], [0.6, 0.0]),
+], ids=["unstable improper, delay", "stable, delay", "Warburg numerator"])
+@pytest.mark.parametrize("zeros", [1, 5, 17, 64])
+def test_a_transfer_function_output_shifts_exactly_with_prepended_zeros(model, zeros):
+    """Issue 34 #6: zero initial conditions make G time-invariant: prepending zeros to u shifts y
+    by as many samples, bit for bit, and y is exactly 0 until the (delayed) input arrives. The
+    FFT solve left ~1e-13 there, and the unstable model amplified it until prepending 1 to 64
+    zeros changed the output 1.5 to 1e15 times."""
+    u = np.random.default_rng(1).standard_normal(200)
+    u[:3] = 0.0
+    y = model.simulate(u, dt=0.1, divergence_threshold=np.inf)
+    shifted = model.simulate(np.r_[np.zeros(zeros), u], dt=0.1, divergence_threshold=np.inf)
+    assert np.array_equal(shifted[zeros:], y)
+    first = 3 + round(model.delay / 0.1)
+    assert np.all(shifted[:zeros + first] == 0.0) and y[first] != 0.0
+
+
+def test_a_diverging_transfer_function_is_refused_at_a_stated_bound():
+    """Issue 34 #6: an unstable model's output is refused once it grows 1e8 times past the output
+    scale of a bounded response (as fohw.simulate does); np.inf lifts the bound; a stable slow
+    model and an integrator on a long record are not refused."""
+    G = fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3)
+    u = np.random.default_rng(1).standard_normal(200)
+    with pytest.raises(fohw.SimulationDivergedError) as info:
+        G.simulate(u, dt=0.1)
+    assert info.value.cause == "transfer_function" and "divergence_threshold=np.inf" in str(info.value)
+    assert np.max(np.abs(G.simulate(u, dt=0.1, divergence_threshold=np.inf))) > 1e50
+    step = np.r_[0.0, np.ones(9999)]
+    slow = fohw.FractionalTF([1.0], [0.0], [1e4, 1.0], [1.0, 0.0])         # tau = 1e4, dt = 1e-3
+    assert slow.simulate(step, dt=1e-3)[-1] > 0.0
+    integrator = fohw.FractionalTF([1.0], [0.0], [1.0], [1.0])
+    np.testing.assert_allclose(integrator.simulate(step, dt=0.01)[-1], 9999 * 0.01, rtol=1e-12)

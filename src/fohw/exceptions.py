@@ -45,14 +45,15 @@ class SimulationDivergedError(FohwError, ArithmeticError):
         The offending output value (may be ``inf`` or ``nan``).
     threshold : float
         The bound on ``|y[k]|`` that was exceeded.
-    cause : {"growth", "output_basis"}
+    cause : {"growth", "output_basis", "transfer_function"}
         ``"growth"``: the model is unstable for this input (the output grew past the bound).
+        ``"transfer_function"``: the same for a :class:`fohw.FractionalTF` (its own advice).
         ``"output_basis"``: the output basis ``g`` returned NaN or inf at a finite ``y[k]`` (a
         function used outside its domain, such as ``sqrt`` of a negative output). An input
         basis that does so is caught before the simulation starts (a ``ParameterError``).
     """
 
-    CAUSES = ("growth", "output_basis")
+    CAUSES = ("growth", "output_basis", "transfer_function")
 
     def __init__(self, sample: int, value: float, threshold: float, cause: str = "growth"):
         self.sample = int(sample)
@@ -67,6 +68,13 @@ class SimulationDivergedError(FohwError, ArithmeticError):
                     f"(y[k] = {self.value!r}): a basis function is not defined there (e.g. "
                     "sqrt or log of a negative value). Check the output's range (an operating "
                     "point shifts it), or use basis functions defined on the whole line.")
+        elif self.cause == "transfer_function":
+            text = (f"the simulated output diverged at sample k = {k}: y[k] = {self.value!r} "
+                    f"(|y| must stay finite and at most {self.threshold:g}, by default 1e8 times "
+                    "the output scale of a bounded response). The transfer function "
+                    "is unstable for this input (see G.is_stable()), or grows without bound (an "
+                    "integrator on a long record); pass divergence_threshold=np.inf to get the "
+                    "growing output anyway.")
         else:
             text = (f"the simulated output diverged at sample k = {k}: y[k] = {self.value!r} "
                     f"(|y| must stay finite and at most {self.threshold:g}). The model is "

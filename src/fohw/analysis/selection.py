@@ -201,7 +201,7 @@ def free_run_check(res, u, reference, envelope, *, initial="fitted"):
     try:
         ysim = res.simulate(u, initial=initial)
     except SimulationDivergedError as exc:
-        return None, "diverged" if exc.cause == "growth" else "nan", str(exc)
+        return None, "nan" if exc.cause == "output_basis" else "diverged", str(exc)
     found = implausible_sample(ysim, reference, envelope)
     if found is not None:
         return None, "implausible", implausible_message(found, envelope)

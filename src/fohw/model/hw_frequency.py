@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validation import check_array
 from ..exceptions import ParameterError
 from .frequency_response import gl_operator_response
 
@@ -184,7 +185,8 @@ class LinearBlock:
         Parameters
         ----------
         omega : array_like
-            ``0 < |omega| h < 2 pi`` (``omega = 0`` is :attr:`static_gain`).
+            Finite, ``0 < |omega| h < 2 pi`` (``omega = 0`` is :attr:`static_gain`); where the
+            response is infinite (a pole on the unit circle) it is refused, never ``inf + nan j``.
 
         Returns
         -------
@@ -199,9 +201,17 @@ class LinearBlock:
         >>> bool(abs(blk.frequency_response([0.3])[0] - (1 / z) / (1 - 0.5 / z)) < 1e-15)
         True
         """
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.f_slope * self.input_polynomial(omega) / (1.0 - self.g_slope
-                                                                   * self.output_polynomial(omega))
+        omega = check_array(omega, "omega", ndim=None, min_length=0)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            h = np.asarray(self.f_slope * self.input_polynomial(omega)
+                           / (1.0 - self.g_slope * self.output_polynomial(omega)))
+        bad = np.flatnonzero(~np.isfinite(h.ravel()))
+        if bad.size:
+            w = float(omega.ravel()[bad[0]])
+            raise ParameterError(f"`omega` = {w!r}: the block's response is infinite there (1 - g' A = 0: "
+                                 f"a pole on the unit circle{', an integrator' if w == 0.0 else ''}; "
+                                 f"static gain {self.static_gain!r}). Give other frequencies.")
+        return h
 
     @property
     def static_gain(self):
