@@ -25,6 +25,7 @@ Y = np.zeros(50)
 M = fohw.datasets.paper_model
 _U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
+_PAPER100 = fohw.datasets.paper_example(100, random_state=0)
 _G34 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0])
 _CIRC34 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015)
 
@@ -749,6 +750,19 @@ API = [
     ("EquivalentCircuit.impedance", "issue 34 #21: f = 0 with capacity= (was inf with a RuntimeWarning)",
      lambda t: _CIRC34.impedance([0.0, 1.0], capacity=5.0), fohw.ParameterError,
      "`f` = 0.0 (index 0): the impedance of the open-circuit voltage (capacity=) is infinite"),
+    ("identify", "issue 34 #14: a fixed dead zone entirely above the data (was fitted, converged)",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.DeadZone(100.0, 200.0)),
+     fohw.ParameterError, "`output_map` deadzone(lower=100, upper=200) lies entirely above the "
+     "measured output"),
+    ("identify", "issue 34 #14: a dead zone with one fixed end below the data",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.DeadZone(None, -50.0)),
+     fohw.ParameterError, "lies entirely below the measured output"),
+    ("identify", "issue 34 #14: fixed piecewise-linear breakpoints all above the data",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.PiecewiseLinear([10.0, 20.0, 30.0])),
+     fohw.ParameterError, "has every breakpoint above the measured output"),
     ("Warburg.impedance", "issue 34 #21: f = 0 (was inf+nanj)",
      lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
      "the impedance of a Warburg element is infinite there"),
