@@ -68,6 +68,28 @@ def _result_file(tmp, **change):
     return str(path)
 
 
+def _link(tmp, target, name="l.json"):
+    (tmp / name).symlink_to(target)
+    return str(tmp / name)
+
+
+def _shipped_as(tmp, how):
+    """battery_cell() with its shipped file replaced by a folder, a link or a long file."""
+    from unittest import mock
+
+    (tmp / "data").mkdir()
+    path = tmp / "data" / fohw.datasets.BATTERY_FILENAME
+    if how == "folder":
+        path.mkdir()
+    elif how == "long":
+        with open(path, "wb") as fh:
+            fh.truncate(64 * 2**20 + 1)                 # sparse: no disk used
+    else:
+        path.symlink_to(how)
+    with mock.patch("importlib.resources.files", lambda package: tmp):
+        return fohw.datasets.battery_cell()
+
+
 def _past_result():
     """A fit with past='estimate' (its levels belong to its estimation record)."""
     return fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1, past="estimate")
@@ -763,6 +785,24 @@ API = [
      lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
                              output_map=fohw.PiecewiseLinear([10.0, 20.0, 30.0])),
      fohw.ParameterError, "has every breakpoint above the measured output"),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file replaced by a folder (was "
+     "IsADirectoryError)", lambda t: _shipped_as(t, "folder"), fohw.DataFileError,
+     "is a directory, not a data file. The installed fohw is damaged; reinstall it."),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file a link to /dev/zero (the checksum "
+     "read forever)", lambda t: _shipped_as(t, "/dev/zero"), fohw.DataFileError,
+     "(a symbolic link to '/dev/zero') is a character device, not a regular file"),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file longer than 64 MiB (read whole)",
+     lambda t: _shipped_as(t, "long"), fohw.DataFileError,
+     "longer than 67108864 bytes (read so far), so not the published file"),
+    ("datasets.load_daisy", "issue 34 #25: a link to /dev/zero (was 'not found')",
+     lambda t: fohw.datasets.load_daisy(_link(t, "/dev/zero")), fohw.DataFileError,
+     "is a character device, not a regular file"),
+    ("read_record", "issue 34 #25: a FIFO (the read never ended)",
+     lambda t: fohw.read_record(os.mkfifo(t / "f.dat") or t / "f.dat"), fohw.DataFileError,
+     "is a FIFO, not a regular file; fohw reads a data file only from a regular file"),
+    ("load_result", "issue 34 #25: a link to /dev/zero (the read never ended)",
+     lambda t: fohw.load_result(_link(t, "/dev/zero")), fohw.DataFileError,
+     "is a character device, not a regular file; fohw reads a fohw JSON file only"),
     ("Warburg.impedance", "issue 34 #21: f = 0 (was inf+nanj)",
      lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
      "the impedance of a Warburg element is infinite there"),
@@ -905,6 +945,10 @@ CLI = [
     ("fohw identify", "--nk 0,-1",
      lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "0,-1"],
      "argument --nk: expected an integer >= 0 (or one per input); got -1"),
+    # issue 34 (io)
+    ("fohw identify", "issue 34 #25: the data file a FIFO (the read never ended)",
+     lambda t: ["identify", os.mkfifo(t / "f.dat") or str(t / "f.dat"), "--na", "1", "--nb", "1"],
+     "is a FIFO, not a regular file"),
 ]
 
 
