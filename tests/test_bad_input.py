@@ -26,6 +26,7 @@ M = fohw.datasets.paper_model
 _U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
 _PAPER100 = fohw.datasets.paper_example(100, random_state=0)
+_U2_100 = np.column_stack([_PAPER100.u, np.random.default_rng(5).uniform(-1, 1, 100)])
 _G34 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0])
 _CIRC34 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015)
 
@@ -88,6 +89,27 @@ def _shipped_as(tmp, how):
         path.symlink_to(how)
     with mock.patch("importlib.resources.files", lambda package: tmp):
         return fohw.datasets.battery_cell()
+
+
+def _two_inputs():
+    """A fit of the paper's output to its input beside a second one (inputs named 'a', 'b')."""
+    return fohw.identify(_U2_100, _PAPER100.y, na=2, nb=2, f_basis=1, g_basis=3, inputs=("a", "b"))
+
+
+def _two_input_file(tmp, **change):
+    """The saved _two_inputs() with fields replaced (``theta=x`` scales theta by x)."""
+    import json
+
+    path = tmp / "two.json"
+    fohw.save_result(_two_inputs(), path)
+    d = json.loads(path.read_text())
+    for key, value in change.items():
+        if key == "theta":
+            d["theta"]["data"] = [v * value for v in d["theta"]["data"]]
+        else:
+            d[key] = value
+    path.write_text(json.dumps(d))
+    return str(path)
 
 
 def _past_result():
@@ -803,6 +825,44 @@ API = [
     ("load_result", "issue 34 #25: a link to /dev/zero (the read never ended)",
      lambda t: fohw.load_result(_link(t, "/dev/zero")), fohw.DataFileError,
      "is a character device, not a regular file; fohw reads a fohw JSON file only"),
+    ("identify", "issue 34 #26: u of shape (50, 0) (was IndexError)",
+     lambda t: fohw.identify(np.empty((50, 0)), U, **S), fohw.DimensionError,
+     "`u` has no columns (shape (50x0)): give one column per input"),
+    ("compare", "issue 34 #26: u of shape (100, 0) for a 2-input fit",
+     lambda t: fohw.compare(_two_inputs(), np.empty((100, 0)), _PAPER100.y), fohw.DimensionError,
+     "`u` has no columns (shape (100x0))"),
+    ("IdentificationResult.simulate", "issue 34 #27: a DataFrame whose columns are not the fit's "
+     "inputs (matched by position)",
+     lambda t: _two_inputs().simulate(pytest.importorskip("pandas").DataFrame(
+         _U2_100, columns=["x", "a"])), fohw.DimensionError,
+     "`u` is a DataFrame with the columns ['x', 'a'], but the model's inputs are ['a', 'b']"),
+    ("IdentificationResult.simulate", "issue 34 #28: initial={'u': ..., 'y': ...} (its keys were read "
+     "as data)",
+     lambda t: _result().simulate(U, initial={"u": U[:10], "y": U[:10]}), fohw.ParameterError,
+     "`initial` must be the pair (u_hist, y_hist); got a dict with the keys ['u', 'y']"),
+    ("simulate", "issue 34 #28: history={'u': ..., 'y': ...}",
+     lambda t: fohw.simulate(M(), U, history={"u": U[:10], "y": U[:10]}), fohw.ParameterError,
+     "`history` must be the pair (u_past, y_past) of measured records; got a dict"),
+    ("identify", "issue 34 #28: operating_point={'u': 0, 'y': 0}",
+     lambda t: fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1,
+                             operating_point={"u": 0.0, "y": 0.0}), fohw.ParameterError,
+     "`operating_point` must be the pair (u0, y0); got a dict with the keys ['u', 'y']"),
+    ("HammersteinWiener", "issue 34 #28: past={0.1: 'a', 0.2: 'b'} (its keys were read as levels)",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 0.5, past={0.1: "a", 0.2: "b"}),
+     fohw.ParameterError, "`past` must be the pair of numbers (a, b); got a dict"),
+    ("lr_test", "issue 34 #29: an output map on one side only (LR with df 3, p from 1 order)",
+     lambda t: fohw.lr_test(_lr_fit(0, method="output_error"),
+                            _lr_fit("commensurate", method="output_error", output_map="saturation")),
+     fohw.ParameterError, "`restricted` (output map none) and `full` (output map saturation(lower=free, "
+     "upper=free)) differ beyond their orders"),
+    ("load_result", "issue 34 #30: 3 input levels in a 2-input result (the error named input_range)",
+     lambda t: fohw.load_result(_two_input_file(t, operating_point=[[0.0, 0.0, 0.0], 0.0])),
+     fohw.DataFileError, "field 'operating_point' gives 3 input levels but field 'input_range' "
+     "gives 2 inputs"),
+    ("IdentificationResult.simulate", "issue 34 #31: a result file with theta x 1e300 (was 'sqrt or "
+     "log of a negative value')",
+     lambda t: fohw.load_result(_two_input_file(t, theta=1e300)).simulate(_U2_100),
+     fohw.SimulationDivergedError, "the output basis g overflowed at sample k = 1"),
     ("Warburg.impedance", "issue 34 #21: f = 0 (was inf+nanj)",
      lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
      "the impedance of a Warburg element is infinite there"),

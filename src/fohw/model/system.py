@@ -14,10 +14,12 @@ acts on deviations from an operating point. Its output is computed by
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from .._types import ArrayLike, PairLike
-from .._validation import check_alpha, check_array, check_scalar
+from .._validation import check_alpha, check_array, check_scalar, unpack_pair
 from ..exceptions import DimensionError, ParameterError
 from .basis import Basis, BasisLike, as_basis, polynomial_basis
 from .orders import ORDER_RANGE, Orders, OrdersLike
@@ -325,6 +327,8 @@ class HammersteinWiener:
 
 def check_pair(value, name):
     """``value`` as a pair of finite floats (``past``, ``operating_point``), or a ParameterError."""
+    if isinstance(value, Mapping):
+        unpack_pair(value, name, "of numbers (a, b)")
     try:
         a, b = value
     except (TypeError, ValueError):
