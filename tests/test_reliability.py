@@ -594,3 +594,68 @@ def test_dataframe_columns_are_matched_by_the_names_the_result_keeps():
     unnamed = fohw.identify(u2, d.y, **S)                       # inputs u1, u2: by position
     np.testing.assert_array_equal(unnamed.simulate(pd.DataFrame(u2, columns=["x", "y"])),
                                   unnamed.simulate(u2))
+
+
+def test_a_two_input_result_from_the_command_line_is_simulated_by_it(tmp_path):
+    """Issue 34 #32: `fohw identify two.csv --columns u1,u2,y --save two.json` could not be
+    simulated by `fohw simulate` ('`u` must be 2-D' with one --column, '--column needs 1 entry'
+    with two), and --plot failed after the run ('the result has no model to simulate')."""
+    d = fohw.datasets.paper_example(400, random_state=0)
+    u2 = np.column_stack([d.u, np.random.default_rng(5).uniform(-1, 1, 400)])
+    data, inp = tmp_path / "two.csv", tmp_path / "inp.csv"
+    data.write_text("u1,u2,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for (a, b), c in
+                                          zip(u2.tolist(), d.y.tolist())))
+    inp.write_text("u2,u1\n" + "".join(f"{b!r},{a!r}\n" for a, b in u2[:60].tolist()))
+    status, _, err = run_cli(["identify", data, "--columns", "u1,u2,y", "--na", 2, "--nb", 2,
+                              "--f-basis", 2, "--g-basis", 3, "--save", tmp_path / "two.json",
+                              "--plot", tmp_path / "two.png", "-q"])
+    assert status == 0 and err == "" and (tmp_path / "two.png").stat().st_size > 0
+    expected = fohw.load_result(tmp_path / "two.json").simulate(u2[:60])
+    for column in ([], ["--column", "u1,u2"], ["--column", "u2,u1"], ["--column", "1,0"]):
+        status, out, err = run_cli(["simulate", "--model", tmp_path / "two.json", "--input", inp,
+                                    *column, "-q"])
+        assert status == 0 and err == "", (column, err)
+        np.testing.assert_array_equal(np.array(out.split(), dtype=float), expected)
+
+
+def _proc_stat(pid):
+    """``(state, parent pid)`` of a process from /proc, or None once it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return fields[0], int(fields[1])
+
+
+def _children(pid):
+    """The process ids whose parent is ``pid`` (from /proc)."""
+    return [int(e) for e in os.listdir("/proc")
+            if e.isdigit() and (st := _proc_stat(e)) is not None and st[1] == pid]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_workers_end_when_select_is_killed(tmp_path):
+    """Issue 34 #34: SIGKILL of `fohw select --jobs 2` left both workers alive 120 s later.
+    The pool's initializer (fohw.end_with_parent) ends them: gone within 5 s."""
+    d = fohw.datasets.paper_example(3000, random_state=0)
+    data = tmp_path / "d.dat"
+    np.savetxt(data, np.c_[d.u, d.y])
+    child = subprocess.Popen([sys.executable, "-m", "fohw", "select", str(data), "--na", "1,2,3",
+                              "--f-basis", "1,2,3", "--g-basis", "1,2,3", "--method",
+                              "output_error", "--jobs", "2", "-q"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while len(workers := _children(child.pid)) < 2:
+        assert time.monotonic() < deadline and child.poll() is None, "no workers started"
+        time.sleep(0.05)
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    deadline = time.monotonic() + 5
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.1)
+        alive = [w for w in workers if (st := _proc_stat(w)) is not None and st[0] != "Z"]
+    for w in alive:                                   # do not leave them running
+        os.kill(w, signal.SIGKILL)
+    assert not alive, f"workers {alive} outlived their killed parent"

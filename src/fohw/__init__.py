@@ -9,6 +9,7 @@ matrix, and the paper's estimators.
 # _startup first ("_" sorts first): for the `fohw` command only, Ctrl-C while importing is one
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
+from ._parallel import end_with_parent
 from .analysis.batch import identify_many
 from .analysis.circuit_checks import circuit_lr_test, circuit_order_interval
 from .analysis.crb import CRBResult, crb
@@ -169,4 +170,5 @@ __all__ = [
     "fit_circuit",
     "circuit_lr_test",
     "circuit_order_interval",
+    "end_with_parent",
 ]
