@@ -781,6 +781,10 @@ API = [
      lambda t: fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3)
      .simulate(np.random.default_rng(1).standard_normal(200), dt=0.1),
      fohw.SimulationDivergedError, "diverged at sample k = 39"),
+    ("FractionalTF.is_stable", "issue 34 #6 (fuzz): a coefficient of 1e-143 (was a RuntimeWarning "
+     "or OverflowError)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0, 1.26e-143], [0.4140625, 0.0]).is_stable(),
+     fohw.ParameterError, "the argument principle needs the frequencies 10**-360.3"),
     ("FractionalHW.frequency_response", "issue 34 #4: a NaN frequency",
      lambda t: fohw.FractionalHW(_G34).frequency_response([1.0, np.nan]), fohw.ParameterError,
      "`omega` must contain only finite values; got np.float64(nan) at index 1"),

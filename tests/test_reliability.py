@@ -659,3 +659,36 @@ def test_workers_end_when_select_is_killed(tmp_path):
     for w in alive:                                   # do not leave them running
         os.kill(w, signal.SIGKILL)
     assert not alive, f"workers {alive} outlived their killed parent"
+
+
+@settings(max_examples=60, deadline=None)
+@given(den_order=st.floats(0.1, 2.0), num_order=st.floats(-0.9, 2.5), a0=st.floats(-3.0, 3.0),
+       b1=st.floats(-2.0, 2.0), delay=st.integers(0, 5), zeros=st.integers(1, 40),
+       n=st.integers(1, 300), seed=st.integers(0, 2**32 - 1))
+def test_fuzz_transfer_function_simulation_is_shift_invariant_and_linear(
+        den_order, num_order, a0, b1, delay, zeros, n, seed):
+    """Issue 34 #6, the fuzz target: for any G in the ordinary domain, prepending zeros shifts
+    the output bit for bit (or moves the divergence refusal by as many samples), and a stable
+    proper G is linear to rounding (1e-9 of the output's size)."""
+    G = fohw.FractionalTF([1.0, b1], [num_order, 0.0], [1.0, a0], [den_order, 0.0], delay=0.1 * delay)
+    rng = np.random.default_rng(seed)
+    u, v = rng.standard_normal(n), rng.standard_normal(n)
+    padded = np.r_[np.zeros(zeros), u]
+    try:
+        y = G.simulate(u, dt=0.1)
+    except fohw.SimulationDivergedError as err:
+        with pytest.raises(fohw.SimulationDivergedError) as again:
+            G.simulate(padded, dt=0.1)
+        assert again.value.sample == err.sample + zeros and again.value.value == err.value
+        return
+    shifted = G.simulate(padded, dt=0.1)
+    assert np.array_equal(shifted[zeros:], y) and not np.any(shifted[:zeros])
+    try:
+        stable = G.is_stable()
+    except fohw.ParameterError as err:            # coefficients beyond the argument principle
+        assert "beyond double precision" in str(err)
+        return
+    if stable and num_order <= den_order:
+        both = G.simulate(u + 2.0 * v, dt=0.1)
+        scale = max(np.abs(y).max(), np.abs(both).max(), 1e-300)
+        np.testing.assert_allclose(both, y + 2.0 * G.simulate(v, dt=0.1), rtol=0, atol=1e-9 * scale)
