@@ -20,7 +20,7 @@ import numbers
 
 import numpy as np
 
-from .._validation import check_array, check_scalar
+from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
 from .frequency_response import gl_operator_response, operator_response
@@ -566,7 +566,7 @@ class FractionalTF:
         Parameters
         ----------
         n : int, optional
-            Number of frequencies.
+            Number of frequencies, 2 to 1 000 000.
 
         Returns
         -------
@@ -579,6 +579,7 @@ class FractionalTF:
         >>> float(w[0]), float(w[-1])
         (0.001, 10.0)
         """
+        n = check_int(n, "n", minimum=2, maximum=1_000_000)
         corners = []
         for c, o in ((self._num, self._num_orders), (self._den, self._den_orders)):
             for i in range(len(c)):
@@ -586,7 +587,7 @@ class FractionalTF:
                     if c[i] != 0 and c[j] != 0 and o[i] != o[j]:
                         corners.append((abs(c[i]) / abs(c[j])) ** (1.0 / (o[j] - o[i])))
         lo, hi = (min(corners), max(corners)) if corners else (1.0, 1.0)
-        return np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, int(n))
+        return np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, n)
 
     @property
     def dcgain(self):

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_array
+from .._validation import check_array, check_int
 from ..exceptions import ParameterError
 from .frequency_response import gl_operator_response
 
@@ -229,7 +229,8 @@ class LinearBlock:
     def default_frequencies(self, n=400):
         """Logarithmic grid from ``10^-3`` of the Nyquist frequency up to it (``pi / h``)."""
         nyq = np.pi / self.dt
-        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), int(n))
+        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), check_int(n, "n", minimum=2,
+                                                                        maximum=1_000_000))
 
     def stability(self, points=20_000):
         """BIBO stability of the block: no zero of ``1 - g' A(x)`` in ``|x| <= 1`` (module docstring).
