@@ -16,11 +16,12 @@ numerator and denominator are summed as rational functions. Two filters for ``s^
 from __future__ import annotations
 
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_array, check_int
+from .._validation import check_array, check_int, unpack_pair
 from ..exceptions import ParameterError
 
 __all__ = ["oustaloup_filter", "oustaloup_approximation", "OustaloupApproximation"]
@@ -31,6 +32,8 @@ REFINED_D = 9.0
 
 
 def _check_band(band):
+    if isinstance(band, Mapping):
+        unpack_pair(band, "band", "(omega_b, omega_h)")
     try:
         lo, hi = (float(v) for v in band)
     except (TypeError, ValueError):
