@@ -576,6 +576,12 @@ def test_a_diverging_transfer_function_is_refused_at_a_stated_bound():
     assert slow.simulate(step, dt=1e-3)[-1] > 0.0
     integrator = fohw.FractionalTF([1.0], [0.0], [1.0], [1.0])
     np.testing.assert_allclose(integrator.simulate(step, dt=0.01)[-1], 9999 * 0.01, rtol=1e-12)
+    growing = fohw.FractionalTF([1.0], [0.0], [1.0, -1.0], [1.0, 0.0])        # 1 / (s - 1)
+    t = np.arange(0.0, 30.0, 0.01)
+    with pytest.raises(fohw.SimulationDivergedError):
+        growing.step(t)
+    # backward Euler: y[k] = (1 - (1 - dt)^k) / ... grows like (1 - dt)^-k, past e^29.99
+    assert growing.step(t, divergence_threshold=np.inf)[-1] > np.exp(29.99) - 1.0
 
 
 def test_dataframe_columns_are_matched_by_the_names_the_result_keeps():

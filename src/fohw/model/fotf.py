@@ -403,7 +403,7 @@ class FractionalTF:
             raise ParameterError(f"`t` must lie on the sampling grid k * dt with dt = {h!r}.")
         return h, k.astype(np.int64)
 
-    def step(self, t, dt=None):
+    def step(self, t, dt=None, *, divergence_threshold=None):
         """Unit-step response at the times ``t`` (on the sampling grid ``k dt``).
 
         Parameters
@@ -413,6 +413,8 @@ class FractionalTF:
         dt : float, optional
             Sampling time (default: the model's ``dt``, else ``t[1] - t[0]`` of an equally
             spaced ``t`` starting at 0).
+        divergence_threshold : float, optional
+            As in :meth:`simulate` (``np.inf``: the growing response of an unstable model).
 
         Returns
         -------
@@ -431,11 +433,11 @@ class FractionalTF:
         h, k = self._grid(t, dt)
         u = np.ones(int(k.max()) + 1)
         u[0] = 0.0
-        y = self.simulate(u, h)
+        y = self.simulate(u, h, divergence_threshold=divergence_threshold)
         y[0] = 0.0                          # f[0] = 0 exactly; the FFT leaves ~1e-17
         return y[k]
 
-    def impulse(self, t, dt=None):
+    def impulse(self, t, dt=None, *, divergence_threshold=None):
         """Unit-impulse response at the times ``t``: the simulation of ``u = [0, 1/dt, 0, …]``.
 
         Parameters
@@ -444,6 +446,8 @@ class FractionalTF:
             Times ``>= 0``, multiples of the sampling time.
         dt : float, optional
             As in :meth:`step`.
+        divergence_threshold : float, optional
+            As in :meth:`simulate` (``np.inf``: the growing response of an unstable model).
 
         Returns
         -------
@@ -462,7 +466,7 @@ class FractionalTF:
         u = np.zeros(int(k.max()) + 1)
         if u.size > 1:
             u[1] = 1.0 / h
-        y = self.simulate(u, h)
+        y = self.simulate(u, h, divergence_threshold=divergence_threshold)
         y[0] = 0.0                          # f[0] = 0 exactly; the FFT leaves ~1e-17
         return y[k]
 
