@@ -19,6 +19,7 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
+import scipy.signal
 
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
@@ -38,6 +39,11 @@ ORDER_TOL = 1e-12
 #: weights (up to ``2**order``) and ``dt**-order`` leave double precision at ordinary ``dt``; already
 #: an integer polynomial of degree 5 simulates with lost digits at ``dt = 0.01``.
 TF_ORDER_LIMIT = 20.0
+#: Integer orders make the GL weights a polynomial; up to this many terms :meth:`FractionalTF.simulate`
+#: runs the recursion itself (``scipy.signal.lfilter``) and direct sums, not the FFT divide and
+#: conquer, which lost 5 digits on ``1/(s + 1)^5`` expanded at ``dt = 0.01`` (1.2e-4 on an output
+#: of 0.18 after 300 samples, against 2e-9) and every digit after 2000 samples.
+POLYNOMIAL_MAX = 64
 #: Default divergence bound of :meth:`FractionalTF.simulate`: ``|y[k]|`` at most this times the
 #: largest magnitude that drives the implicit recursion, as in :func:`fohw.simulate`.
 DIVERGENCE_FACTOR = 1e8
@@ -111,6 +117,12 @@ def _check_positive(value, name, allow_none=True):
     if not np.isfinite(value) or value <= 0.0:
         raise ParameterError(f"`{name}` must be positive and finite; got {value!r}.")
     return value
+
+
+def _polynomial(w):
+    """``w`` without its trailing zeros (the GL weights of integer orders end)."""
+    nz = np.flatnonzero(w)
+    return w[:nz[-1] + 1] if nz.size else w[:1]
 
 
 def _is_inf(value):
@@ -332,7 +344,9 @@ class FractionalTF:
         Solves ``sum_{k'<=k} c[k'] y[k-k'] = sum_{k'<=k} d[k'] u[k-k'-n_delay]`` (GL weights of
         denominator and numerator, :func:`operator_weights`) by power-series division in
         ``O(N log^2 N)``; every sample equals the implicit recursion
-        ``y[k] = (f[k] - sum_{j>=1} c[j] y[k-j]) / c[0]`` to rounding error. The solve starts at the
+        ``y[k] = (f[k] - sum_{j>=1} c[j] y[k-j]) / c[0]`` to rounding error; integer orders (a
+        polynomial of at most 64 weights, :data:`POLYNOMIAL_MAX`) run that recursion itself,
+        which keeps the digits an expanded polynomial has. The solve starts at the
         first sample the input reaches (the samples before are exactly zero by causality): the
         FFT products would otherwise leave rounding noise of ``1e-16`` of the largest value there,
         which an unstable model amplifies (measured: ``1e-13`` before the delay, and an output that
@@ -370,8 +384,11 @@ class FractionalTF:
             if np.all(self._num_orders == 0.0):             # a constant numerator: no convolution
                 f = float(np.sum(self._num)) * ud
             else:
-                f = causal_product(operator_weights(self._num, self._num_orders, h, m), ud, m)
-            y[start:] = series_divide(f, c)
+                d = _polynomial(operator_weights(self._num, self._num_orders, h, m))
+                f = np.convolve(d, ud)[:m] if d.size <= POLYNOMIAL_MAX else causal_product(d, ud, m)
+            c_short = _polynomial(c)
+            y[start:] = (scipy.signal.lfilter([1.0], c_short, f) if c_short.size <= POLYNOMIAL_MAX
+                         else series_divide(f, c))
             # The output scale of a bounded response: |f| / |c[0]| at the first sample, |f| / |sum c|
             # once settled (a slow stable model, an integrator: sum c -> 0 makes the bound infinite).
             gain = min(abs(c[0]), abs(float(np.sum(c))))
