@@ -628,7 +628,7 @@ class IdentificationResult(ResultPresentation):
         where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
-        u = check_inputs(u, self.structure.n_inputs)
+        u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
         y = check_array(y, "y")
         builder = RegressorBuilder(u - np.asarray(u0) if np.any(u0) else u,
                                    y - y0 if y0 else y, structure=self.structure)
@@ -681,7 +681,7 @@ class IdentificationResult(ResultPresentation):
             ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
-        u = check_inputs(u, self.structure.n_inputs)
+        u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
         state = self.initial_state(u, y, initial)
         if self.input_range is not None:
             u_arr = u

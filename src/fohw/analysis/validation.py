@@ -417,7 +417,7 @@ def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelo
                                 for name in ("simulate", "predict")):
         raise ParameterError("`model` must be an identification result (fohw.identify) or a "
                              f"fohw.HammersteinWiener; got {type(model).__name__}.")
-    u = check_inputs(u, model.structure.n_inputs)
+    u = check_inputs(u, model.structure.n_inputs, names=model.structure.inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if y.size < 2:

@@ -236,7 +236,7 @@ class FractionalHW:
         """``w = fbar(u) = sum_j p_j f_j(u)``."""
         return self.p @ self.f_basis.evaluate(np.asarray(u, dtype=np.float64), "u")
 
-    def simulate(self, u, dt=None, *, states=False):
+    def simulate(self, u, dt=None, *, states=False, divergence_threshold=None):
         """Output for the input ``u`` (zero initial conditions of ``G``).
 
         Parameters
@@ -247,6 +247,9 @@ class FractionalHW:
             Sampling time (default ``G.dt``).
         states : bool, optional
             Also return ``w = fbar(u)`` and ``x = G w``.
+        divergence_threshold : float, optional
+            The bound on ``|x|`` of :meth:`fohw.FractionalTF.simulate` (default: ``1e8`` times
+            the output scale of a bounded response; ``np.inf``: no bound).
 
         Returns
         -------
@@ -254,7 +257,7 @@ class FractionalHW:
             Or ``(w, x, y)`` with ``states=True``.
         """
         w = self.input_signal(u)
-        x = self.G.simulate(w, dt)
+        x = self.G.simulate(w, dt, divergence_threshold=divergence_threshold)
         y = self.output_map(x)
         return (w, x, y) if states else y
 

@@ -40,11 +40,12 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import check_array, check_inputs, check_same_length
+from .._validation import check_array, check_inputs, check_same_length, unpack_pair
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .simulation import simulate
 from .structure import Structure
@@ -150,6 +151,8 @@ def check_initial(initial, *, default=None):
                                  "('estimate', n), n >= 0 free past output samples; got "
                                  f"{initial!r}.")
         return "estimate", int(n)
+    if isinstance(initial, Mapping):
+        unpack_pair(initial, "initial", "(u_hist, y_hist)")
     try:
         u_hist, y_hist = initial
     except (TypeError, ValueError):
@@ -269,7 +272,7 @@ def initial_state(model, u, y=None, initial=None) -> InitialState:
     choice, value = check_initial(initial)
     if choice is None:
         choice = default_initial(model)
-    u = check_inputs(u, n_inputs)
+    u = check_inputs(u, n_inputs, names=model.structure.inputs)
     u0, y0 = model.operating_point
     op = (float(u0) if n_inputs == 1 else tuple(float(v) for v in u0), float(y0))
     if y is not None and choice != "estimate":

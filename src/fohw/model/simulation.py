@@ -29,6 +29,7 @@ from .._validation import (
     check_random_state,
     check_same_length,
     check_scalar,
+    unpack_pair,
 )
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
@@ -298,7 +299,7 @@ def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0,
     qa, pb = layout.blocks(linear[:layout.n_params])
     offset = float(linear[layout.n_params]) if structure.offset else 0.0
     values, past = structure.split_nonlinear(nonlinear)
-    u = check_inputs(u, structure.n_inputs)
+    u = check_inputs(u, structure.n_inputs, names=structure.inputs)
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
     Q, A = _output_representation(qa)
     hmap = structure.output_map
@@ -455,9 +456,35 @@ def recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_fi
         leaf = _pure_leaf(output_terms(g_basis, Q), acc.terms, acc.memory, acc.memoryless, rev,
                           w, y, z, dz, threshold, y_fixed)
         _compiled.count_pure(n)
-    with np.errstate(over="ignore", invalid="ignore"):
-        divide_and_conquer(n, leaf_size, leaf, lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            divide_and_conquer(n, leaf_size, leaf, lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    except SimulationDivergedError as err:
+        if err.cause == "output_basis" and _basis_overflows(g_basis, err.value):
+            raise SimulationDivergedError(err.sample, err.value, err.threshold, err.cause,
+                                          overflow=True) from None
+        raise
     return y
+
+
+def _basis_overflows(g_basis, y):
+    """Whether ``g`` is non-finite at the finite ``y`` by overflow (no function left its domain)."""
+    if not np.isfinite(y):
+        return False
+    x = np.array([float(y)])
+    for f in getattr(g_basis, "functions", ()):
+        try:
+            with np.errstate(over="ignore", invalid="raise", divide="raise"):
+                value = np.asarray(f(x), dtype=np.float64)
+        except FloatingPointError:
+            return False                    # invalid or divide: sqrt, log of a bad value
+        except (OverflowError, ArithmeticError):
+            continue
+        except Exception:                   # a user's function failing otherwise: not known
+            return False
+        if np.any(np.isnan(value)):
+            return False
+    return True
 
 
 def _pure_leaf(zfun, terms, memory, memoryless, rev, w, y, z, dz, threshold, y_fixed):
@@ -594,8 +621,7 @@ def free_run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, opera
                       structure.dt, y_fixed, kernel=kernel, leaf_size=leaf_size)
     except SimulationDivergedError as err:
         raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold,
-                                      err.cause) \
-            from None
+                                      err.cause, overflow=err.overflow) from None
     y = y[n_hist:]
     return y + y0 if y0 != 0.0 else y
 
@@ -653,11 +679,7 @@ def equation_noise(n, noise=None, noise_std=0.0, random_state=None):
 
 def check_input_point(operating_point, n_inputs):
     """``(u0, y0)`` of a model with several inputs: ``u0`` one level per input (a tuple)."""
-    try:
-        u0, y0 = operating_point
-    except (TypeError, ValueError):
-        raise ParameterError(f"`operating_point` must be a pair (u0, y0); got "
-                             f"{operating_point!r}.") from None
+    u0, y0 = unpack_pair(operating_point, "operating_point", "(u0, y0)")
     if np.ndim(u0) == 0:
         u0 = [check_scalar(u0, "operating_point[0]")] * n_inputs
     u0 = check_array(u0, "operating_point[0]")
@@ -668,11 +690,7 @@ def check_input_point(operating_point, n_inputs):
 
 
 def _check_history(history, n_inputs=1):
-    try:
-        u_hist, y_hist = history
-    except (TypeError, ValueError):
-        raise ParameterError("`history` must be a pair (u_past, y_past) of measured records; "
-                             f"got {type(history).__name__}.") from None
+    u_hist, y_hist = unpack_pair(history, "history", "(u_past, y_past) of measured records")
     u_hist = check_inputs(u_hist, n_inputs, "history u")
     y_hist = check_array(y_hist, "history y")
     check_same_length(u_hist, y_hist, "history u", "history y")
