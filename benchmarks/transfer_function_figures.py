@@ -85,7 +85,7 @@ def main():
     approx = G.oustaloup((1e-2, 1e2), 4)
     refined = G.oustaloup((1e-2, 1e2), 4, "refined")
     w = np.logspace(-4, 4, 400)
-    from fohw.analysis.frequency import bode_plot
+    from fohw.frequency_plots import bode_plot
     curves = {"1/(s^0.5+1)": G.frequency_response(w), "Oustaloup N=4": approx.frequency_response(w),
               "refined N=4": refined.frequency_response(w)}
     fig = bode_plot(w, curves, band=(1e-2, 1e2),

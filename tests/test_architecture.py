@@ -8,6 +8,9 @@
 3. No private name (``_name``) is imported from another fohw module. Private *modules*
    (``from . import _linalg``, ``from .._validation import check_array``) are fine.
 4. CONTRIBUTING.md's module map has a line for every module, and only for modules.
+5. Layers: no module imports from a higher layer (:data:`LAYERS`, the order CONTRIBUTING.md
+   declares), and nothing calls upward through a runtime registry (a module-level assignment
+   into a mapping imported from another fohw module).
 
 Run alone with ``python -m pytest tests/test_architecture.py``; ``python tests/test_architecture.py``
 prints the graph's circles and the private imports without pytest.
@@ -240,6 +243,82 @@ def test_module_map_names_every_module():
     assert not sorted(listed - set(modules)), f"not modules of fohw: {sorted(listed - set(modules))}"
 
 
+#: The layers, lowest first; a module may import from its own layer and the ones below. The
+#: foundation (private helpers, exceptions, the frequency plots every kind draws with) is
+#: below everything; the model kinds; the results they make; the estimators; files and
+#: data sets; the analyses (which fit, compare, test and select); the application.
+LAYERS = (
+    ("foundation", lambda top: top.startswith("_") or top in ("exceptions", "frequency_plots")),
+    ("model", lambda top: top == "model"),
+    ("results", lambda top: top in ("results", "fit_result", "presentation", "record")),
+    ("estimators", lambda top: top == "estimators"),
+    ("io", lambda top: top in ("io", "datasets")),
+    ("analysis", lambda top: top == "analysis"),
+    ("application", lambda top: top in ("cli", "paper", "__main__")),
+)
+
+
+def layer(module):
+    """Index in :data:`LAYERS` of a fohw module (``fohw`` itself: above them all)."""
+    if module == "fohw":
+        return len(LAYERS)
+    top = module.split(".")[1]
+    for i, (_, member) in enumerate(LAYERS):
+        if member(top):
+            return i
+    raise AssertionError(f"{module} is in no layer of LAYERS; add it")
+
+
+def upward_imports():
+    """``"importer (layer) line -> target (layer)"`` for every import of a higher layer."""
+    names = [n for n, _ in LAYERS] + ["fohw"]
+    found = []
+    for importer, targets in sorted(import_graph().items()):
+        for target, line in targets.items():
+            if target == "fohw" and importer.split(".")[1] in ("cli", "paper"):
+                continue                                  # the application uses the public API
+            if importer == "fohw.__main__" and target == "fohw.cli":
+                continue                                  # `python -m fohw` starts the CLI
+            if layer(target) > layer(importer):
+                found.append(f"{importer} ({names[layer(importer)]}) line {line} -> {target} "
+                             f"({names[layer(target)]})")
+    return found
+
+
+def runtime_registries():
+    """``"module:line"`` of module-level ``name[...] = ...`` into a name imported from fohw."""
+    found = []
+    for module, path in _modules().items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        imported = {alias.asname or alias.name for node in tree.body
+                    if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "")
+                                                             .startswith("fohw"))
+                    for alias in node.names}
+        for node in tree.body:
+            targets = node.targets if isinstance(node, ast.Assign) else []
+            for t in targets:
+                if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name) \
+                        and t.value.id in imported:
+                    found.append(f"{module}:{node.lineno}: {t.value.id}[...] = ...")
+    return found
+
+
+def test_every_module_is_in_a_layer_and_no_import_climbs():
+    found = upward_imports()
+    assert not found, "imports of a higher layer:\n" + "\n".join(found)
+
+
+def test_nothing_calls_upward_through_a_runtime_registry():
+    found = runtime_registries()
+    assert not found, "module-level writes into another module's registry:\n" + "\n".join(found)
+
+
+def test_the_layer_check_sees_a_climb():
+    # The checker itself: a model module importing an analysis would be caught.
+    assert layer("fohw.model.gl") < layer("fohw.analysis.crb")
+    assert layer("fohw._validation") == 0 and layer("fohw.cli") == len(LAYERS) - 1
+
+
 def test_no_private_names_cross_modules():
     found = private_imports()
     assert not found, "private names imported from another fohw module:\n" + "\n".join(found)
@@ -248,3 +327,5 @@ def test_no_private_names_cross_modules():
 if __name__ == "__main__":
     print("import circles:", *import_cycles() or ["none"], sep="\n  ")
     print("private names imported across modules:", *private_imports() or ["none"], sep="\n  ")
+    print("imports of a higher layer:", *upward_imports() or ["none"], sep="\n  ")
+    print("runtime registries:", *runtime_registries() or ["none"], sep="\n  ")

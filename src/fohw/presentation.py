@@ -131,11 +131,11 @@ class ResultPresentation:
         Returns
         -------
         matplotlib.figure.Figure
-            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); a new figure
+            Magnitude and phase axes (:func:`fohw.frequency_plots.bode_plot`); a new figure
             is not registered with pyplot (no window; ``fig.savefig`` writes it) and shows as
             the last expression of a notebook cell.
         """
-        from .analysis.frequency import bode_plot
+        from .frequency_plots import bode_plot
         from .model.hw_frequency import LinearBlock, linear_block
 
         block = self.linear_block()

@@ -1119,7 +1119,7 @@ class FractionalTF(Model):
         Returns
         -------
         matplotlib.figure.Figure
-            See :func:`fohw.analysis.frequency.bode_plot`.
+            See :func:`fohw.frequency_plots.bode_plot`.
 
         Examples
         --------
@@ -1128,7 +1128,7 @@ class FractionalTF(Model):
         >>> fig.axes[0].get_ylabel()
         'magnitude [dB]'
         """
-        from ..analysis.frequency import bode_plot
+        from ..frequency_plots import bode_plot
 
         omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
         curves = {str(self): self.frequency_response(omega)}
@@ -1151,14 +1151,14 @@ class FractionalTF(Model):
         Returns
         -------
         matplotlib.figure.Figure
-            See :func:`fohw.analysis.frequency.nyquist_plot`.
+            See :func:`fohw.frequency_plots.nyquist_plot`.
 
         Examples
         --------
         >>> import fohw
         >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
         """
-        from ..analysis.frequency import nyquist_plot
+        from ..frequency_plots import nyquist_plot
 
         omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
         return nyquist_plot({str(self): self.frequency_response(omega)}, title=title, ax=ax)

@@ -39,13 +39,13 @@ def bode_plot(omega, responses, *, title=None, band=None, ax=None):
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.analysis.frequency import bode_plot
+    >>> from fohw.frequency_plots import bode_plot
     >>> w = np.logspace(-2, 2, 50)
     >>> fig = bode_plot(w, {"1/(s+1)": 1 / (1j * w + 1)})
     >>> [a.get_ylabel() for a in fig.axes]
     ['magnitude [dB]', 'phase [deg]']
     """
-    from .._plotting import axes_for
+    from ._plotting import axes_for
 
     omega = np.asarray(omega, dtype=np.float64)
     if not isinstance(responses, dict):
@@ -96,13 +96,13 @@ def nyquist_plot(responses, *, title=None, ax=None):
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.analysis.frequency import nyquist_plot
+    >>> from fohw.frequency_plots import nyquist_plot
     >>> w = np.logspace(-2, 2, 50)
     >>> fig = nyquist_plot(1 / (np.sqrt(1j * w) + 1))
     >>> fig.axes[0].get_xlabel()
     'real part'
     """
-    from .._plotting import axes_for
+    from ._plotting import axes_for
 
     if not isinstance(responses, dict):
         responses = {None: responses}
