@@ -151,6 +151,17 @@ def test_lr_test_compares_the_ocv_maps():
     restricted = fohw.fit(shifted, u, v)
     with pytest.raises(fohw.ParameterError, match="same settings.*Python-function OCV"):
         fohw.lr_test(restricted, full)
+    # Two tables: compared through config(), the message names the setting that differs.
+    grid = np.linspace(0.0, 1.0, 101)
+    tables = [fohw.OCVTable(grid, ocv(grid) + shift) for shift in (0.0, 0.01)]
+    pair = []
+    for table, held in zip(tables, (False, True)):
+        model = EquivalentCircuit(["zarc"], ocv=table, tau_bounds=(1.0, 1000.0))
+        if held:
+            model = model.with_parameters(model.parameters.replace("alpha1", value=1.0, fixed=True))
+        pair.append(fohw.fit(model, u, v))
+    with pytest.raises(fohw.ParameterError, match="same settings.*config\\(\\) differ in 'ocv'"):
+        fohw.lr_test(pair[1], pair[0])
     # The same bound method of one object is the same map (a new object at each access).
     cell = fohw.datasets.battery_cell()
     a = EquivalentCircuit(["zarc"], ocv=cell.ocv)

@@ -511,12 +511,10 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                   bootstrap=boot)
 
 
-def _describe_settings(model):
-    """A model's settings for a message: its ``config()``, or why it has none."""
-    try:
-        return repr(model.config())
-    except ParameterError:
-        return "(settings no file can hold, e.g. a Python function)"
+def _short(value, width=80):
+    """``repr(value)``, cut to ``width`` characters (an OCV table is long)."""
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 5] + " ...)"
 
 
 def settings_differ(restricted_model, full_model, u=None):
@@ -557,7 +555,9 @@ def settings_differ(restricted_model, full_model, u=None):
                     "object in both)")
     else:
         if rc != fc:
-            return f"settings {rc!r} and {fc!r}"
+            keys = [k for k in dict.fromkeys([*rc, *fc]) if rc.get(k) != fc.get(k)]
+            return "their config() differ in " + "; ".join(
+                f"{k!r} ({_short(rc.get(k))} and {_short(fc.get(k))})" for k in keys)
     if u is not None:
         with np.errstate(all="ignore"):
             try:
@@ -597,9 +597,8 @@ def nested_fits(restricted, full, u=None):
         why = settings_differ(rm, fm, u)
         if why is not None:
             raise ParameterError(f"`restricted` and `full` must be fits of one model kind with "
-                                 f"the same settings; got a {type(rm).__name__} "
-                                 f"{_describe_settings(rm)} and a {type(fm).__name__} "
-                                 f"{_describe_settings(fm)}: {why}.")
+                                 f"the same settings; got {type(rm).__name__} and "
+                                 f"{type(fm).__name__} fits: {why}.")
     if restricted.n_samples != full.n_samples or restricted.data_digest != full.data_digest:
         raise ParameterError(f"`restricted` and `full` were not fitted to the same record "
                              f"({restricted.n_samples} and {full.n_samples} samples, "
