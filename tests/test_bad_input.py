@@ -703,6 +703,9 @@ API = [
      lambda t: impedance_error(_result(), [1.0, 2.0], [1.0, 1.0]), fohw.ParameterError,
      "`circuit` must be an EquivalentCircuit or a fohw.fit result of one; got "
      "IdentificationResult"),
+    ("register_model", "a class that is not a fohw.Model",
+     lambda t: fohw.register_model(dict), fohw.ParameterError,
+     "register_model takes a subclass of fohw.Model; got <class 'dict'>"),
     ("metrics.effective_samples", "constant residuals",
      lambda t: effective_samples(np.zeros(50)), fohw.ParameterError,
      "`residuals` are constant (0.0 at all 50 samples)"),
