@@ -20,9 +20,10 @@ potentials, and impedance spectra measured separately on the same cell.
    is kept (errors within 1e-6 relative are a tie, which goes to the smallest bound: bounds no
    fit reaches differ only by where each search stopped), the circuit refitted on the whole
    estimation half and validated once.
-4. The fractional element's order: profile interval and LR test against its integer limit
-   (alpha = 1, the RC element), with the nominal n and with Bartlett's effective n of the
-   correlated residuals.
+4. The fractional element's order: profile interval (fohw.profile_interval) and LR test
+   (fohw.lr_test) against its integer limit (alpha = 1, the RC element), with the nominal n and
+   with Bartlett's effective n of the correlated residuals (fohw.analysis.metrics.effective_samples,
+   passed as n_effective=).
 5. Impedance: the identified circuits' Z(j omega) (with the OCV's capacitor) beside the measured
    spectra at SOC 0.4, 0.5 and 0.6, in the band 1e-3 to 0.33 Hz.
 
@@ -42,12 +43,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
-from fohw.analysis.circuit_checks import (  # noqa: E402
-    circuit_lr_test,
-    circuit_order_interval,
-    effective_samples,
-    impedance_error,
-)
+from fohw.analysis.metrics import effective_samples  # noqa: E402
+from fohw.model.circuit import impedance_error  # noqa: E402
 
 STRUCTURES = [((), False), (("rc",), False), (("rc", "rc"), False), (("rc", "rc", "rc"), False),
               (("zarc",), False), (("rc", "zarc"), False), (("zarc", "zarc"), False),
@@ -243,11 +240,12 @@ def main(argv=None):
     restricted, _ = fit_circuit(cell, est, ("zarc",), False, frac_row["tau_max"], fit_kw,
                                 held={"alpha1": 1.0})
     n_eff = effective_samples(frac.residuals)
-    lr_nominal = circuit_lr_test(restricted, frac)
-    lr_eff = circuit_lr_test(restricted, frac, n=n_eff)
+    lr_nominal = fohw.lr_test(restricted, frac, u=u_e, y=v_e)     # the record: `frac` refitted
+    lr_eff = fohw.lr_test(restricted, frac, u=u_e, y=v_e, n_effective=n_eff)  # from `restricted` too
     n_grid = 3 if args.fast else 9
-    prof = circuit_order_interval(frac, u_e, v_e, "alpha1", n_grid=n_grid)
-    prof_eff = circuit_order_interval(frac, u_e, v_e, "alpha1", n=n_eff, n_grid=n_grid)
+    prof = fohw.profile_interval(frac, "alpha1", u=u_e, y=v_e, n_grid=n_grid, xtol=1e-3)
+    prof_eff = fohw.profile_interval(frac, "alpha1", u=u_e, y=v_e, n_grid=n_grid, xtol=1e-3,
+                                     n_effective=n_eff)
 
     # Impedance against the measured spectra.
     integer_key = next(k for k in fits if label(*k) == best_int["structure"])
@@ -270,8 +268,7 @@ def main(argv=None):
         slope = ocv_slope(cell, soc)
         styles = iter(("C0-", "C3--", "C2-."))
         for name, fit in compared.items():
-            _, zm, rel = impedance_error(fit.model, f, z, BAND, capacity=cell.capacity,
-                                         ocv_slope=slope)
+            _, zm, rel = impedance_error(fit, f, z, BAND, capacity=cell.capacity, ocv_slope=slope)
             imp_rows.append(dict(soc=soc, model=name, rms_rel_error=rms(rel),
                                  max_rel_error=float(rel.max()), n_freq=int(rel.size)))
             if name in plotted:
@@ -317,6 +314,10 @@ def main(argv=None):
     ax.semilogy(prof_eff.grid, np.maximum(prof_eff.statistic, 1e-3), "s-",
                 label=f"effective n = {n_eff:.0f}")
     ax.axhline(3.84, color="k", lw=0.8, ls="--")
+    for interval, color in ((prof, "C0"), (prof_eff, "C1")):    # the ends (Brent, between grid points)
+        ends = [x for x, side in ((interval.low, "low"), (interval.high, "high"))
+                if interval.one_sided not in (side, "both")]
+        ax.plot(ends, [3.84] * len(ends), "|", color=color, ms=14, mew=2)
     ax.set_xlabel("alpha1 (ZARC order)")
     ax.set_ylabel("n log(RSS(alpha) / RSS_min)")
     ax.legend(fontsize=8)

@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.analysis.circuit_checks import circuit_lr_test, circuit_order_interval
+from fohw.analysis.metrics import effective_samples
 from fohw.cli import main as cli
+from fohw.model.circuit import impedance_error
 
 ROOT = Path(__file__).resolve().parents[1]
 S = dict(na=2, nb=2, f_basis=2, g_basis=3)
@@ -726,14 +727,35 @@ API = [
      lambda t: fohw.fit(fohw.EquivalentCircuit(["rc"]), np.column_stack([U, 0.5 + 0 * U]), U,
                         sample_weight=0 * U),
      fohw.ParameterError, "`sample_weight` must be non-negative with at least one positive entry"),
-    ("circuit_checks.circuit_lr_test", "a result of another estimator",
-     lambda t: circuit_lr_test(_result(), _result()), fohw.ParameterError,
-     "`restricted` must be a fohw.fit result of an EquivalentCircuit"),
-    ("circuit_checks.circuit_order_interval", "an order the circuit does not have",
-     lambda t: circuit_order_interval(
-         fohw.fit(fohw.EquivalentCircuit([]), np.column_stack([U, np.linspace(0.8, 0.7, 50)]), U),
-         np.column_stack([U, np.linspace(0.8, 0.7, 50)]), U, "alpha1"),
-     fohw.ParameterError, "`name` must be a free order of the fit (); got 'alpha1'"),
+    ("lr_test", "circuit fits to two records (issue 34 #22)",
+     lambda t: fohw.lr_test(_circuit_fit(_SOC[::-1].copy(), b=0.0), _circuit_fit()),
+     fohw.ParameterError, "`restricted` and `full` were not fitted to the same record"),
+    ("lr_test", "circuit fits at two step sizes (issue 34 #22)",
+     lambda t: fohw.lr_test(_circuit_fit(dt=2.0, b=0.0), _circuit_fit()), fohw.ParameterError,
+     "`restricted` and `full` were fitted at different step sizes (dt 2.0 and 1.0)"),
+    ("lr_test", "an effective sample size above the samples",
+     lambda t: fohw.lr_test(_circuit_fit(b=0.0), _circuit_fit(), n_effective=60),
+     fohw.ParameterError, "`n_effective` must be at most the 50 samples of the criterion"),
+    ("profile_interval", "a circuit fit and half its record (issue 34 #23)",
+     lambda t: fohw.profile_interval(_circuit_fit(), "R0", u=_circuit_u()[:25], y=U[:25]),
+     fohw.ParameterError, "`u` and `y` have 25 samples, but `result` was fitted to 50"),
+    ("profile_interval", "an order the circuit does not have",
+     lambda t: fohw.profile_interval(_circuit_fit(), "alpha1", u=_circuit_u(), y=U),
+     fohw.ParameterError, "`name` must be one of the free parameters ['a', 'b', 'R0'] of the "
+     "EquivalentCircuit fit; got 'alpha1'"),
+    ("circuit.impedance_error", "a NaN in the measured spectrum (issue 34 #24)",
+     lambda t: impedance_error(fohw.EquivalentCircuit([]), [1.0, 2.0], [1.0, np.nan]),
+     fohw.ParameterError, "`z` must be finite and non-zero at every frequency"),
+    ("circuit.impedance_error", "a fit of another kind (issue 34 #24: a fit of a circuit is scored)",
+     lambda t: impedance_error(_result(), [1.0, 2.0], [1.0, 1.0]), fohw.ParameterError,
+     "`circuit` must be an EquivalentCircuit or a fohw.fit result of one; got "
+     "IdentificationResult"),
+    ("register_model", "a class that is not a fohw.Model",
+     lambda t: fohw.register_model(dict), fohw.ParameterError,
+     "register_model takes a subclass of fohw.Model; got <class 'dict'>"),
+    ("metrics.effective_samples", "constant residuals",
+     lambda t: effective_samples(np.zeros(50)), fohw.ParameterError,
+     "`residuals` are constant (0.0 at all 50 samples)"),
     ("BatteryCell.ocv", "a state of charge above 1",
      lambda t: fohw.datasets.battery_cell().ocv(1.2), fohw.ParameterError,
      "`soc` must be in [0, 1]"),
@@ -1037,6 +1059,22 @@ def _lr_fit(orders, n=50, method="varpro", **kw):
     """A fit of U -> U**3 (the first ``n`` samples) for the lr_test rows."""
     kw = {**dict(na=1, nb=1, f_basis=1, g_basis=1), **kw}
     return fohw.identify(U[:n], U[:n] ** 3, orders=orders, method=method, **kw)
+
+
+_SOC = np.linspace(0.8, 0.7, 50)
+
+
+def _circuit_u(soc=_SOC):
+    return np.column_stack([U, soc])
+
+
+def _circuit_fit(soc=_SOC, dt=1.0, **held):
+    """An R0-only circuit fitted to U (``held``: parameters fixed at values)."""
+    model = fohw.EquivalentCircuit([], dt=dt)
+    params = model.parameters
+    for name, value in held.items():
+        params = params.replace(name, value=value, fixed=True)
+    return fohw.fit(model.with_parameters(params), _circuit_u(soc), U)
 
 
 def _hybrid():

@@ -9,7 +9,7 @@ import pytest
 import scipy.special
 
 import fohw
-from fohw.model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
+from fohw.model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg, impedance_error
 
 
 def literal_zarc(i, R, tau, alpha, h):
@@ -181,6 +181,41 @@ def test_impedance_with_the_ocv_capacitor():
     d = (circuit.impedance(f, discrete=True, capacity=5.0, ocv_slope=0.55)
          - circuit.impedance(f, discrete=True))
     np.testing.assert_allclose(d, extra - 0.6 / (3600 * 5.0) * h / 2, rtol=1e-9)
+
+
+def test_impedance_error_of_a_circuit_and_of_its_fit():
+    circuit = EquivalentCircuit([RC(0.004, 6.0), ZARC(0.012, 150.0, 0.55)], r0=0.015)
+    f = np.logspace(-3, 0, 12)
+    z = circuit.impedance(f)
+    kept, model, rel = impedance_error(circuit, f, z, band=(1e-3, 0.5))
+    assert kept.max() <= 0.5 and kept.size == 10 and np.all(rel < 1e-15)    # 10^(-3 + 3k/11), k <= 9
+    assert np.array_equal(model, z[: kept.size])
+    # A spectrum off by 10 % in magnitude: |Z - Z / 1.1| / |Z / 1.1| = 0.1 at every frequency.
+    np.testing.assert_allclose(impedance_error(circuit, f, z / 1.1)[2], 0.1, rtol=1e-12)
+    # A fohw.fit result scores its fitted circuit (issue 34 case 24: a raw AttributeError).
+    u = np.column_stack([np.repeat(np.random.default_rng(0).uniform(-3, 1, 30), 10),
+                         np.linspace(0.8, 0.7, 300)])
+    fit = fohw.fit(EquivalentCircuit(["rc"], tau_bounds=(1.0, 100.0)), u,
+                   EquivalentCircuit([RC(0.004, 6.0)], r0=0.015).simulate(u))
+    np.testing.assert_array_equal(impedance_error(fit, f, z)[2], impedance_error(fit.model, f, z)[2])
+
+
+@pytest.mark.parametrize("args, match", [
+    ((np.logspace(-3, 0, 3), np.array([1.0, np.nan, 1.0])), "`z` must be finite and non-zero.*index 1"),
+    ((np.logspace(-3, 0, 3), np.array([1.0, 0.0, 1.0])), "`z` must be finite and non-zero"),
+    ((np.logspace(-3, 0, 3), np.ones(2)), "`z` must have one value per frequency; got 2 values for 3"),
+    ((np.array([0.0, 1.0]), np.ones(2)), "`f` must be positive frequencies"),
+    ((np.array([np.nan, 1.0]), np.ones(2)), "`f`"),
+])
+def test_impedance_error_refuses_what_it_cannot_score(args, match):
+    circuit = EquivalentCircuit([RC(0.004, 6.0)], r0=0.015)
+    with pytest.raises(fohw.ParameterError, match=match):
+        impedance_error(circuit, *args)
+    with pytest.raises(fohw.ParameterError, match="`band` .* holds none of the frequencies"):
+        impedance_error(circuit, np.logspace(-3, 0, 3), np.ones(3), band=(10.0, 20.0))
+    with pytest.raises(fohw.ParameterError, match="`circuit` must be an EquivalentCircuit or a "
+                                                  "fohw.fit result of one; got FractionalTF"):
+        impedance_error(fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]), *args)
 
 
 def test_circuit_is_a_model_with_named_bounded_parameters():

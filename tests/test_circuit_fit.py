@@ -8,12 +8,6 @@ import scipy.optimize
 import scipy.stats
 
 import fohw
-from fohw.analysis.circuit_checks import (
-    circuit_lr_test,
-    circuit_order_interval,
-    effective_samples,
-    impedance_error,
-)
 from fohw.model.circuit import RC, ZARC, EquivalentCircuit
 
 
@@ -92,12 +86,87 @@ def test_zarc_at_order_one_is_the_rc_fit():
     at_one = fohw.fit(circuit(("zarc",), alpha1=1.0), u, v)
     assert at_one.sse == pytest.approx(rc.sse, rel=1e-8)
     full = fohw.fit(circuit(("zarc",)), u, v)
-    test = circuit_lr_test(rc, full)
-    assert test.statistic == pytest.approx(u.shape[0] * math.log(rc.sse / full.sse))
-    assert test.df == 1 and "0.5*chi2_0" in test.distribution
+    # The generic test, though the OCV is a Python function (no config(): issue 32).
+    test = fohw.lr_test(at_one, full)
+    assert test.statistic == pytest.approx(u.shape[0] * math.log(at_one.sse / full.sse))
+    assert test.df == 1 and test.boundary == ("alpha1",) and "0.5*chi2_0" in test.distribution
     # The mixture's p-value is half the chi2_1 tail.
     assert test.pvalue == pytest.approx(0.5 * scipy.stats.chi2.sf(test.statistic, 1))
-    assert test.pvalue == pytest.approx(circuit_lr_test(at_one, full).pvalue, rel=1e-9)
+    assert test.hypothesis == "alpha1 = 1" and test.criterion == "free-run RSS"
+    # With the record, `full` is refitted from the restricted estimate too: never above it.
+    again = fohw.lr_test(at_one, full, u=u, y=v)
+    assert again.rss_full <= full.sse and again.statistic >= test.statistic
+    # The RC circuit is the same model, but not the ZARC's with a parameter fixed: the
+    # generic test needs the pair written as one model (alpha1 held at 1).
+    with pytest.raises(fohw.ParameterError, match="have different parameters"):
+        fohw.lr_test(rc, full)
+
+
+def test_lr_test_with_an_effective_sample_size():
+    u = record(2000, seed=3)
+    v = TRUE.simulate(u) + 1e-3 * np.random.default_rng(4).standard_normal(u.shape[0])
+    at_one = fohw.fit(circuit(("zarc",), alpha1=1.0), u, v)
+    full = fohw.fit(circuit(("zarc",)), u, v)
+    test = fohw.lr_test(at_one, full, n_effective=250.5)
+    assert test.statistic == pytest.approx(250.5 * math.log(at_one.sse / full.sse), rel=1e-12)
+    assert test.pvalue == pytest.approx(0.5 * scipy.stats.chi2.sf(test.statistic, 1), rel=1e-12)
+    assert test.n == 250 and "n_effective = 250.5 of 2000 samples" in test.criterion
+    assert "n_effective = 250.5" in str(test)
+    with pytest.raises(fohw.ParameterError, match="`n_effective` must be at most the 2000"):
+        fohw.lr_test(at_one, full, n_effective=2001)
+    with pytest.raises(fohw.ParameterError, match="`n_effective` must be"):
+        fohw.lr_test(at_one, full, n_effective=0.5)
+
+
+def test_lr_test_refuses_circuit_fits_to_two_records_or_step_sizes():
+    # issue 34 case 22: the former circuit_lr_test gave LR 34 260 (two records) and 2 168 (two
+    # step sizes), p = 0, without a check.
+    u = record(1500, seed=20)
+    v = TRUE.simulate(u) + 1e-3 * np.random.default_rng(21).standard_normal(u.shape[0])
+    full = fohw.fit(circuit(("zarc",)), u, v)
+    other = record(1500, seed=22)
+    w = TRUE.simulate(other) + 1e-3 * np.random.default_rng(23).standard_normal(u.shape[0])
+    restricted = fohw.fit(circuit(("zarc",), alpha1=1.0), other, w)
+    with pytest.raises(fohw.ParameterError, match="not fitted to the same record"):
+        fohw.lr_test(restricted, full)
+    coarse = EquivalentCircuit(["zarc"], ocv=ocv, dt=2.0, tau_bounds=(2.0, 1000.0))
+    coarse = coarse.with_parameters(coarse.parameters.replace("alpha1", value=1.0, fixed=True))
+    restricted = fohw.fit(coarse, u, v)
+    with pytest.raises(fohw.ParameterError, match="different step sizes"):
+        fohw.lr_test(restricted, full)
+    # Half the record passed for the refit: refused, not refitted on it.
+    at_one = fohw.fit(circuit(("zarc",), alpha1=1.0), u, v)
+    with pytest.raises(fohw.ParameterError, match="fitted to 1500"):
+        fohw.lr_test(at_one, full, u=u[:750], y=v[:750])
+
+
+def test_lr_test_compares_the_ocv_maps():
+    # A circuit's OCV is a setting, not a parameter: two fits with different OCV functions are
+    # not one model with a parameter fixed, though their parameters have the same names.
+    u = record(1500, seed=24)
+    v = TRUE.simulate(u) + 1e-3 * np.random.default_rng(25).standard_normal(u.shape[0])
+    full = fohw.fit(circuit(("zarc",)), u, v)
+    shifted = EquivalentCircuit(["zarc"], ocv=lambda s: ocv(s) + 0.01, tau_bounds=(1.0, 1000.0))
+    shifted = shifted.with_parameters(shifted.parameters.replace("alpha1", value=1.0, fixed=True))
+    restricted = fohw.fit(shifted, u, v)
+    with pytest.raises(fohw.ParameterError, match="same settings.*Python-function OCV"):
+        fohw.lr_test(restricted, full)
+    # Two tables: compared through config(), the message names the setting that differs.
+    grid = np.linspace(0.0, 1.0, 101)
+    tables = [fohw.OCVTable(grid, ocv(grid) + shift) for shift in (0.0, 0.01)]
+    pair = []
+    for table, held in zip(tables, (False, True)):
+        model = EquivalentCircuit(["zarc"], ocv=table, tau_bounds=(1.0, 1000.0))
+        if held:
+            model = model.with_parameters(model.parameters.replace("alpha1", value=1.0, fixed=True))
+        pair.append(fohw.fit(model, u, v))
+    with pytest.raises(fohw.ParameterError, match="same settings.*config\\(\\) differ in 'ocv'"):
+        fohw.lr_test(pair[1], pair[0])
+    # The same bound method of one object is the same map (a new object at each access).
+    cell = fohw.datasets.battery_cell()
+    a = EquivalentCircuit(["zarc"], ocv=cell.ocv)
+    assert a.ocv is not cell.ocv and a == EquivalentCircuit(["zarc"], ocv=cell.ocv)
+    assert a != EquivalentCircuit(["zarc"], ocv=fohw.datasets.battery_cell().ocv)
 
 
 def test_profile_interval_covers_the_true_order_and_matches_the_statistic():
@@ -105,14 +174,25 @@ def test_profile_interval_covers_the_true_order_and_matches_the_statistic():
     u = record(3000, seed=5)
     v = true.simulate(u) + 1e-3 * np.random.default_rng(6).standard_normal(u.shape[0])
     fit = fohw.fit(circuit(("zarc",)), u, v)
-    pi = circuit_order_interval(fit, u, v, "alpha1", n_grid=5)
+    pi = fohw.profile_interval(fit, "alpha1", u=u, y=v, n_grid=5)
     assert pi.low < 0.5 < pi.high and pi.one_sided == ""
-    # At each end the refit's statistic is the chi2_1 quantile, 3.84.
+    # At each end the refit's statistic is the chi2_1 quantile, 3.84 (xtol 1e-4 in the order,
+    # times a slope of the statistic below 200 per unit there).
     for end in (pi.low, pi.high):
         r = fohw.fit(circuit(("zarc",), alpha1=end), u, v, start=fit.model)
         assert u.shape[0] * math.log(r.sse / fit.sse) == pytest.approx(3.841, abs=0.05)
     # The width agrees with the standard error (a quadratic profile): 1.96 se each side.
     assert (pi.high - pi.low) / 2 == pytest.approx(1.96 * fit.standard_errors()["alpha1"], rel=0.15)
+    # With an effective sample size the statistic scales by n_eff / n: at each end of that
+    # interval the nominal statistic is 3.84 * n / n_eff.
+    wide = fohw.profile_interval(fit, "alpha1", u=u, y=v, n_grid=5, n_effective=750.0)
+    assert wide.low < pi.low and pi.high < wide.high
+    for end in (wide.low, wide.high):
+        r = fohw.fit(circuit(("zarc",), alpha1=end), u, v, start=fit.model)
+        assert 750.0 * math.log(r.sse / fit.sse) == pytest.approx(3.841, abs=0.05)
+    # issue 34 case 23: an interval on half the record it was not fitted to is refused.
+    with pytest.raises(fohw.ParameterError, match="fitted to 3000"):
+        fohw.profile_interval(fit, "alpha1", u=u[:1500], y=v[:1500])
 
 
 def test_profile_interval_scans_the_fits_own_order_bounds():
@@ -124,27 +204,35 @@ def test_profile_interval_scans_the_fits_own_order_bounds():
     model = EquivalentCircuit(["warburg"], ocv=ocv)
     model = model.with_parameters(model.parameters.replace("alpha1", bounds=(0.3, 0.7)))
     fit = fohw.fit(model, u, v)
-    pi = circuit_order_interval(fit, u, v, "alpha1", n_grid=3)
+    pi = fohw.profile_interval(fit, "alpha1", u=u, y=v, n_grid=3)
     assert pi.grid.min() >= 0.3 and pi.grid.max() <= 0.7 and 0.3 in pi.grid and 0.7 in pi.grid
 
 
-def test_effective_samples_of_white_and_of_an_ar1():
-    rng = np.random.default_rng(0)
-    e = rng.standard_normal(50_000)
-    assert effective_samples(e) == pytest.approx(50_000, rel=0.05)
-    x = np.zeros_like(e)
-    for k in range(1, e.size):
-        x[k] = 0.8 * x[k - 1] + e[k]
-    # AR(1): n (1 - rho) / (1 + rho) = n / 9.
-    assert effective_samples(x) == pytest.approx(50_000 / 9, rel=0.15)
-
-
-def test_impedance_error_against_its_own_spectrum_is_zero():
-    f = np.logspace(-3, 0, 12)
-    z = TRUE.impedance(f)
-    kept, model, rel = impedance_error(TRUE, f, z, band=(1e-3, 0.5))
-    assert kept.max() <= 0.5 and np.all(rel < 1e-15)
-    assert np.array_equal(model, z[: kept.size])
+def test_verbs_refit_with_the_fits_own_sample_weights():
+    # A fit with a block held back (weight 0): the profile's refits and lr_test's refit use the
+    # same weights, so the criterion is the fit's. Before, the record check (unweighted) refused
+    # the fit's own record.
+    true = EquivalentCircuit([ZARC(0.012, 60.0, 0.5)], r0=0.015, ocv=ocv)
+    u = record(2000, seed=26)
+    v = true.simulate(u) + 1e-3 * np.random.default_rng(27).standard_normal(u.shape[0])
+    v[800:1100] += 0.05                             # a block the criterion must not see
+    w = np.ones(u.shape[0])
+    w[800:1100] = 0.0
+    fit = fohw.fit(circuit(("zarc",)), u, v, sample_weight=w)
+    assert fit.n_samples == 1700
+    pi = fohw.profile_interval(fit, "alpha1", u=u, y=v, n_grid=3)
+    assert pi.low < 0.5 < pi.high
+    # Each grid point's statistic is that of a weighted refit with alpha1 held there.
+    for value, stat in zip(pi.grid, pi.statistic):
+        r = fohw.fit(circuit(("zarc",), alpha1=float(value)), u, v, sample_weight=w,
+                     start=fit.model.with_parameters({"alpha1": float(value)}))
+        assert stat == pytest.approx(max(1700 * math.log(r.sse / fit.sse), 0.0), rel=1e-6, abs=1e-6)
+    at_one = fohw.fit(circuit(("zarc",), alpha1=1.0), u, v, sample_weight=w)
+    test = fohw.lr_test(at_one, fit, u=u, y=v)
+    assert test.statistic == pytest.approx(1700 * math.log(at_one.sse / test.rss_full))
+    # The same record with other weights is another criterion: refused.
+    with pytest.raises(fohw.ParameterError, match="not fitted to the same record"):
+        fohw.lr_test(fohw.fit(circuit(("zarc",), alpha1=1.0), u, v), fit)
 
 
 @pytest.mark.parametrize("make, error, match", [

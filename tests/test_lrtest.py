@@ -273,3 +273,71 @@ def test_order_test_of_the_mixed_class_needs_the_record():
     t = full.order_test()
     assert np.isnan(t.pvalue) and "lr_test" in t.note and t.unidentified == ("alpha",)
     assert varpro.order_test() is None                 # no integer fit kept: lr_test it
+
+
+# ---- an effective sample size (correlated residuals), for every kind -------------------------
+def test_n_effective_scales_the_lagged_statistic_and_interval():
+    u, y = record(1, alpha=0.5)
+    r0, rc = fits(u, y, 0, "commensurate")
+    t = fohw.lr_test(r0, rc, n_effective=50)
+    assert t.statistic == pytest.approx(50 * math.log(r0.J / rc.J), rel=1e-12)
+    assert t.pvalue == pytest.approx(0.5 * scipy.stats.chi2.sf(t.statistic, 1), rel=1e-12)
+    assert t.n == 50 and t.criterion == "one-step RSS; n_effective = 50 of 500 samples"
+    with pytest.raises(fohw.ParameterError, match="`n_effective` does not apply with "
+                                                  "reference='bootstrap'"):
+        fohw.lr_test(r0, rc, u=u, y=y, reference="bootstrap", n_effective=50)
+    with pytest.raises(fohw.ParameterError, match="`n_effective` must be at most the 500"):
+        fohw.lr_test(r0, rc, n_effective=501)
+    # The interval's ends: where 50 log(J(alpha) / J_hat) reaches the quantile.
+    iv = fohw.profile_interval(rc, "alpha", 0.9, u=u, y=y, n_effective=50)
+    q = scipy.stats.chi2.ppf(0.9, 1)
+    for end in (iv.low, iv.high):
+        if end in (0.0, 1.0):
+            continue
+        (fixed,) = fits(u, y, end)
+        assert 50 * math.log(fixed.J / rc.J) == pytest.approx(q, abs=0.05)
+    narrow = fohw.profile_interval(rc, "alpha", 0.9, u=u, y=y)
+    assert iv.low < narrow.low and narrow.high < iv.high
+
+
+class _Scaled(fohw.Model):
+    """``y = gain * shape(u)``: a kind whose setting ``shape`` (a Python function) no config holds."""
+
+    def __init__(self, gain=1.0, offset=0.0, shape=np.tanh):
+        self.gain, self.offset, self.shape = float(gain), float(offset), shape
+
+    def config(self):
+        raise fohw.ParameterError("`shape` is a Python function: no file holds it.")
+
+    def __eq__(self, other):        # the default compares config(), which this kind has not
+        return self.config() == other.config()
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("gain", self.gain),
+                                fohw.Parameter("offset", self.offset)])
+
+    def with_parameters(self, values):
+        v = self.parameters.with_values(values).valuesdict()
+        return _Scaled(v["gain"], v["offset"], self.shape)
+
+    def simulate(self, u, *, initial=None):
+        return self.gain * self.shape(self.check_input(u)) + self.offset
+
+
+def test_nesting_of_a_kind_without_config_is_checked_by_simulation():
+    u = np.linspace(-2, 2, 200)
+    y = 1.5 * np.tanh(u) + 0.01 * np.random.default_rng(0).standard_normal(200)
+    full = fohw.fit(_Scaled(), u, y)
+    held = _Scaled()
+    held = held.with_parameters(held.parameters.replace("offset", value=0.0, fixed=True))
+    restricted = fohw.fit(held, u, y)
+    # Neither config() nor == can compare the settings: the record decides, or the call says so.
+    with pytest.raises(fohw.ParameterError, match="cannot be compared without the record: pass u=, y="):
+        fohw.lr_test(restricted, full)
+    t = fohw.lr_test(restricted, full, u=u, y=y)
+    assert t.df == 1 and t.statistic == pytest.approx(200 * math.log(restricted.sse / t.rss_full))
+    other = _Scaled(shape=np.sin)
+    other = other.with_parameters(other.parameters.replace("offset", value=0.0, fixed=True))
+    with pytest.raises(fohw.ParameterError, match="simulate the record differently"):
+        fohw.lr_test(fohw.fit(other, u, y), full, u=u, y=y)

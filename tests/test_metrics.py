@@ -299,3 +299,28 @@ if __name__ == "__main__":
     for stat in ("ljung-box", "box-pierce"):
         rates = _rejection_rates([metrics.whiteness_test(x, statistic=stat).p_value for x in e])
         print(f"  whiteness, white residual, {stat:10s}  {100 * rates[0]:5.2f} % / {100 * rates[1]:5.2f} %")
+
+
+def test_effective_samples_of_white_and_of_an_ar1():
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal(50_000)
+    assert metrics.effective_samples(e) == pytest.approx(50_000, rel=0.05)
+    x = np.zeros_like(e)
+    for k in range(1, e.size):
+        x[k] = 0.8 * x[k - 1] + e[k]
+    # AR(1): n (1 - rho) / (1 + rho) = n / 9.
+    assert metrics.effective_samples(x) == pytest.approx(50_000 / 9, rel=0.15)
+    # A fixed number of lags: the sum of the sample autocorrelations by hand (3 lags).
+    r = x[:2000] - x[:2000].mean()
+    rho = [float(r[:-k] @ r[k:] / (r @ r)) for k in (1, 2, 3)]
+    assert metrics.effective_samples(x[:2000], max_lag=3) == pytest.approx(
+        2000 / (1 + 2 * sum(rho)), rel=1e-10)
+
+
+def test_effective_samples_names_bad_residuals():
+    with pytest.raises(fohw.ParameterError, match="`residuals` are constant"):
+        metrics.effective_samples(np.ones(10))
+    with pytest.raises(fohw.ParameterError, match="`residuals`"):
+        metrics.effective_samples([1.0, np.nan, 2.0, 3.0, 4.0])
+    with pytest.raises(fohw.ParameterError, match="`max_lag`"):
+        metrics.effective_samples(np.arange(10.0), max_lag=0)

@@ -31,6 +31,12 @@ with ``s`` the coefficients the order brings and ``V`` the total variation of
 which need ``u, y``), or a parametric bootstrap (``reference="bootstrap"``: records simulated
 from the restricted fit with its noise variance, both classes refitted on each).
 
+Every reference assumes white residuals. A free run's residuals are usually correlated, so
+``n`` overstates the information: ``n_effective=`` (e.g. Bartlett's estimate,
+:func:`fohw.analysis.metrics.effective_samples` of the full fit's residuals) replaces ``n`` in
+the statistic, ``n_effective log(RSS_restricted / RSS_full)``, with the same reference (an
+approximation; the result's ``criterion`` says which ``n`` was used).
+
 The F form ``((RSS_r - RSS_f) / q) / (RSS_f / (n - d))`` is exact only for linear models with
 chi2 references; the boundary and Davies references are derived for the likelihood ratio, so
 fohw uses ``n log``. For ``n`` in the hundreds and ``d`` parameters the two differ by about
@@ -56,6 +62,7 @@ from ..results import REFITS
 from .profile_interval import (
     check_data,
     check_fit_record,
+    check_n_effective,
     check_result,
     criterion,
     is_fit,
@@ -78,7 +85,8 @@ class LRTest:
     Attributes
     ----------
     statistic : float
-        ``n log(RSS_restricted / RSS_full)`` (0 when the full fit is not better).
+        ``n log(RSS_restricted / RSS_full)`` (0 when the full fit is not better), ``n`` the
+        samples of the criterion or the ``n_effective`` given.
     df : int
         Parameters the full class adds (free orders and their coefficients).
     pvalue : float
@@ -88,9 +96,10 @@ class LRTest:
         binomial weights, ``"Davies bound"`` (an upper bound of the p-value) or
         ``"bootstrap"``.
     criterion : str
-        ``"one-step RSS"`` or ``"free-run RSS"``.
+        ``"one-step RSS"`` or ``"free-run RSS"``; with ``n_effective``, followed by
+        ``"; n_effective = <n> of <N> samples"``.
     n : int
-        Samples of the criterion.
+        Samples of the criterion (``n_effective`` rounded, when given).
     rss_restricted, rss_full : float
     boundary, unidentified : tuple of str
         The free orders on the boundary under the null, and those not identified there.
@@ -296,6 +305,13 @@ def _statistic(rss_r, rss_f, n):
     return max(n * math.log(rss_r / rss_f), 0.0)
 
 
+def _criterion_text(name, n_effective, n):
+    """``LRTest.criterion``: the criterion, and the effective samples when they scale it."""
+    if n_effective is None:
+        return name
+    return f"{name}; n_effective = {float(n_effective):.4g} of {n} samples"
+
+
 def _davies_profile(full, rss_r, n, u, y, n_grid):
     """``LR(nu)`` on a grid of the single unidentified order (and at the estimate)."""
     (name,) = full.orders
@@ -384,7 +400,7 @@ def order_test(full):
 
 
 def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=199,
-            random_state=None, executor=None, n_grid=21):
+            random_state=None, executor=None, n_grid=21, n_effective=None):
     """Likelihood-ratio test of a fractional class (``full``) against orders 0 (``restricted``).
 
     Parameters
@@ -420,6 +436,13 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         Runs the bootstrap refits.
     n_grid : int
         Points of the order grid for Davies' profile when it is refitted.
+    n_effective : float, optional
+        The samples that scale the statistic, ``n_effective log(RSS_restricted / RSS_full)``,
+        in ``[1, n]``; default ``n``, the samples of the criterion (white residuals). For
+        correlated residuals, e.g. Bartlett's
+        :func:`fohw.analysis.metrics.effective_samples` of ``full.residuals``; the reference
+        distribution is unchanged (an approximation) and ``criterion`` names the ``n`` used.
+        Not with ``reference="bootstrap"``, which calibrates the statistic itself.
 
     Returns
     -------
@@ -430,7 +453,9 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     ------
     ParameterError
         Wrong types, a method that is not a least-squares optimum, a pair that is not nested
-        (the message says how), an unknown ``reference``, or missing data.
+        (the message says how: another kind or settings, fits to two records or at two step
+        sizes, parameters that are not one model's with some fixed), an unknown
+        ``reference``, missing data, or ``n_effective`` outside ``[1, n]``.
 
     Examples
     --------
@@ -444,7 +469,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     ('chi2 mixture 0.5*chi2_0 + 0.5*chi2_1', 1, True)
     """
     if is_fit(restricted) or is_fit(full):
-        return _lr_fits(restricted, full, reference, u, y)
+        return _lr_fits(restricted, full, reference, u, y, n_effective)
     restricted = check_result(restricted, "restricted")
     full = check_result(full, "full")
     if reference not in REFERENCES:
@@ -453,8 +478,13 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     if u is not None or y is not None:
         u, y = check_data(restricted, u, y, "restricted")
         check_data(full, u, y, "full")
-    rss_r, n = criterion(restricted)
+    rss_r, n_criterion = criterion(restricted)
     rss_f, _ = criterion(full)
+    n = check_n_effective(n_effective, n_criterion)
+    if n_effective is not None and reference == "bootstrap":
+        raise ParameterError("`n_effective` does not apply with reference='bootstrap': the "
+                             "bootstrap records have white noise and calibrate the statistic "
+                             "themselves; use 'mixture' or 'davies' with n_effective.")
     stat = _statistic(rss_r, rss_f, n)
     df = (full.structure.n_linear - restricted.structure.n_linear
           + full.structure.n_nonlinear - restricted.structure.n_nonlinear)
@@ -499,17 +529,84 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         distribution = "bootstrap"
     crit_name = "free-run RSS" if full.method == "output_error" else "one-step RSS"
     return LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
-                  criterion=crit_name, n=n, rss_restricted=rss_r, rss_full=rss_f,
+                  criterion=_criterion_text(crit_name, n_effective, n_criterion),
+                  n=int(round(n)), rss_restricted=rss_r, rss_full=rss_f,
                   boundary=boundary, unidentified=unidentified, note=" ".join(notes),
                   bootstrap=boot)
 
 
-def nested_fits(restricted, full):
+def _short(value, width=80):
+    """``repr(value)``, cut to ``width`` characters (an OCV table is long)."""
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 5] + " ...)"
+
+
+def settings_differ(restricted_model, full_model, u=None):
+    """Why two models of one kind differ in their settings apart from their parameters, or None.
+
+    ``restricted_model`` is given ``full_model``'s parameters (values, bounds, fixed flags,
+    ties), so that only the settings that are not parameters are compared:
+
+    1. when both give a :meth:`~fohw.Model.config` (the settings a file holds), the two
+       configs must be equal;
+    2. when one cannot (e.g. a circuit whose OCV map is a Python function, which no file can
+       hold), the kind's own ``==`` decides (the circuit's compares its OCV maps with ``==``:
+       the same function, the same bound method of one object, or equal tables); a kind
+       whose ``==`` needs ``config()`` too cannot be compared, which is said;
+    3. with a record ``u``, both must also simulate it to the same output (to 1e-12 of its
+       largest magnitude): a setting the first two cannot see still shows in the output.
+    """
+    if type(restricted_model) is not type(full_model):
+        return (f"a {type(restricted_model).__name__} and a {type(full_model).__name__} are "
+                "different model kinds")
+    try:
+        aligned = restricted_model.with_parameters(full_model.parameters)
+    except (ParameterError, KeyError) as exc:
+        return f"`full`'s parameters do not fit `restricted`'s model ({exc})"
+    try:
+        rc, fc = aligned.config(), full_model.config()
+    except ParameterError:
+        try:
+            same = bool(aligned == full_model)
+        except ParameterError:
+            if u is None:
+                return ("a setting of the kind has no config() and its == needs one, so the "
+                        "settings cannot be compared without the record: pass u=, y=")
+            same = True         # decided by the simulation below
+        if not same:
+            return (f"the {type(full_model).__name__}'s == says their settings differ (a "
+                    "setting no file can hold, e.g. a Python-function OCV map, must be the same "
+                    "object in both)")
+    else:
+        if rc != fc:
+            keys = [k for k in dict.fromkeys([*rc, *fc]) if rc.get(k) != fc.get(k)]
+            return "their config() differ in " + "; ".join(
+                f"{k!r} ({_short(rc.get(k))} and {_short(fc.get(k))})" for k in keys)
+    if u is not None:
+        with np.errstate(all="ignore"):
+            try:
+                yr = np.asarray(aligned.simulate(u), dtype=float)
+            except (ParameterError, ArithmeticError) as exc:
+                return f"`restricted`'s model with `full`'s values does not simulate the record ({exc})"
+            yf = np.asarray(full_model.simulate(u), dtype=float)
+            scale = float(np.nanmax(np.abs(yf))) if np.any(np.isfinite(yf)) else 1.0
+            gap = np.abs(yr - yf)
+            bad = np.flatnonzero(~(gap <= 1e-12 * scale) & ~(np.isnan(yr) & np.isnan(yf)))
+        if bad.size:
+            k = int(bad[0])
+            return (f"with the same parameter values they simulate the record differently "
+                    f"(sample {k}: {yr[k]!r} and {yf[k]!r}), so a setting that is not a "
+                    "parameter differs")
+    return None
+
+
+def nested_fits(restricted, full, u=None):
     """``(fixed names, boundary names)`` of two FitResults, or a ParameterError saying why not.
 
-    Same kind and settings, one record (its fingerprint, ``n_samples`` and ``dt``), and
-    ``restricted`` is ``full`` with some free parameters held fixed at values inside their
-    bounds in ``full`` (on a bound: a boundary of the parameter space).
+    Same kind and settings (:func:`settings_differ`; with the record ``u`` also compared by
+    simulation), one record (its fingerprint, ``n_samples`` and ``dt``), and ``restricted`` is
+    ``full`` with some free parameters held fixed at values inside their bounds in ``full``
+    (on a bound: a boundary of the parameter space).
     """
     for name, res in (("restricted", restricted), ("full", full)):
         if not is_fit(res):
@@ -520,16 +617,12 @@ def nested_fits(restricted, full):
         raise ParameterError(f"`restricted` and `full` were fitted at different step sizes "
                              f"(dt {rm.dt!r} and {fm.dt!r}): their criteria are of different "
                              "records, so their ratio tests nothing.")
-    same = type(rm) is type(fm)
-    if same:        # the settings apart from the values (a kind's config may hold values too)
-        try:
-            same = rm.with_parameters(fm.parameters.valuesdict()).config() == fm.config()
-        except ParameterError:
-            same = False
-    if not same:
-        raise ParameterError(f"`restricted` and `full` must be fits of one model kind with the "
-                             f"same settings; got a {type(rm).__name__} {rm.config()!r} and a "
-                             f"{type(fm).__name__} {fm.config()!r}.")
+    if restricted.parameters.names == full.parameters.names or type(rm) is not type(fm):
+        why = settings_differ(rm, fm, u)
+        if why is not None:
+            raise ParameterError(f"`restricted` and `full` must be fits of one model kind with "
+                                 f"the same settings; got {type(rm).__name__} and "
+                                 f"{type(fm).__name__} fits: {why}.")
     if restricted.n_samples != full.n_samples or restricted.data_digest != full.data_digest:
         raise ParameterError(f"`restricted` and `full` were not fitted to the same record "
                              f"({restricted.n_samples} and {full.n_samples} samples, "
@@ -563,9 +656,11 @@ def nested_fits(restricted, full):
     return tuple(fixed), tuple(boundary)
 
 
-def _lr_fits(restricted, full, reference, u, y):
+def _lr_fits(restricted, full, reference, u, y, n_effective):
     """:func:`lr_test` of two :class:`fohw.FitResult` (any kind but the lagged one)."""
-    fixed, boundary = nested_fits(restricted, full)
+    if u is not None or y is not None:
+        u, y = check_fit_record(restricted, u, y, "restricted")
+    fixed, boundary = nested_fits(restricted, full, u)
     if reference not in REFERENCES:
         raise ParameterError(f"`reference` must be one of {REFERENCES}; got {reference!r}.")
     if reference not in ("auto", "mixture"):
@@ -573,9 +668,9 @@ def _lr_fits(restricted, full, reference, u, y):
                              f"of a {type(full.model).__name__} is tested against chi2 (or the "
                              "chi-bar-squared mixture for a value on its bound): use 'auto'.")
     notes = []
-    rss_r, rss_f, n = restricted.sse, full.sse, full.n_samples
-    if u is not None or y is not None:
-        u, y = check_fit_record(restricted, u, y, "restricted")
+    rss_r, rss_f = restricted.sse, full.sse
+    n = check_n_effective(n_effective, full.n_samples)
+    if u is not None:
         with warnings.catch_warnings():       # its status is the user's `full`'s business
             warnings.simplefilter("ignore", ConvergenceWarning)
             again = fit(full.model, u, y, start=restricted.model, **dict(full.options))
@@ -601,7 +696,8 @@ def _lr_fits(restricted, full, reference, u, y):
         distribution = f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_({df - k}+j)"
     rp = restricted.parameters
     return LRTest(statistic=stat, df=df, pvalue=pvalue, distribution=distribution,
-                  criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
+                  criterion=_criterion_text("free-run RSS", n_effective, full.n_samples),
+                  n=int(round(n)), rss_restricted=rss_r, rss_full=rss_f,
                   boundary=boundary, note=" ".join(notes),
                   hypothesis=", ".join(f"{name} = {rp[name].value:g}" for name in fixed))
 

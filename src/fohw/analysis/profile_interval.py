@@ -6,7 +6,8 @@ noise of unknown variance (profiled out) the likelihood-ratio statistic is
 
 ``LR(nu) = n log(RSS(nu) / RSS(nu_hat))``
 
-(``n`` the samples of the criterion), and the interval of level ``1 - a`` is the set where
+(``n`` the samples of the criterion, or an effective sample size ``n_effective`` given for
+correlated residuals), and the interval of level ``1 - a`` is the set where
 ``LR(nu) <= chi2_1 quantile(1 - a)`` (Wilks). For ``"varpro"`` and ``"structured"`` the
 criterion is the one-step (equation-error) RSS, ``N J``; for ``"output_error"`` the free-run
 RSS. ``RSS(nu)`` is a public :func:`fohw.identify` call with that order fixed (for ``"varpro"``
@@ -15,7 +16,9 @@ it is exactly the separable least-squares solution at fixed orders), and an
 found by a coarse grid over the order's bounds and Brent's method between the grid points
 that bracket the quantile; an end whose criterion never reaches the quantile is the bound
 itself (a one-sided interval). The result objects keep no data, so ``u`` and ``y`` (the
-record the fit was made on, checked against the fit's ``J``) are passed again.
+record the fit was made on, checked against the fit's ``J``; for a :class:`fohw.FitResult`,
+against its fingerprint) are passed again. A :class:`fohw.FitResult` of any other kind is
+profiled the same way, each ``RSS(nu)`` a :func:`fohw.fit` with the fit's own options.
 """
 
 from __future__ import annotations
@@ -36,7 +39,8 @@ from ..model.orders import Orders
 from ..results import REFITS, IdentificationResult
 
 __all__ = ["ProfileInterval", "profile_interval", "refit", "orders_with", "criterion",
-           "check_data", "check_fit_record", "sse_with_fixed", "LIKELIHOOD_METHODS"]
+           "check_data", "check_fit_record", "check_n_effective", "fit_weight", "sse_with_fixed",
+           "LIKELIHOOD_METHODS"]
 
 #: Methods whose estimate is a least-squares (Gaussian likelihood) optimum.
 LIKELIHOOD_METHODS = ("varpro", "structured", "output_error")
@@ -94,20 +98,30 @@ def is_fit(result):
     return isinstance(result, FitResult) and not isinstance(result, IdentificationResult)
 
 
+def fit_weight(result):
+    """The ``sample_weight`` ``result`` was fitted with (its ``options``), or None."""
+    weight = result.options.get("sample_weight")
+    return None if weight is None else np.asarray(weight, dtype=np.float64)
+
+
 def check_fit_record(result, u, y, name):
     """``u``, ``y`` checked to be the record the FitResult ``result`` was fitted to.
 
     The fit keeps a fingerprint of its record (:func:`fohw.estimators.fit.data_digest`: the
-    samples and ``dt``); another record, a part of it or another step size is refused.
+    samples, ``dt`` and the ``sample_weight`` of its options); another record, a part of it or
+    another step size is refused.
     """
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
     u, y = check_record(result.model, u, y)
-    if y.size != result.n_samples:
+    weight = fit_weight(result)
+    length = result.n_samples if weight is None else weight.size
+    if y.size != length:
+        held = "" if weight is None else f" ({result.n_samples} of them of positive weight)"
         raise ParameterError(f"`u` and `y` have {y.size} samples, but `{name}` was fitted to "
-                             f"{result.n_samples}: pass the record it was fitted to.")
-    digest = data_digest(u, y, result.model.dt)
+                             f"{length}{held}: pass the record it was fitted to.")
+    digest = data_digest(u, y, result.model.dt, weight)
     if result.data_digest and digest != result.data_digest:
         raise ParameterError(f"`u` and `y` (at dt = {result.model.dt!r}) are not the record "
                              f"`{name}` was fitted to: their fingerprint is {digest}, the fit's "
@@ -118,8 +132,11 @@ def check_fit_record(result, u, y, name):
 def sse_with_fixed(result, u, y, values):
     """The least SSE of ``result``'s model with ``values`` (``{name: value}``) held fixed.
 
-    The other free parameters are refitted by :func:`fohw.fit` from the estimate, with the
-    fit's options; when none is left, the SSE of the model's free run. A refit next to the
+    The other free parameters are refitted by :func:`fohw.fit` with the fit's own options
+    (``sample_weight``, ``order_grid``, ``n_starts``, ``max_nfev``, ``tol``: the same
+    criterion and search as the fit), from the kind's starts and from the estimate with
+    ``values`` put in (``start=``); when none is left, the SSE of the model's free run
+    (weighted as the fit was). A refit next to the
     optimum may stop without a step or end rank deficient (an order at 0 can make a gain and a
     time constant one): its SSE is still an upper bound of the profile there, which can only
     widen an interval, so those warnings are not the user's business. ``inf`` when no start
@@ -130,17 +147,32 @@ def sse_with_fixed(result, u, y, values):
         params = params.replace(name, value=float(value), fixed=True)
     model = result.model.with_parameters(params)
     if not params.free_names:
+        weight = fit_weight(result)
         with np.errstate(all="ignore"):
             r = y - np.asarray(model.simulate(u), dtype=float)
+            if weight is not None:
+                r = r * np.sqrt(weight)
         sse = float(r @ r)
         return sse if math.isfinite(sse) else math.inf
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         warnings.simplefilter("ignore", RankDeficiencyWarning)
         try:
-            return fit(model, u, y, **dict(result.options)).sse
+            return fit(model, u, y, start=model, **dict(result.options)).sse
         except ParameterError:
             return math.inf
+
+
+def check_n_effective(n_effective, n):
+    """The samples that scale a likelihood-ratio statistic: ``n``, or ``n_effective`` in [1, n]."""
+    if n_effective is None:
+        return n
+    value = check_scalar(n_effective, "n_effective", lower=1.0)
+    if value > n:
+        raise ParameterError(f"`n_effective` must be at most the {n} samples of the criterion "
+                             f"(correlated residuals carry less information, not more); got "
+                             f"{n_effective!r}.")
+    return value
 
 
 def orders_with(orders, fixed):
@@ -253,7 +285,8 @@ def _fixed_value_ok(orders, name, value):
     return True
 
 
-def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xtol=1e-4):
+def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xtol=1e-4,
+                     n_effective=None):
     """The profile-likelihood interval of free order ``name`` of ``result``.
 
     Parameters
@@ -276,6 +309,12 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
         Points of the coarse grid over the parameter's bounds (at least 3).
     xtol : float
         Absolute tolerance of the ends (Brent).
+    n_effective : float, optional
+        The samples that scale the statistic, ``n_effective log(RSS(nu) / RSS_hat)``, in
+        ``[1, n]``; default ``n``, the samples of the criterion (white residuals). For
+        correlated residuals (a free run's usually are) ``n`` overstates the information;
+        :func:`fohw.analysis.metrics.effective_samples` of the fit's residuals gives Bartlett's
+        estimate, and the interval widens accordingly (still an approximation).
 
     Returns
     -------
@@ -285,8 +324,9 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     Raises
     ------
     ParameterError
-        Not a least-squares fit, an unknown order name, ``level`` outside (0, 1), or ``u, y``
-        missing or not the fit's record.
+        Not a least-squares fit, an unknown order name, ``level`` outside (0, 1), ``u, y``
+        missing or not the fit's record (another record, a part of it, another step size or
+        other sample weights), or ``n_effective`` outside ``[1, n]``.
 
     Notes
     -----
@@ -306,7 +346,7 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     True
     """
     if is_fit(result):
-        return _profile_fit(result, name, level, u, y, n_grid, xtol)
+        return _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective)
     result = check_result(result, "result")
     if not isinstance(name, str) or name not in result.orders:
         raise ParameterError(f"`name` must be one of the free orders {list(result.orders)}; "
@@ -317,6 +357,7 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
     u, y = check_data(result, u, y, "result")
     rss_hat, n = criterion(result)
+    n = check_n_effective(n_effective, n)
     quantile = float(scipy.stats.chi2.ppf(level, 1))
     est = float(result.orders[name])
     lo, hi = order_bounds(result, name)
@@ -369,7 +410,7 @@ def _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol):
 SCAN_STANDARD_ERRORS = 10.0
 
 
-def _profile_fit(result, name, level, u, y, n_grid, xtol):
+def _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective):
     """:func:`profile_interval` of a FitResult: refits with ``name`` fixed, in its own bounds."""
     free = result.free_names
     if not isinstance(name, str) or name not in free:
@@ -380,7 +421,7 @@ def _profile_fit(result, name, level, u, y, n_grid, xtol):
     n_grid = check_int(n_grid, "n_grid", minimum=3)
     xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
     u, y = check_fit_record(result, u, y, "result")
-    rss_hat, n = result.sse, result.n_samples
+    rss_hat, n = result.sse, check_n_effective(n_effective, result.n_samples)
     quantile = float(scipy.stats.chi2.ppf(level, 1))
     est = result.parameters[name].value
     lo, hi = result.parameters[name].bounds

@@ -48,7 +48,8 @@ from .gl import gl_weights_derivative, gl_weights_unchecked
 from .kernels import causal_product, series_divide
 from .parameters import Parameter, Parameters
 
-__all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS"]
+__all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS",
+           "impedance_error"]
 
 
 def _omega(f):
@@ -734,8 +735,7 @@ class EquivalentCircuit(Model):
     def __eq__(self, other):
         if type(other) is not type(self):
             return NotImplemented
-        same_ocv = self.ocv is other.ocv or (isinstance(self.ocv, OCVTable) and self.ocv == other.ocv)
-        return (same_ocv and self.kinds == other.kinds and self.dt == other.dt
+        return (_same_map(self.ocv, other.ocv) and self.kinds == other.kinds and self.dt == other.dt
                 and self.tau_bounds == other.tau_bounds and (self.n_tau, self.n_alpha) ==
                 (other.n_tau, other.n_alpha) and self.parameters == other.parameters)
 
@@ -797,6 +797,96 @@ class EquivalentCircuit(Model):
                           ["parameter", "value", "bounds"], rows,
                           lines=[f"dt = {self.dt:g} s; OCV map: "
                                  + ("given" if self.ocv is not None else "none")])
+
+
+def impedance_error(circuit, f, z, band=None, *, discrete=False, capacity=None, ocv_slope=0.0):
+    """Relative error ``|Z_model - Z| / |Z|`` of a circuit's impedance against a measured spectrum.
+
+    Parameters
+    ----------
+    circuit : EquivalentCircuit or FitResult
+        The circuit, or a :func:`fohw.fit` result of one (its fitted ``model``).
+    f : array_like, shape (m,)
+        Frequencies [Hz], finite and positive.
+    z : array_like of complex, shape (m,)
+        Measured impedance [ohm], finite and non-zero (a NaN is refused, never scored).
+    band : (float, float), optional
+        Keep the frequencies in ``[low, high]`` [Hz]; default all.
+    discrete : bool, optional
+        Use the GL-discretised model's response at its ``dt`` (see
+        :meth:`EquivalentCircuit.impedance`).
+    capacity, ocv_slope : float, optional
+        Add the OCV's capacitor (see :meth:`EquivalentCircuit.impedance`).
+
+    Returns
+    -------
+    f, model, rel : ndarray
+        The frequencies kept, the model's impedance there and the relative errors; the RMS
+        relative error is ``sqrt(mean(rel**2))``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fohw.model.circuit import EquivalentCircuit, ZARC, impedance_error
+    >>> cell = EquivalentCircuit([ZARC(0.01, 50.0, 0.5)], r0=0.015)
+    >>> f = np.logspace(-3, 0, 7)
+    >>> kept, zm, rel = impedance_error(cell, f, 1.1 * cell.impedance(f), band=(1e-3, 0.1))
+    >>> kept.size, np.round(rel, 4)          # |Z - 1.1 Z| / |1.1 Z| = 0.1 / 1.1
+    (5, array([0.0909, 0.0909, 0.0909, 0.0909, 0.0909]))
+    """
+    if not isinstance(circuit, EquivalentCircuit):
+        model = getattr(circuit, "model", None)         # a FitResult of a circuit
+        if not isinstance(model, EquivalentCircuit):
+            what = type(circuit).__name__ + ("" if model is None else f" of a {type(model).__name__}")
+            raise ParameterError(f"`circuit` must be an EquivalentCircuit or a fohw.fit result of "
+                                 f"one; got {what}.")
+        circuit = model
+    f = check_array(f, "f")
+    if np.any(f <= 0):
+        raise ParameterError(f"`f` must be positive frequencies [Hz]; got {float(f[f <= 0][0])!r} at "
+                             f"index {int(np.flatnonzero(f <= 0)[0])}.")
+    try:
+        z = np.asarray(z, dtype=np.complex128).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError(f"`z` must be an array of complex impedances; got "
+                             f"{type(z).__name__}.") from None
+    if z.shape != f.shape:
+        raise ParameterError(f"`z` must have one value per frequency; got {z.shape[0]} values for "
+                             f"{f.shape[0]} frequencies.")
+    bad = np.flatnonzero(~np.isfinite(z) | (z == 0))
+    if bad.size:
+        k = int(bad[0])
+        raise ParameterError(f"`z` must be finite and non-zero at every frequency (a relative "
+                             f"error needs |z| > 0); got {z[k]!r} at index {k} (f = {f[k]:g} Hz), "
+                             f"{bad.size} such value(s) in all. Drop those frequencies.")
+    keep = np.ones(f.shape, dtype=bool)
+    if band is not None:
+        try:
+            low, high = (float(x) for x in band)
+        except (TypeError, ValueError):
+            raise ParameterError(f"`band` must be a pair (low, high) [Hz]; got {band!r}.") from None
+        if not low <= high:
+            raise ParameterError(f"`band` must be (low, high) with low <= high; got {band!r}.")
+        keep = (f >= low) & (f <= high)
+        if not keep.any():
+            raise ParameterError(f"`band` {band!r} holds none of the frequencies "
+                                 f"({f.min():g} to {f.max():g} Hz).")
+    model = circuit.impedance(f[keep], discrete=discrete, capacity=capacity, ocv_slope=ocv_slope)
+    return f[keep], model, np.abs(model - z[keep]) / np.abs(z[keep])
+
+
+def _same_map(a, b):
+    """Whether two OCV maps are one: the same object, equal tables, or ``==`` callables.
+
+    A function equals only itself; a bound method equals the same method of the same object
+    (``cell.ocv == cell.ocv``), though each access makes a new one.
+    """
+    if a is b:
+        return True
+    try:
+        return bool(a == b)
+    except (TypeError, ValueError):     # a callable whose == gives an array
+        return False
 
 
 def _check_rest(initial):
