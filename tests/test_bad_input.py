@@ -1045,7 +1045,7 @@ CLI = [
     ("fohw simulate", "issue 34 #32: one column for a two-input result (was '`u` must be 2-D')",
      lambda t: ["simulate", "--model", _two_input_file(t), "--input", _bad_file(t, "1\n2\n"),
                 "--column", "0"],
-     "--column gives 1 column(s), but "),
+     "--column needs 2 entries, one per input of "),
     ("fohw select", "issue 34 #33: --jobs 1000 (56.6 s for two candidates, 0.5 s with --jobs 1)",
      lambda t: ["select", "x.dat", "--na", "1", "--jobs", "1000"],
      "--jobs must be from 1 to"),
