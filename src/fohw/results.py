@@ -20,6 +20,7 @@ import numpy as np
 
 from ._validation import RANGE_TOLERANCE, check_array, check_inputs, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
+from .lr_statistic import order_test
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
@@ -716,22 +717,9 @@ class IdentificationResult(ResultPresentation):
         class it contains (``details["integer_sse"]``); None otherwise (use
         :func:`fohw.lr_test` with both fits). An order not identified under the null (the
         mixed class) has no p-value here (NaN): :func:`fohw.lr_test` with the record gives
-        Davies' bound or a bootstrap. See :func:`fohw.analysis.lrtest.order_test`.
+        Davies' bound or a bootstrap. See :func:`fohw.lr_statistic.order_test`.
         """
-        return REFITS["order_test"](self)
-
-    def order_interval(self, name, level=0.95, *, u=None, y=None):
-        """Profile-likelihood interval ``(low, high)`` of free order ``name``.
-
-        The result keeps no data: pass the record it was fitted to as ``u``, ``y``. See
-        :func:`fohw.profile_interval` (one-sided at a bound), which it calls.
-        """
-        return tuple(REFITS["profile_interval"](self, name, level, u=u, y=y))
-
-
-#: Analyses that refit, registered by their modules (``fohw.analysis.profile_interval``): they
-#: import the estimators, which import this module, so it cannot import them (no circles).
-REFITS = {}
+        return order_test(self)
 
 
 def _rebuild(cls, values):

@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
@@ -56,17 +55,24 @@ from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
 from ..estimators.fit import fit
 from ..exceptions import ConvergenceWarning, ParameterError
-from ..model.orders import Orders
-from ..model.structure import Structure
-from ..results import REFITS
+from ..lr_statistic import (
+    LRTest,
+    cancelled_orders,
+    check_result,
+    chi_bar_squared_sf,
+    criterion,
+    mixture,
+    null_orders,
+    order_bounds,
+    order_notes,
+    order_test,
+    statistic,
+)
 from .profile_interval import (
     check_data,
     check_fit_record,
     check_n_effective,
-    check_result,
-    criterion,
     is_fit,
-    order_bounds,
     orders_with,
     refit,
 )
@@ -78,88 +84,6 @@ __all__ = ["LRTest", "lr_test", "order_test", "davies_bound", "chi_bar_squared_s
 REFERENCES = ("auto", "mixture", "davies", "bootstrap")
 
 
-@dataclass(frozen=True)
-class LRTest:
-    """The likelihood-ratio test of a fractional class against its integer class.
-
-    Attributes
-    ----------
-    statistic : float
-        ``n log(RSS_restricted / RSS_full)`` (0 when the full fit is not better), ``n`` the
-        samples of the criterion or the ``n_effective`` given.
-    df : int
-        Parameters the full class adds (free orders and their coefficients).
-    pvalue : float
-        From :attr:`distribution`.
-    distribution : str
-        The reference used: ``"chi2 mixture 0.5*chi2_0 + 0.5*chi2_1"``, a chi-bar-squared with
-        binomial weights, ``"Davies bound"`` (an upper bound of the p-value) or
-        ``"bootstrap"``.
-    criterion : str
-        ``"one-step RSS"`` or ``"free-run RSS"``; with ``n_effective``, followed by
-        ``"; n_effective = <n> of <N> samples"``.
-    n : int
-        Samples of the criterion (``n_effective`` rounded, when given).
-    rss_restricted, rss_full : float
-    boundary, unidentified : tuple of str
-        The free orders on the boundary under the null, and those not identified there.
-    note : str
-        What the user must know: an order whose coefficients cancel (the log-memory limit of
-        the mixed class), a full fit worse than the restricted one, the bootstrap's Monte
-        Carlo error.
-    bootstrap : ndarray or None
-        The bootstrap statistics.
-    hypothesis : str
-        For fits of a kind other than the lagged one: the null, the values the restricted fit
-        holds fixed (e.g. ``"alpha = 1"``); empty for the lagged kind (orders 0).
-    """
-
-    statistic: float
-    df: int
-    pvalue: float
-    distribution: str
-    criterion: str
-    n: int
-    rss_restricted: float
-    rss_full: float
-    boundary: tuple = ()
-    unidentified: tuple = ()
-    note: str = ""
-    bootstrap: np.ndarray | None = field(default=None, repr=False)
-    hypothesis: str = ""
-
-    def __repr__(self):
-        return (f"LRTest(statistic={self.statistic:.4g}, df={self.df}, pvalue={self.pvalue:.4g}, "
-                f"distribution={self.distribution!r}, criterion={self.criterion!r}, n={self.n})")
-
-    def _repr_html_(self):
-        from .._repr import html_table
-
-        rows = [("LR statistic", self.statistic), ("degrees of freedom", self.df),
-                ("p-value", self.pvalue), ("reference", self.distribution),
-                ("criterion", f"{self.criterion}, n = {self.n}"),
-                ("RSS restricted / full", f"{self.rss_restricted:.6g} / {self.rss_full:.6g}")]
-        rows += [("on the boundary", ", ".join(self.boundary))] if self.boundary else []
-        rows += [("unidentified under the null", ", ".join(self.unidentified))] \
-            if self.unidentified else []
-        return html_table("LR test of the fractional orders against orders 0", ["", "value"], rows,
-                          notes=[self.note])
-
-    def __str__(self):
-        null = self.hypothesis or "the fractional orders against orders 0"
-        text = (f"LR test of {null}: LR = {self.statistic:.4g} "
-                f"({self.criterion}, n = {self.n}), df = {self.df}, p = {self.pvalue:.4g} "
-                f"({self.distribution}).")
-        return text + (f" {self.note}" if self.note else "")
-
-
-def chi_bar_squared_sf(x, k):
-    """``P(X > x)`` for ``X ~ sum_j C(k, j) 2^-k chi2_j`` (``chi2_0`` a point mass at 0)."""
-    x = float(x)
-    if x <= 0:
-        return 1.0
-    return float(sum(math.comb(k, j) * 0.5 ** k * scipy.stats.chi2.sf(x, j)
-                     for j in range(1, k + 1)))
 
 
 def davies_bound(statistic, s, profile):
@@ -177,75 +101,6 @@ def davies_bound(statistic, s, profile):
     return float(min(1.0, scipy.stats.chi2.sf(c, s) + tail))
 
 
-def null_orders(orders):
-    """``(restricted orders, boundary names, unidentified names)`` of a class with free orders.
-
-    Every free order is set to 0; a term that then duplicates an order-0 term of its lag is
-    dropped, and its free order is *unidentified* under the null (its coefficients are 0
-    there); the others are on the boundary ``nu = 0``.
-    """
-    unidentified = []
-
-    def branch(terms):
-        fixed0 = {(t.lag, t.input) for t in terms if not t.free and t.order == 0.0}
-        out = []
-        for t in terms:
-            if t.free and (t.lag, t.input) in fixed0:
-                if t.order not in unidentified:
-                    unidentified.append(t.order)
-                continue
-            out.append((t.lag, 0.0 if t.free else t.order, t.input))
-        return out
-
-    restricted = Orders([t[:2] for t in branch(orders.output)], branch(orders.input),
-                        inputs=orders.inputs or None)
-    boundary = tuple(n for n in orders.free if n not in unidentified)
-    return restricted, boundary, tuple(unidentified)
-
-
-def _prefixed(prefix, name):
-    """Theta's name of basis ``prefix`` (``p2``) of a term: ``p2b1``, or ``u2.p2b1``."""
-    head, dot, tail = name.rpartition(".")
-    return f"{head}{dot}{prefix}{tail}"
-
-
-def cancelled_orders(result, *, ratio=20.0, small=0.05):
-    """Notes on free orders that sit near 0 with terms cancelling an order-0 term.
-
-    In the mixed class, ``b0 Delta^0 x + b1 Delta^nu x`` with ``nu -> 0`` and ``b1 = -b0 =
-    beta / nu`` tends to ``-beta d/dnu Delta^nu x |_0``, a logarithmic long-memory term
-    (``sum_j x(k - j) / j``), not a fractional order. An order below ``small`` whose
-    ``nu``-term coefficient is more than ``ratio`` times the sum of the pair, with the
-    opposite sign, is reported so (``{order: note}``).
-    """
-    s = result.structure
-    names = s.layout.names
-    theta = dict(zip(names, result.theta))
-    notes = []
-    for letter, terms, term_names in (("a", s.orders.output, s.orders.a_names),
-                                      ("b", s.orders.input, s.orders.b_names)):
-        zero = {(t.lag, t.input): nm for t, nm in zip(terms, term_names)
-                if not t.free and t.order == 0.0}
-        for t, nm in zip(terms, term_names):
-            key = (t.lag, t.input)
-            if not t.free or key not in zero or result.orders[t.order] >= small:
-                continue
-            prefixes = [""] + [f"{'q' if letter == 'a' else 'p'}{j}" for j in range(2, 10)]
-            for pre in prefixes:
-                name_nu, name_0 = _prefixed(pre, nm), _prefixed(pre, zero[key])
-                if name_nu not in theta:
-                    continue
-                c_nu, c_0 = theta[name_nu], theta[name_0]
-                if abs(c_nu) > ratio * max(abs(c_nu + c_0), np.finfo(float).tiny) \
-                        and np.sign(c_nu) != np.sign(c_0):
-                    notes.append((t.order, f"{name_nu} = {c_nu:.3g}, {name_0} = {c_0:.3g}"))
-    out = {}
-    for order, pair in notes:
-        out.setdefault(order, []).append(pair)
-    return {order: (f"{order} = {result.orders[order]:.3g} with cancelling coefficients "
-                    f"({'; '.join(pairs)}): the fit uses the {order} -> 0 limit, a logarithmic "
-                    "long-memory term, not a fractional order.")
-            for order, pairs in out.items()}
 
 
 def _check_nested(restricted, full):
@@ -293,17 +148,6 @@ def _check_nested(restricted, full):
     return boundary, unidentified
 
 
-def _mixture(stat, k):
-    """``(pvalue, distribution)`` of the chi-bar-squared reference of ``k`` boundary orders."""
-    distribution = ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1" if k == 1 else
-                    f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_j (orders assumed "
-                    "uncorrelated)")
-    return chi_bar_squared_sf(stat, k), distribution
-
-
-def _statistic(rss_r, rss_f, n):
-    return max(n * math.log(rss_r / rss_f), 0.0)
-
 
 def _criterion_text(name, n_effective, n):
     """``LRTest.criterion``: the criterion, and the effective samples when they scale it."""
@@ -316,12 +160,12 @@ def _davies_profile(full, rss_r, n, u, y, n_grid):
     """``LR(nu)`` on a grid of the single unidentified order (and at the estimate)."""
     (name,) = full.orders
     est = float(full.orders[name])
-    stat_f = _statistic(rss_r, criterion(full)[0], n)
+    stat_f = statistic(rss_r, criterion(full)[0], n)
     prof = full.alpha_profile
     if full.method == "varpro" and prof is not None and len(full.orders) == 1 \
             and full.structure.past == "rest":
         grid, J = prof
-        values = [_statistic(rss_r, j * full.n_samples, n) for j in J]
+        values = [statistic(rss_r, j * full.n_samples, n) for j in J]
     else:
         u, y = check_data(full, u, y, "full")
         lo, hi = order_bounds(full, name)
@@ -330,7 +174,7 @@ def _davies_profile(full, rss_r, n, u, y, n_grid):
         for v in grid:
             fit = refit(full, u, y, orders=orders_with(full.structure.orders, {name: float(v)}),
                         start=(full.linear, full.nonlinear[1:]))
-            values.append(_statistic(rss_r, criterion(fit)[0], n))
+            values.append(statistic(rss_r, criterion(fit)[0], n))
     order = np.argsort(np.r_[grid, est])
     return np.r_[values, stat_f][order]
 
@@ -345,58 +189,9 @@ def _bootstrap_one(restricted, full, u, seed, noise_std):
     r = refit(restricted, u, y)
     f = refit(full, u, y)
     rss_r, n = criterion(r)
-    return _statistic(rss_r, criterion(f)[0], n)
+    return statistic(rss_r, criterion(f)[0], n)
 
 
-def _notes(full, rss_r, rss_f):
-    notes = list(cancelled_orders(full).values())
-    if rss_f > rss_r * (1 + 1e-9):
-        notes.append(f"The full fit's RSS ({rss_f:.6g}) is above the restricted one's "
-                     f"({rss_r:.6g}), though its class contains it: the full fit missed its "
-                     "optimum; the statistic is set to 0.")
-    return notes
-
-
-def order_test(full):
-    """:func:`lr_test` of an ``"output_error"`` fit against the integer fit its chain made.
-
-    The default chain of starts of ``method="output_error"`` fits the integer class the fit's
-    class contains (every order 0, as :func:`null_orders` builds it) and keeps its free-run RSS
-    in ``details["integer_sse"]``; this is the test :func:`lr_test` computes from that fit and
-    ``full``, without refitting (the same statistic, df and mixture). An order not identified
-    under the null (the mixed class) gets no p-value here (NaN): Davies' bound and the
-    bootstrap need the record (:func:`lr_test` with ``u``, ``y``).
-
-    Returns
-    -------
-    LRTest or None
-        None when ``full`` has no ``details["integer_sse"]`` (another method, a given start,
-        no free order, a bound of an order above 0, or a series output map, whose fit starts
-        from the fit without the map instead: use :func:`lr_test` with both fits).
-    """
-    full = check_result(full, "full")
-    if "integer_sse" not in full.details or not full.orders:
-        return None
-    if any(order_bounds(full, name)[0] != 0.0 for name in full.orders):
-        return None
-    fs = full.structure
-    null, boundary, unidentified = null_orders(fs.orders)
-    rs = Structure(null, fs.f_basis, fs.g_basis, fs.offset, fs.past, fs.dt, fs.output_map)
-    rss_r = float(full.details["integer_sse"])
-    rss_f, n = criterion(full)
-    stat = _statistic(rss_r, rss_f, n)
-    df = fs.n_linear - rs.n_linear + fs.n_nonlinear - rs.n_nonlinear
-    notes = _notes(full, rss_r, rss_f)
-    if unidentified:
-        pvalue, distribution = math.nan, "none without the record"
-        notes.append(f"The order(s) {list(unidentified)} are not identified under the null "
-                     "(Davies 1977): fohw.lr_test(restricted, full, u=u, y=y) gives Davies' "
-                     "bound or a bootstrap p-value.")
-    else:
-        pvalue, distribution = _mixture(stat, len(boundary))
-    return LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
-                  criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
-                  boundary=boundary, unidentified=unidentified, note=" ".join(notes))
 
 
 def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=199,
@@ -485,10 +280,10 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         raise ParameterError("`n_effective` does not apply with reference='bootstrap': the "
                              "bootstrap records have white noise and calibrate the statistic "
                              "themselves; use 'mixture' or 'davies' with n_effective.")
-    stat = _statistic(rss_r, rss_f, n)
+    stat = statistic(rss_r, rss_f, n)
     df = (full.structure.n_linear - restricted.structure.n_linear
           + full.structure.n_nonlinear - restricted.structure.n_nonlinear)
-    notes = _notes(full, rss_r, rss_f)
+    notes = order_notes(full, rss_r, rss_f)
     if reference == "auto":
         reference = "davies" if unidentified else "mixture"
     boot = None
@@ -498,7 +293,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                                  f"{list(unidentified)} are not identified under the null (their "
                                  "coefficients are 0 there; Davies 1977); use 'davies' or "
                                  "'bootstrap'.")
-        pvalue, distribution = _mixture(stat, len(boundary))
+        pvalue, distribution = mixture(stat, len(boundary))
     elif reference == "davies":
         if len(unidentified) != 1 or len(full.orders) != 1:
             raise ParameterError("`reference='davies'` is implemented for one free order that is "
@@ -684,12 +479,12 @@ def _lr_fits(restricted, full, reference, u, y, n_effective):
                 "refit it from the restricted estimate); the statistic is set to 0.")
         notes.append(text)
         warnings.warn(text, ConvergenceWarning, stacklevel=3)
-    stat = _statistic(rss_r, rss_f, n)
+    stat = statistic(rss_r, rss_f, n)
     df, k = len(fixed), len(boundary)
     if k == 0:
         pvalue, distribution = float(scipy.stats.chi2.sf(stat, df)), f"chi2_{df}"
     elif k == df:
-        pvalue, distribution = _mixture(stat, k)
+        pvalue, distribution = mixture(stat, k)
     else:       # Self & Liang: k values on their bounds, df - k inside
         pvalue = float(sum(math.comb(k, j) * 0.5 ** k * scipy.stats.chi2.sf(stat, df - k + j)
                            for j in range(k + 1)))
@@ -702,4 +497,3 @@ def _lr_fits(restricted, full, reference, u, y, n_effective):
                   hypothesis=", ".join(f"{name} = {rp[name].value:g}" for name in fixed))
 
 
-REFITS["order_test"] = order_test            # IdentificationResult.order_test calls it

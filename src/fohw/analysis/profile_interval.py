@@ -35,39 +35,15 @@ from ..estimators.fit import check_record, data_digest, fit
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
+from ..lr_statistic import LIKELIHOOD_METHODS, check_result, criterion, order_bounds
 from ..model.orders import Orders
-from ..results import REFITS, IdentificationResult
+from ..results import IdentificationResult
 
 __all__ = ["ProfileInterval", "profile_interval", "refit", "orders_with", "criterion",
            "check_data", "check_fit_record", "check_n_effective", "fit_weight", "sse_with_fixed",
            "LIKELIHOOD_METHODS"]
 
-#: Methods whose estimate is a least-squares (Gaussian likelihood) optimum.
-LIKELIHOOD_METHODS = ("varpro", "structured", "output_error")
 
-
-def check_result(result, name):
-    """``result`` must be an IdentificationResult of a least-squares method."""
-    if not isinstance(result, IdentificationResult):
-        raise ParameterError(f"`{name}` must be an IdentificationResult (from fohw.identify); "
-                             f"got {type(result).__name__}.")
-    if result.method not in LIKELIHOOD_METHODS:
-        raise ParameterError(f"`{name}` was fitted by method {result.method!r}, which is not a "
-                             f"least-squares optimum; likelihood-ratio tests and profile "
-                             f"intervals need one of {LIKELIHOOD_METHODS}.")
-    return result
-
-
-def criterion(result):
-    """``(rss, n)``: the fit's residual sum of squares and the samples it covers.
-
-    The one-step RSS ``N J`` for ``"varpro"`` and ``"structured"``; the free-run RSS
-    (``details["simulation_sse"]``) over ``N - n_init`` samples for ``"output_error"``.
-    """
-    if result.method == "output_error":
-        n = result.n_samples - int(result.options.get("n_init", 0))
-        return float(result.details["simulation_sse"]), n
-    return float(result.J) * result.n_samples, result.n_samples
 
 
 def check_data(result, u, y, name):
@@ -211,13 +187,6 @@ def refit(result, u, y, *, orders=None, start=None):
                         operating_point=result.operating_point, past=s.past, dt=s.dt,
                         alpha_bounds=bounds, options=options, nk=s.nk)
 
-
-def order_bounds(result, name):
-    """``(low, high)`` of free order ``name`` in the fit's ``alpha_bounds``."""
-    bounds = result.options.get("alpha_bounds", (0.0, 1.0))
-    if isinstance(bounds, dict):
-        bounds = bounds[name]
-    return float(bounds[0]), float(bounds[1])
 
 
 @dataclass(frozen=True)
@@ -444,4 +413,3 @@ def _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective):
     return _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol)
 
 
-REFITS["profile_interval"] = profile_interval      # IdentificationResult.order_interval calls it

@@ -1,0 +1,281 @@
+"""The likelihood-ratio statistic of the fractional orders, without refitting (its result type).
+
+:class:`LRTest` is the result of :func:`fohw.lr_test`; :func:`order_test` computes the test of
+an ``"output_error"`` fit against the integer fit its chain of starts made
+(``details["integer_sse"]``), which ``result.order_test()`` and ``summary()`` report. The
+pieces are pure reads of a result (its criterion, its orders' bounds, the null class of its
+orders, the chi-bar-squared reference), so they live below the analyses that refit
+(:mod:`fohw.analysis.lrtest`, :mod:`fohw.analysis.profile_interval`), which use them too.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy  # submodules (scipy.stats, ...) load on first use: import time
+
+from .exceptions import ParameterError
+from .model.orders import Orders
+from .model.structure import Structure
+
+__all__ = ["LRTest", "order_test", "chi_bar_squared_sf", "null_orders", "cancelled_orders",
+           "mixture", "statistic", "order_notes", "check_result", "criterion", "order_bounds",
+           "LIKELIHOOD_METHODS"]
+
+
+#: Methods whose estimate is a least-squares (Gaussian likelihood) optimum.
+LIKELIHOOD_METHODS = ("varpro", "structured", "output_error")
+
+
+def check_result(result, name):
+    """``result`` must be an IdentificationResult of a least-squares method."""
+    if not (hasattr(result, "structure") and hasattr(result, "method")):
+        raise ParameterError(f"`{name}` must be an IdentificationResult (from fohw.identify); "
+                             f"got {type(result).__name__}.")
+    if result.method not in LIKELIHOOD_METHODS:
+        raise ParameterError(f"`{name}` was fitted by method {result.method!r}, which is not a "
+                             f"least-squares optimum; likelihood-ratio tests and profile "
+                             f"intervals need one of {LIKELIHOOD_METHODS}.")
+    return result
+
+
+def criterion(result):
+    """``(rss, n)``: the fit's residual sum of squares and the samples it covers.
+
+    The one-step RSS ``N J`` for ``"varpro"`` and ``"structured"``; the free-run RSS
+    (``details["simulation_sse"]``) over ``N - n_init`` samples for ``"output_error"``.
+    """
+    if result.method == "output_error":
+        n = result.n_samples - int(result.options.get("n_init", 0))
+        return float(result.details["simulation_sse"]), n
+    return float(result.J) * result.n_samples, result.n_samples
+
+
+def order_bounds(result, name):
+    """``(low, high)`` of free order ``name`` in the fit's ``alpha_bounds``."""
+    bounds = result.options.get("alpha_bounds", (0.0, 1.0))
+    if isinstance(bounds, dict):
+        bounds = bounds[name]
+    return float(bounds[0]), float(bounds[1])
+
+
+@dataclass(frozen=True)
+class LRTest:
+    """The likelihood-ratio test of a fractional class against its integer class.
+
+    Attributes
+    ----------
+    statistic : float
+        ``n log(RSS_restricted / RSS_full)`` (0 when the full fit is not better), ``n`` the
+        samples of the criterion or the ``n_effective`` given.
+    df : int
+        Parameters the full class adds (free orders and their coefficients).
+    pvalue : float
+        From :attr:`distribution`.
+    distribution : str
+        The reference used: ``"chi2 mixture 0.5*chi2_0 + 0.5*chi2_1"``, a chi-bar-squared with
+        binomial weights, ``"Davies bound"`` (an upper bound of the p-value) or
+        ``"bootstrap"``.
+    criterion : str
+        ``"one-step RSS"`` or ``"free-run RSS"``; with ``n_effective``, followed by
+        ``"; n_effective = <n> of <N> samples"``.
+    n : int
+        Samples of the criterion (``n_effective`` rounded, when given).
+    rss_restricted, rss_full : float
+    boundary, unidentified : tuple of str
+        The free orders on the boundary under the null, and those not identified there.
+    note : str
+        What the user must know: an order whose coefficients cancel (the log-memory limit of
+        the mixed class), a full fit worse than the restricted one, the bootstrap's Monte
+        Carlo error.
+    bootstrap : ndarray or None
+        The bootstrap statistics.
+    hypothesis : str
+        For fits of a kind other than the lagged one: the null, the values the restricted fit
+        holds fixed (e.g. ``"alpha = 1"``); empty for the lagged kind (orders 0).
+    """
+
+    statistic: float
+    df: int
+    pvalue: float
+    distribution: str
+    criterion: str
+    n: int
+    rss_restricted: float
+    rss_full: float
+    boundary: tuple = ()
+    unidentified: tuple = ()
+    note: str = ""
+    bootstrap: np.ndarray | None = field(default=None, repr=False)
+    hypothesis: str = ""
+
+    def __repr__(self):
+        return (f"LRTest(statistic={self.statistic:.4g}, df={self.df}, pvalue={self.pvalue:.4g}, "
+                f"distribution={self.distribution!r}, criterion={self.criterion!r}, n={self.n})")
+
+    def _repr_html_(self):
+        from ._repr import html_table
+
+        rows = [("LR statistic", self.statistic), ("degrees of freedom", self.df),
+                ("p-value", self.pvalue), ("reference", self.distribution),
+                ("criterion", f"{self.criterion}, n = {self.n}"),
+                ("RSS restricted / full", f"{self.rss_restricted:.6g} / {self.rss_full:.6g}")]
+        rows += [("on the boundary", ", ".join(self.boundary))] if self.boundary else []
+        rows += [("unidentified under the null", ", ".join(self.unidentified))] \
+            if self.unidentified else []
+        return html_table("LR test of the fractional orders against orders 0", ["", "value"], rows,
+                          notes=[self.note])
+
+    def __str__(self):
+        null = self.hypothesis or "the fractional orders against orders 0"
+        text = (f"LR test of {null}: LR = {self.statistic:.4g} "
+                f"({self.criterion}, n = {self.n}), df = {self.df}, p = {self.pvalue:.4g} "
+                f"({self.distribution}).")
+        return text + (f" {self.note}" if self.note else "")
+
+
+def chi_bar_squared_sf(x, k):
+    """``P(X > x)`` for ``X ~ sum_j C(k, j) 2^-k chi2_j`` (``chi2_0`` a point mass at 0)."""
+    x = float(x)
+    if x <= 0:
+        return 1.0
+    return float(sum(math.comb(k, j) * 0.5 ** k * scipy.stats.chi2.sf(x, j)
+                     for j in range(1, k + 1)))
+
+
+def null_orders(orders):
+    """``(restricted orders, boundary names, unidentified names)`` of a class with free orders.
+
+    Every free order is set to 0; a term that then duplicates an order-0 term of its lag is
+    dropped, and its free order is *unidentified* under the null (its coefficients are 0
+    there); the others are on the boundary ``nu = 0``.
+    """
+    unidentified = []
+
+    def branch(terms):
+        fixed0 = {(t.lag, t.input) for t in terms if not t.free and t.order == 0.0}
+        out = []
+        for t in terms:
+            if t.free and (t.lag, t.input) in fixed0:
+                if t.order not in unidentified:
+                    unidentified.append(t.order)
+                continue
+            out.append((t.lag, 0.0 if t.free else t.order, t.input))
+        return out
+
+    restricted = Orders([t[:2] for t in branch(orders.output)], branch(orders.input),
+                        inputs=orders.inputs or None)
+    boundary = tuple(n for n in orders.free if n not in unidentified)
+    return restricted, boundary, tuple(unidentified)
+
+
+def _prefixed(prefix, name):
+    """Theta's name of basis ``prefix`` (``p2``) of a term: ``p2b1``, or ``u2.p2b1``."""
+    head, dot, tail = name.rpartition(".")
+    return f"{head}{dot}{prefix}{tail}"
+
+
+def cancelled_orders(result, *, ratio=20.0, small=0.05):
+    """Notes on free orders that sit near 0 with terms cancelling an order-0 term.
+
+    In the mixed class, ``b0 Delta^0 x + b1 Delta^nu x`` with ``nu -> 0`` and ``b1 = -b0 =
+    beta / nu`` tends to ``-beta d/dnu Delta^nu x |_0``, a logarithmic long-memory term
+    (``sum_j x(k - j) / j``), not a fractional order. An order below ``small`` whose
+    ``nu``-term coefficient is more than ``ratio`` times the sum of the pair, with the
+    opposite sign, is reported so (``{order: note}``).
+    """
+    s = result.structure
+    names = s.layout.names
+    theta = dict(zip(names, result.theta))
+    notes = []
+    for letter, terms, term_names in (("a", s.orders.output, s.orders.a_names),
+                                      ("b", s.orders.input, s.orders.b_names)):
+        zero = {(t.lag, t.input): nm for t, nm in zip(terms, term_names)
+                if not t.free and t.order == 0.0}
+        for t, nm in zip(terms, term_names):
+            key = (t.lag, t.input)
+            if not t.free or key not in zero or result.orders[t.order] >= small:
+                continue
+            prefixes = [""] + [f"{'q' if letter == 'a' else 'p'}{j}" for j in range(2, 10)]
+            for pre in prefixes:
+                name_nu, name_0 = _prefixed(pre, nm), _prefixed(pre, zero[key])
+                if name_nu not in theta:
+                    continue
+                c_nu, c_0 = theta[name_nu], theta[name_0]
+                if abs(c_nu) > ratio * max(abs(c_nu + c_0), np.finfo(float).tiny) \
+                        and np.sign(c_nu) != np.sign(c_0):
+                    notes.append((t.order, f"{name_nu} = {c_nu:.3g}, {name_0} = {c_0:.3g}"))
+    out = {}
+    for order, pair in notes:
+        out.setdefault(order, []).append(pair)
+    return {order: (f"{order} = {result.orders[order]:.3g} with cancelling coefficients "
+                    f"({'; '.join(pairs)}): the fit uses the {order} -> 0 limit, a logarithmic "
+                    "long-memory term, not a fractional order.")
+            for order, pairs in out.items()}
+
+
+def mixture(stat, k):
+    """``(pvalue, distribution)`` of the chi-bar-squared reference of ``k`` boundary orders."""
+    distribution = ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1" if k == 1 else
+                    f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_j (orders assumed "
+                    "uncorrelated)")
+    return chi_bar_squared_sf(stat, k), distribution
+
+
+def statistic(rss_r, rss_f, n):
+    """The LR statistic ``n log(rss_r / rss_f)``, 0 when the full fit is not better."""
+    return max(n * math.log(rss_r / rss_f), 0.0)
+
+
+def order_notes(full, rss_r, rss_f):
+    """What the user must know about a test's two fits (cancelled orders; a full fit above)."""
+    notes = list(cancelled_orders(full).values())
+    if rss_f > rss_r * (1 + 1e-9):
+        notes.append(f"The full fit's RSS ({rss_f:.6g}) is above the restricted one's "
+                     f"({rss_r:.6g}), though its class contains it: the full fit missed its "
+                     "optimum; the statistic is set to 0.")
+    return notes
+
+
+def order_test(full):
+    """:func:`lr_test` of an ``"output_error"`` fit against the integer fit its chain made.
+
+    The default chain of starts of ``method="output_error"`` fits the integer class the fit's
+    class contains (every order 0, as :func:`null_orders` builds it) and keeps its free-run RSS
+    in ``details["integer_sse"]``; this is the test :func:`lr_test` computes from that fit and
+    ``full``, without refitting (the same statistic, df and mixture). An order not identified
+    under the null (the mixed class) gets no p-value here (NaN): Davies' bound and the
+    bootstrap need the record (:func:`lr_test` with ``u``, ``y``).
+
+    Returns
+    -------
+    LRTest or None
+        None when ``full`` has no ``details["integer_sse"]`` (another method, a given start,
+        no free order, a bound of an order above 0, or a series output map, whose fit starts
+        from the fit without the map instead: use :func:`lr_test` with both fits).
+    """
+    full = check_result(full, "full")
+    if "integer_sse" not in full.details or not full.orders:
+        return None
+    if any(order_bounds(full, name)[0] != 0.0 for name in full.orders):
+        return None
+    fs = full.structure
+    null, boundary, unidentified = null_orders(fs.orders)
+    rs = Structure(null, fs.f_basis, fs.g_basis, fs.offset, fs.past, fs.dt, fs.output_map)
+    rss_r = float(full.details["integer_sse"])
+    rss_f, n = criterion(full)
+    stat = statistic(rss_r, rss_f, n)
+    df = fs.n_linear - rs.n_linear + fs.n_nonlinear - rs.n_nonlinear
+    notes = order_notes(full, rss_r, rss_f)
+    if unidentified:
+        pvalue, distribution = math.nan, "none without the record"
+        notes.append(f"The order(s) {list(unidentified)} are not identified under the null "
+                     "(Davies 1977): fohw.lr_test(restricted, full, u=u, y=y) gives Davies' "
+                     "bound or a bootstrap p-value.")
+    else:
+        pvalue, distribution = mixture(stat, len(boundary))
+    return LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
+                  criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
+                  boundary=boundary, unidentified=unidentified, note=" ".join(notes))
