@@ -20,7 +20,6 @@ from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
 from .estimators.circuit_fit import CircuitFit, fit_circuit
 from .estimators.fit import fit
-from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
     HybridOptions,
@@ -55,7 +54,7 @@ from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
 from .model.fotf import FractionalTF
-from .model.fotf_hw import FractionalHW, OutputMap
+from .model.fotf_hw import FractionalHW
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
@@ -161,10 +160,6 @@ __all__ = [
     "profile_interval",
     "fractional_tf_crb",
     "FractionalHW",
-    "FractionalHWFit",
-    "OutputMap",
-    "fit_fractional_hw",
-    "fractional_hw_crb",
     "Saturation",
     "DeadZone",
     "PiecewiseLinear",
