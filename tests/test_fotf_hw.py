@@ -46,6 +46,7 @@ MAPS = [
     ("identity", None, (), lambda x: x),
     ("polynomial", fohw.PolynomialMap(3), (0.4, -0.3), lambda x: x + 0.4 * x ** 2 - 0.3 * x ** 3),
     ("saturation", fohw.Saturation(), None, None),       # limits at the 20 % and 80 % quantiles of x
+    ("deadzone", fohw.DeadZone(), None, None),           # ends at the 30 % and 70 % quantiles of x
 ]
 
 
@@ -55,11 +56,12 @@ def test_simulation_equals_the_literal_model_at_every_sample(kind, hmap, params,
     num, num_orders, den, den_orders = [1.0, 0.3], [0.0, 0.5], [2.0, 0.7, 1.0], [1.3, 0.6, 0.0]
     G = fohw.FractionalTF(num, num_orders, den, den_orders, delay=2 * h)
     u = np.random.default_rng(0).uniform(-1, 1, 400)
-    if kind == "saturation":
+    if kind in ("saturation", "deadzone"):
         x = fohw.FractionalHW(G, p=[1.0, 0.5, -0.2]).simulate(u, dt=h)
-        lo, hi = np.quantile(x, [0.2, 0.8])
+        lo, hi = np.quantile(x, [0.2, 0.8] if kind == "saturation" else [0.3, 0.7])
         params = (lo, hi)
-        h_map = (lambda v: min(max(v, lo), hi))   # noqa: E731
+        h_map = ((lambda v: min(max(v, lo), hi)) if kind == "saturation"    # noqa: E731
+                 else (lambda v: v - hi if v > hi else v - lo if v < lo else 0.0))
     model = fohw.FractionalHW(G, p=[1.0, 0.5, -0.2], output_map=hmap,
                               output_params=params if hmap is not None else None)
     y = model.simulate(u, dt=h)
@@ -68,6 +70,8 @@ def test_simulation_equals_the_literal_model_at_every_sample(kind, hmap, params,
     assert np.max(np.abs(y - ref)) <= 1e-12 * scale
     if kind == "saturation":           # the limits are reached, so the test covers them
         assert np.sum(ref == lo) > 50 and np.sum(ref == hi) > 50
+    if kind == "deadzone":             # samples inside the zone and on both sides
+        assert np.sum(ref == 0.0) > 50 and np.sum(ref > 0) > 50 and np.sum(ref < 0) > 50
 
 
 def test_states_are_the_three_blocks():
@@ -100,6 +104,20 @@ def test_parameters_names_defaults_and_round_trip():
     assert back == new and back.parameters == new.parameters
     u = np.random.default_rng(2).uniform(-1, 1, 200)
     np.testing.assert_array_equal(back.simulate(u), new.simulate(u))
+
+
+def test_files_refuse_code_and_bad_configs():
+    """A custom basis is code: its model is written (names only) but not rebuilt from a file."""
+    G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
+    custom = fohw.FractionalHW(G, p=[1.0, 0.5], f_basis=[np.tanh, np.sin], dt=0.1)
+    d = json.loads(json.dumps(custom.to_dict()))
+    assert d["config"]["f_basis"] == {"kind": "custom", "names": ["tanh", "sin"]}
+    with pytest.raises(ParameterError, match="`f_basis`.*custom code"):
+        fohw.Model.from_dict(d)
+    d = fohw.FractionalHW(G, dt=0.1).to_dict()
+    d["config"]["n_den"] = 0
+    with pytest.raises(ParameterError, match="`n_den` must be at least 1"):
+        fohw.Model.from_dict(d)
 
 
 def _fd(model, u, eps=1e-6):

@@ -36,9 +36,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
 from .base import Model
-from .basis import Basis, as_basis, polynomial_basis
+from .basis import Basis, as_basis
 from .fotf import FractionalTF, delay_samples, operator_weights
 from .gl import gl_weights, gl_weights_derivative
 from .output_map import (
@@ -53,7 +54,7 @@ from .output_map import (
 from .parameters import ORDER_RANGE, Parameter, Parameters
 from .series_division import causal_product, series_reciprocal
 
-__all__ = ["FractionalHW", "NUM_ORDER_RANGE"]
+__all__ = ["FractionalHW", "NUM_ORDER_RANGE", "tf_sensitivities"]
 
 #: Default bounds of a numerator order of ``G`` (it may be negative: a fractional integral).
 NUM_ORDER_RANGE = (-ORDER_RANGE[1], ORDER_RANGE[1])
@@ -433,13 +434,12 @@ class FractionalHW(Model):
     def _solve_coefficients(self, params, fu, y, h) -> FractionalHW:
         t = params.tie_matrix()
         names = list(params)
-        b, beta, a, alpha, _, _ = self._names()
+        b, _, a, _, _, _ = self._names()
         coef_rows = [names.index(n) for n in b + a]
-        order_rows = [names.index(n) for n in beta + alpha]
         free = params.free_names
+        other_rows = [i for i in range(len(names)) if i not in coef_rows]
         cols = np.flatnonzero(np.any(t[coef_rows] != 0, axis=0))
-        if cols.size == 0 or np.any(t[np.ix_(order_rows, cols)] != 0) or \
-                np.any(t[np.ix_([i for i in range(len(names)) if i not in coef_rows], cols)] != 0):
+        if cols.size == 0 or np.any(t[np.ix_(other_rows, cols)] != 0):    # tied to a non-coefficient
             return self
         n = y.size
         wd = _shifted(self.p @ fu, delay_samples(self._delay, h))
@@ -500,10 +500,12 @@ class FractionalHW(Model):
             raise ParameterError(f"a FractionalHW config needs exactly {sorted(known)}; got "
                                  f"{sorted(config)}.")
         basis = config["f_basis"]
-        if not isinstance(basis, dict) or basis.get("kind") != "polynomial":
+        if isinstance(basis, dict) and basis.get("kind") == "custom":
             raise ParameterError(f"`f_basis` {basis!r} is custom code, which fohw never stores: "
                                  "rebuild the FractionalHW with its basis and call with_parameters.")
-        basis = polynomial_basis(basis["degree"])
+        basis = Basis.from_dict(basis, name="f_basis")
+        for key in ("n_num", "n_den"):
+            check_int(config[key], key, minimum=1)
         spec = config["output_map"]
         if isinstance(spec, dict) and spec.get("kind") == CustomMap.kind:
             raise ParameterError(f"`output_map` {spec!r} is custom code, which fohw never stores: "
