@@ -349,6 +349,9 @@ def test_summary_and_frequency_view():
     fit = fohw.fit(_start("polynomial", y), u, y)
     text = fit.summary()
     assert "alpha0" in text and "h_c2" in text
+    back = fohw.FitResult.from_dict(json.loads(json.dumps(fit.to_dict())))
+    assert back.model == fit.model and back.sse == fit.sse
+    np.testing.assert_array_equal(back.simulate(u), fit.simulate(u))
     w = np.array([0.1, 1.0, 10.0])
     np.testing.assert_array_equal(fit.model.frequency_response(w), fit.model.G.frequency_response(w))
     assert fit.model.linearised_gain() == 1.0
