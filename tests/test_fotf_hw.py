@@ -371,3 +371,17 @@ def test_every_lagged_linear_block_is_a_gl_discretised_tf_at_the_same_dt(alpha):
     u = np.random.default_rng(6).uniform(-1, 1, 3000)
     y1, y2 = ftf.simulate(u, dt=h), fohw.simulate(lagged, u)
     assert np.max(np.abs(y1 - y2)) <= 1e-12 * np.max(np.abs(y2))
+
+
+def test_linear_start_solves_a_noise_free_record_at_the_true_orders():
+    """Identity map, noise-free record, orders at the truth: the equation error is exact there
+    (sum a_i W_alpha_i y = sum b_j W_beta_j fbar(u) holds sample by sample), and x is linear in
+    b ⊗ p, so the start is the truth itself (to rounding), from coefficients far from it."""
+    G = fohw.FractionalTF([1.5, 0.4], [0.0, 0.7], [2.0, 1.0], [0.6, 0.0])
+    truth = fohw.FractionalHW(G, p=[1.0, 0.3, -0.1], dt=0.05)
+    u = np.random.default_rng(8).uniform(-1.5, 1.5, 800)
+    y = truth.simulate(u)
+    wrong = truth.with_parameters({"b0": 0.2, "b1": -1.0, "a0": 0.5, "p2": 0.0, "p3": 0.0})
+    start = wrong.linear_start(u, y)
+    got, want = start.parameters.valuesdict(), truth.parameters.valuesdict()
+    assert max(abs(got[n] - want[n]) for n in want) < 1e-8, got

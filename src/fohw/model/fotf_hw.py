@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.fft
+import scipy.optimize
 
 from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
@@ -52,9 +53,14 @@ from .output_map import (
     output_map_from_dict,
 )
 from .parameters import ORDER_RANGE, Parameter, Parameters
-from .series_division import causal_product, series_reciprocal
+from .series_division import causal_product, series_divide, series_reciprocal
 
 __all__ = ["FractionalHW", "NUM_ORDER_RANGE", "tf_sensitivities"]
+
+#: Rounds of :meth:`FractionalHW.linear_start` (G's coefficients, then b and p, then the map).
+ROUNDS = 2
+#: Simulation budget of each coefficient fit in :meth:`FractionalHW.linear_start`.
+START_NFEV = 30
 
 #: Default bounds of a numerator order of ``G`` (it may be negative: a fractional integral).
 NUM_ORDER_RANGE = (-ORDER_RANGE[1], ORDER_RANGE[1])
@@ -263,6 +269,11 @@ class FractionalHW(Model):
         return self._dt
 
     @property
+    def terms(self):
+        """``(num, num_orders, den, den_orders)`` of ``G`` as the parameters hold them (unmerged)."""
+        return self._num, self._num_orders, self._den, self._den_orders
+
+    @property
     def G(self) -> FractionalTF:
         """The linear block as a :class:`fohw.FractionalTF` (equal orders merged)."""
         if self._G is None:
@@ -376,7 +387,7 @@ class FractionalHW(Model):
         yhat = self._map(x)
         wd = _shifted(w, delay_samples(self._delay, h))
         with np.errstate(over="ignore", invalid="ignore"):
-            jg = tf_sensitivities(self._num, self._num_orders, self._den, self._den_orders, wd, x, h)
+            jg = tf_sensitivities(*self.terms, wd, x, h)
         if self.output_map is None:
             dh = np.ones_like(x)
             jh = np.zeros((x.size, 0))
@@ -398,14 +409,18 @@ class FractionalHW(Model):
         return [self]
 
     def linear_start(self, u, y):
-        """``G``'s coefficients by equation error, ``p`` and the map by linear least squares.
+        """A start with the orders held: ``G``'s coefficients, ``p`` and the map solved for ``y``.
 
-        With the orders held: ``G``'s free coefficients from the linear equation error
-        ``sum_i a_i W_{alpha_i} y - sum_j b_j W_{beta_j} fbar(u)`` (the map taken as the
-        identity), then ``p2…`` by least squares on the columns ``G f_j(u)``; twice when there
-        is a ``p`` (``G`` once more from the new ``fbar(u)``); then a polynomial map's free
-        coefficients by least squares on ``x^k``, any other map's free parameters at its start
-        for the record (a saturation's limits at the range of ``y``). None where a step fails.
+        Twice when there is a ``p`` (once otherwise): ``G``'s free coefficients by simulation
+        error on ``fbar(u) -> y`` (the map taken as the identity; from the better of the current
+        values and the linear equation error ``sum_i a_i W_{alpha_i} y - sum_j b_j W_{beta_j}
+        fbar(u)``, at most :data:`START_NFEV` simulations), then the numerator and ``p2…``
+        together by linear least squares (``x`` is linear in ``b ⊗ p`` for a fixed denominator;
+        their best rank-one split, ``p_1 = 1``). Then a polynomial map's free coefficients by
+        least squares on ``x^k``, any other map's free parameters at its start for the record (a
+        saturation's limits at the range of ``y``). None where a step fails. This is the start
+        the kind's own fitter made before ``fohw.fit`` (a fit of ``G`` then the maps at each point
+        of the order grid), with a linear step where it had a second nonlinear one.
         """
         try:
             with np.errstate(all="ignore"):
@@ -417,11 +432,70 @@ class FractionalHW(Model):
         params = self.parameters
         h = self._need_dt()
         fu = self.f_basis.evaluate(u, "u")
-        steps = [FractionalHW._solve_coefficients, FractionalHW._solve_p] * (2 if fu.shape[0] > 1 else 1)
         model = self
-        for step in steps + [FractionalHW._solve_map]:
-            model = step(model, params, fu, y, h)
-        return model
+        for _ in range(ROUNDS if fu.shape[0] > 1 else 1):
+            model = FractionalHW._fit_coefficients(model, params, fu, y, h)
+            model = FractionalHW._solve_p(model, params, fu, y, h)
+        return FractionalHW._solve_map(model, params, fu, y, h)
+
+    def _sse(self, fu, y, h):
+        try:
+            r = y - self.G.simulate(self.p @ fu, h)
+        except (ParameterError, ArithmeticError):
+            return np.inf
+        return float(r @ r) if np.all(np.isfinite(r)) else np.inf
+
+    def _fit_coefficients(self, params, fu, y, h) -> FractionalHW:
+        """``G``'s free coefficients by simulation error on ``fbar(u) -> y``, orders held.
+
+        From the better of the model's and the equation error's; the map taken as the identity.
+        """
+        candidates = [self, FractionalHW._solve_coefficients(self, params, fu, y, h),
+                      FractionalHW._solve_joint(self, params, fu, y, h)]
+        model = min(candidates, key=lambda m: FractionalHW._sse(m, fu, y, h))
+        b, _, a, _, _, _ = self._names()
+        names = [n for n in b + a if params[n].free]
+        if not names or any(p.tie is not None and p.tie[0] in names for p in params.values()):
+            return model
+        cols = [b.index(n) if n in b else 2 * len(b) + a.index(n) for n in names]  # tf_sensitivities'
+        lower = np.array([params[n].bounds[0] for n in names])
+        upper = np.array([params[n].bounds[1] for n in names])
+        w = model.p @ fu
+        wd = _shifted(w, delay_samples(self._delay, h))
+        penalty = np.full(y.size, 1e4 * max(float(np.max(np.abs(y))), 1e-300))
+        cache = {}
+
+        def at(q):
+            key = q.tobytes()
+            if key not in cache:
+                cache.clear()
+                cache[key] = model.with_parameters(dict(zip(names, q.tolist())))
+            return cache[key]
+
+        def residual(q):
+            try:
+                x = at(q).G.simulate(w, h)
+            except (ParameterError, ArithmeticError):
+                return penalty
+            return y - x if np.all(np.isfinite(x)) and np.max(np.abs(x)) < 1e8 * penalty[0] \
+                else penalty
+
+        def jacobian(q):
+            g = at(q)
+            try:
+                x = g.G.simulate(w, h)
+                jac = tf_sensitivities(*g.terms, wd, x, h)
+            except (ParameterError, ArithmeticError):
+                return np.zeros((y.size, len(names)))
+            jac = -jac[:, cols]
+            return jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
+
+        q0 = np.clip([model.parameters[n].value for n in names], lower, upper)
+        res = scipy.optimize.least_squares(residual, q0, jac=jacobian, bounds=(lower, upper),
+                                           method="trf", x_scale="jac", max_nfev=START_NFEV)
+        if not 2.0 * res.cost < FractionalHW._sse(model, fu, y, h):
+            return model
+        return FractionalHW._solved(model, params, names, res.x)
 
     def _solved(self, params, names, values):
         """The model with ``names`` set to ``values`` (clipped to their bounds), or itself."""
@@ -443,11 +517,14 @@ class FractionalHW(Model):
             return self
         n = y.size
         wd = _shifted(self.p @ fu, delay_samples(self._delay, h))
+        c = operator_weights(self._den, self._den_orders, h, n)        # prefilter 1 / A (current)
+        wd, yf = series_divide(wd, c), series_divide(y, c)
         M = np.column_stack([-causal_product(operator_weights([1.0], [nu], h, n), wd, n)
                              for nu in self._num_orders]
-                            + [causal_product(operator_weights([1.0], [nu], h, n), y, n)
+                            + [causal_product(operator_weights([1.0], [nu], h, n), yf, n)
                                for nu in self._den_orders])
-        x_free = params.free_values()
+        current = self.parameters.valuesdict()          # this step's values (params: the settings)
+        x_free = np.array([current[n] for n in free])
         values = np.r_[self._num, self._den]
         tc = t[coef_rows][:, cols]
         base = values - tc @ x_free[cols]
@@ -457,9 +534,72 @@ class FractionalHW(Model):
         sol = np.linalg.lstsq(A / scale, -M @ base, rcond=None)[0] / scale
         return self._solved(params, [free[j] for j in cols], sol)
 
+    def _solve_joint(self, params, fu, y, h) -> FractionalHW:
+        """The denominator and ``theta = b ⊗ p`` together by the linear equation error.
+
+        ``sum_i a_i W_{alpha_i} y = sum_k sum_j theta_kj W_{beta_k} f_j(u)`` is linear in the
+        free ``a_i`` and ``theta`` (both sides filtered by the current ``1 / A``); ``b`` and ``p``
+        (``p_1 = 1``) from ``theta``'s best rank-one approximation. Only when every ``b_k``, every
+        ``p_j`` and every free ``a_i`` is free and untied (else the model itself).
+        """
+        b, _, a, _, pn, _ = self._names()
+        plain = b + pn
+        free_a = [n for n in a if params[n].free]
+        if not pn or not all(params[n].free for n in plain) or any(
+                p.tie is not None for p in params.values()):
+            return self
+        n = y.size
+        shift = delay_samples(self._delay, h)
+        c = operator_weights(self._den, self._den_orders, h, n)
+        yf = series_divide(y, c)
+        cols = [causal_product(operator_weights([1.0], [nu], h, n), yf, n)
+                for name, nu in zip(a, self._den_orders) if name in free_a]
+        rhs = -sum((coef * causal_product(operator_weights([1.0], [nu], h, n), yf, n)
+                    for name, coef, nu in zip(a, self._den, self._den_orders)
+                    if name not in free_a), np.zeros(n))
+        for beta in self._num_orders:
+            wk = operator_weights([1.0], [beta], h, n)
+            cols += [-causal_product(wk, series_divide(_shifted(f, shift), c), n) for f in fu]
+        A = np.column_stack(cols)
+        scale = np.linalg.norm(A, axis=0)
+        scale[scale == 0] = 1.0
+        sol = np.linalg.lstsq(A / scale, rhs, rcond=None)[0] / scale
+        theta = sol[len(free_a):].reshape(len(b), fu.shape[0])
+        left, sv, right = np.linalg.svd(theta)
+        if right[0, 0] == 0.0:
+            return self
+        values = np.r_[sol[:len(free_a)], sv[0] * right[0, 0] * left[:, 0],
+                       (right[0] / right[0, 0])[1:]]
+        return FractionalHW._solved(self, params, free_a + plain, values)
+
     def _solve_p(self, params, fu, y, h) -> FractionalHW:
-        pn = self._names()[4]
-        if not pn or not all(params[n].free for n in pn):
+        """Numerator and ``p`` by simulation-error least squares, ``G``'s denominator held.
+
+        ``x = sum_k sum_j b_k p_j (s^{beta_k} / A(s)) f_j(u)`` is linear in ``theta = b ⊗ p``:
+        solved for ``theta``, then ``b`` and ``p`` (``p_1 = 1``) from its best rank-one
+        approximation. Only ``p`` (``G`` held) when a numerator coefficient is not free.
+        """
+        b, _, _, _, pn, _ = self._names()
+        if any(params[n].tie is not None for n in pn) or any(
+                p.tie is not None and p.tie[0] in b + pn for p in params.values()):
+            return self
+        free_b = [params[n].free for n in b]
+        free_p = [params[n].free for n in pn]
+        if all(free_b) and all(free_p):
+            shift = delay_samples(self._delay, h)
+            n = y.size
+            c = operator_weights(self._den, self._den_orders, h, n)
+            cols = []
+            for beta in self._num_orders:
+                d = operator_weights([1.0], [beta], h, n)
+                cols += [series_divide(causal_product(d, _shifted(f, shift), n), c) for f in fu]
+            theta = np.linalg.lstsq(np.column_stack(cols), y, rcond=None)[0]
+            left, sv, right = np.linalg.svd(theta.reshape(len(b), fu.shape[0]))
+            if right[0, 0] == 0.0:
+                return self
+            p_row = right[0] / right[0, 0]
+            return self._solved(params, b + pn, np.r_[sv[0] * right[0, 0] * left[:, 0], p_row[1:]])
+        if not pn or not all(free_p):
             return self
         cols = np.column_stack([self.G.simulate(f, h) for f in fu])
         sol = np.linalg.lstsq(cols[:, 1:], y - cols[:, 0], rcond=None)[0]
