@@ -385,3 +385,15 @@ def test_linear_start_solves_a_noise_free_record_at_the_true_orders():
     start = wrong.linear_start(u, y)
     got, want = start.parameters.valuesdict(), truth.parameters.valuesdict()
     assert max(abs(got[n] - want[n]) for n in want) < 1e-8, got
+
+
+def test_coefficient_sensitivities_alone_are_the_full_ones_columns():
+    from fohw.model.fotf_hw import tf_sensitivities
+    G = fohw.FractionalTF([1.0, 0.3], [0.5, 0.0], [2.0, 0.7, 1.0], [1.3, 0.6, 0.0])
+    w = np.random.default_rng(3).uniform(-1, 1, 300)
+    x = G.simulate(w, dt=0.05)
+    terms = (G.num, G.num_orders, G.den, G.den_orders)
+    full = tf_sensitivities(*terms, w, x, 0.05)
+    coef = tf_sensitivities(*terms, w, x, 0.05, orders=False)
+    assert full.shape == (300, 10) and coef.shape == (300, 5)
+    np.testing.assert_array_equal(coef, full[:, [0, 1, 4, 5, 6]])       # b0, b1, a0, a1, a2

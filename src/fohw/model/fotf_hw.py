@@ -59,8 +59,11 @@ __all__ = ["FractionalHW", "NUM_ORDER_RANGE", "tf_sensitivities"]
 
 #: Rounds of :meth:`FractionalHW.linear_start` (G's coefficients, then b and p, then the map).
 ROUNDS = 2
-#: Simulation budget of each coefficient fit in :meth:`FractionalHW.linear_start`.
+#: Simulation budget and tolerances of each coefficient fit in :meth:`FractionalHW.linear_start`
+#: (a start: 1e-4 gave the same starts as 1e-8 to 3 digits on the tests' 13 fits, 25 % fewer
+#: simulations).
 START_NFEV = 30
+START_TOL = 1e-4
 
 #: Default bounds of a numerator order of ``G`` (it may be negative: a fractional integral).
 NUM_ORDER_RANGE = (-ORDER_RANGE[1], ORDER_RANGE[1])
@@ -77,7 +80,7 @@ def _shifted(w, shift):
     return out
 
 
-def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h):
+def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h, *, orders=True):
     """``d x / d (num, num_orders, den, den_orders)`` of ``x = G wd`` (GL discretisation).
 
     Parameters
@@ -91,10 +94,14 @@ def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h):
     h : float
         Sampling time.
 
+    orders : bool, optional
+        False: the coefficients' columns only.
+
     Returns
     -------
     ndarray, shape (N, 2 m + 2 k)
-        Columns ``b_0…, beta_0…, a_0…, alpha_0…`` (module notes for the formulas).
+        Columns ``b_0…, beta_0…, a_0…, alpha_0…`` (module notes for the formulas); with
+        ``orders=False`` shape ``(N, m + k)``, columns ``b_0…, a_0…``.
 
     Examples
     --------
@@ -116,14 +123,15 @@ def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h):
     xx = -rr * scipy.fft.rfft(x, nfft)
     log_h = np.log(h)
     cols = []
-    for coefs, orders, spec in ((num, num_orders, ww), (den, den_orders, xx)):
+    for coefs, nus, spec in ((num, num_orders, ww), (den, den_orders, xx)):
         block_c, block_o = [], []
-        for cf, nu in zip(coefs, orders):
+        for cf, nu in zip(coefs, nus):
             s = h ** (-nu)
             w = gl_weights(nu, n)
-            dw = gl_weights_derivative(nu, n) - log_h * w
             block_c.append(scipy.fft.irfft(spec * scipy.fft.rfft(s * w, nfft), nfft)[:n])
-            block_o.append(scipy.fft.irfft(spec * scipy.fft.rfft(cf * s * dw, nfft), nfft)[:n])
+            if orders:
+                dw = gl_weights_derivative(nu, n) - log_h * w
+                block_o.append(scipy.fft.irfft(spec * scipy.fft.rfft(cf * s * dw, nfft), nfft)[:n])
         cols += block_c + block_o
     return np.column_stack(cols)
 
@@ -457,7 +465,7 @@ class FractionalHW(Model):
         names = [n for n in b + a if params[n].free]
         if not names or any(p.tie is not None and p.tie[0] in names for p in params.values()):
             return model
-        cols = [b.index(n) if n in b else 2 * len(b) + a.index(n) for n in names]  # tf_sensitivities'
+        cols = [b.index(n) if n in b else len(b) + a.index(n) for n in names]  # tf_sensitivities'
         lower = np.array([params[n].bounds[0] for n in names])
         upper = np.array([params[n].bounds[1] for n in names])
         w = model.p @ fu
@@ -484,7 +492,7 @@ class FractionalHW(Model):
             g = at(q)
             try:
                 x = g.G.simulate(w, h)
-                jac = tf_sensitivities(*g.terms, wd, x, h)
+                jac = tf_sensitivities(*g.terms, wd, x, h, orders=False)
             except (ParameterError, ArithmeticError):
                 return np.zeros((y.size, len(names)))
             jac = -jac[:, cols]
@@ -492,7 +500,8 @@ class FractionalHW(Model):
 
         q0 = np.clip([model.parameters[n].value for n in names], lower, upper)
         res = scipy.optimize.least_squares(residual, q0, jac=jacobian, bounds=(lower, upper),
-                                           method="trf", x_scale="jac", max_nfev=START_NFEV)
+                                           method="trf", x_scale="jac", max_nfev=START_NFEV,
+                                           ftol=START_TOL, xtol=START_TOL, gtol=START_TOL)
         if not 2.0 * res.cost < FractionalHW._sse(model, fu, y, h):
             return model
         return FractionalHW._solved(model, params, names, res.x)
