@@ -36,6 +36,16 @@ def convergence_table():
         print(f"| {name} | {e1[0]:.3g} | {e1[-1]:.3g} | {order[0]:.3f} | {order[1]:.3f} | {order[2]:.3f} |")
 
 
+def _start(num_orders, den_orders, h, bounds=None):
+    """The start model: coefficients 1, the given orders, default free parameters, ``bounds``."""
+    G = fohw.FractionalTF(np.ones(len(num_orders)), num_orders, np.ones(len(den_orders)), den_orders,
+                          dt=h)
+    p = G.parameters
+    for name, bound in (bounds or {}).items():
+        p = p.replace(name, bounds=bound)
+    return G.with_parameters(p)
+
+
 def identify(outdir):
     rng = np.random.default_rng(2025)
     h, n = 0.05, 2000
@@ -52,8 +62,12 @@ def identify(outdir):
         y0 = G.simulate(u, dt=h)
         sigma = 0.05 * np.std(y0)
         y = y0 + sigma * rng.standard_normal(n)
-        fit = fohw.fit_fractional_tf(u, y, dt=h, **spec)
+        fit = fohw.fit(_start(h=h, **spec), u, y)
         print(f"\n### {name}, noise std {sigma:.3g}, N = {n}, dt = {h}\n")
+        se = fit.standard_errors()
+        print("```\n" + f"{name}: {fit.model}\n  "
+              + ", ".join(f"{k} {fit.parameters[k].value:.5g} ± {v:.2g}" for k, v in se.items())
+              + "\n```\n")
         print("```\n" + fit.summary() + "\n```")
         fig, axes = fit.model.bode(np.logspace(-3, 3, 400), others={"truth " + str(G): G},
                                    title=f"estimate beside the truth: {name}")

@@ -25,6 +25,7 @@ Y = np.zeros(50)
 M = fohw.datasets.paper_model
 _U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
+_TF = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0], dt=0.1)
 
 
 def _bad_file(tmp, text, name="bad.dat"):
@@ -78,10 +79,19 @@ def _nan_result():
 
 # (where, what is wrong, call, exception, text the message must contain)
 API = [
-    ("fit_fractional_tf", "u and y differ in length",
-     lambda t: fohw.fit_fractional_tf(np.ones(50), np.ones(49), dt=0.1, num_orders=[0.0],
-                                      den_orders=[0.5, 0.0]),
+    ("fit", "a FractionalTF, u and y differ in length",
+     lambda t: fohw.fit(_TF, np.ones(50), np.ones(49)),
      fohw.DimensionError, "`u` and `y` must have the same length"),
+    ("fit", "a FractionalTF without a sampling time",
+     lambda t: fohw.fit(fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]), U, U),
+     fohw.ParameterError, "this FractionalTF has no sampling time"),
+    ("fit", "a FractionalTF on a zero input",
+     lambda t: fohw.fit(_TF, np.zeros(50), U), fohw.ParameterError, "`u` is zero at every sample"),
+    ("fit", "a FractionalTF on a constant output",
+     lambda t: fohw.fit(_TF, U, np.ones(50)), fohw.ParameterError, "`y` is constant"),
+    ("FractionalTF.simulate", "an initial state other than rest",
+     lambda t: _TF.simulate(U, initial="estimate"), fohw.ParameterError,
+     "`initial` must be None or 'rest'; got 'estimate'"),
     ("FractionalTF", "a zero leading denominator coefficient",
      lambda t: fohw.FractionalTF([1.0], [0.0], [0.0, 1.0], [0.5, 0.0]), fohw.ParameterError, "`den`"),
     ("gl_difference", "alpha is NaN", lambda t: fohw.gl_difference(np.ones(5), np.nan),
@@ -103,7 +113,8 @@ API = [
     ("as_basis", "a string", lambda t: fohw.as_basis("x", "f_basis"),
      fohw.ParameterError, "`f_basis` must be a Basis, an int degree, or callables; got 'x'"),
     ("save_model", "not a model", lambda t: fohw.save_model("m", t / "m.json"),
-     fohw.ParameterError, "`model` must be a HammersteinWiener; got str"),
+     fohw.ParameterError,
+     "`model` must be a fohw.Model (a HammersteinWiener or any other kind); got str"),
     ("load_model", "not a model file", lambda t: fohw.load_model(_bad_file(t, "{}", "m.json")),
      fohw.DataFileError, "is not a fohw-model file"),
     ("monte_carlo", "an option the method does not have",
@@ -412,10 +423,6 @@ API = [
      lambda t: fohw.read_record(_bad_file(t, "u,y\n1;2\n3;4\n", "r.csv")),
      fohw.DataFileError, "line 2 is separated by ';' but the header on line 1 by ','"),
     # issue 28 (tf2)
-    ("fractional_tf_crb", "a negative noise level",
-     lambda t: fohw.fractional_tf_crb(np.ones(50), dt=0.1, num=[1.0], num_orders=[0.0], den=[1.0, 1.0],
-                                      den_orders=[0.5, 0.0], noise_std=-1.0),
-     fohw.ParameterError, "`noise_std` must be positive and finite; got -1.0"),
     ("FractionalHW", "p[0] is not 1 (the gain is G's)",
      lambda t: fohw.FractionalHW(fohw.FractionalTF([1.0], [0.0], [1.0], [0.0]), p=[2.0]),
      fohw.ParameterError, "`p[0]` must be exactly 1"),
@@ -504,30 +511,6 @@ API = [
     ("load_result", "issue 28 #10: a schedule the method does not have",
      lambda t: fohw.load_result(_result_file(t, schedule="recursive")),
      fohw.DataFileError, "field 'schedule' is 'recursive', but method 'varpro' has no schedule"),
-    # issue 28 (tfsel)
-    ("select_fractional_tf", "an empty grid {}",
-     lambda t: fohw.select_fractional_tf(U, U, {}, dt=0.1, num_orders=[0.0]),
-     fohw.ParameterError, "`candidates` is an empty grid {}"),
-    ("select_fractional_tf", "a grid of orders one level short (numbers, not lists)",
-     lambda t: fohw.select_fractional_tf(U, U, {"den_orders": [0.5, 0.0]}, dt=0.1,
-                                         num_orders=[0.0]),
-     fohw.ParameterError, "`candidates[0]` give den_orders=0.5, a number"),
-    ("select_fractional_tf", "a misspelt fit_fractional_tf keyword in a candidate",
-     lambda t: fohw.select_fractional_tf(U, U, [{"den_order": [0.5, 0.0]}], dt=0.1,
-                                         num_orders=[0.0]),
-     fohw.ParameterError, "`candidates[0]` gives 'den_order': not a keyword of "
-     "fohw.fit_fractional_tf; did you mean 'den_orders'?"),
-    ("select_fractional_tf", "den_orders given nowhere",
-     lambda t: fohw.select_fractional_tf(U, U, [{"free": None}], dt=0.1, num_orders=[0.0]),
-     fohw.ParameterError, "`den_orders` is required by fohw.fit_fractional_tf and missing"),
-    ("select_fractional_tf", "dt inside a candidate",
-     lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0], "dt": 0.2}], dt=0.1,
-                                         num_orders=[0.0]),
-     fohw.ParameterError, "`candidates[0]` gives 'dt': `dt` is shared"),
-    ("select_fractional_tf", "a held-back part of 1 sample",
-     lambda t: fohw.select_fractional_tf(U, U, [{"den_orders": [0.5, 0.0]}], dt=0.1,
-                                         num_orders=[0.0], validation=1),
-     fohw.ParameterError, "`validation` = 1 (an int: a number of samples)"),
     # issue 24 (initial)
     ("IdentificationResult.simulate", "a past='estimate' fit without `initial`",
      lambda t: _past_result().simulate(U), fohw.ParameterError,

@@ -1,14 +1,45 @@
-"""The documentation: the tutorial runs as a newcomer would, and the site builds with warnings
-as errors."""
+"""The documentation: the tutorial runs as a newcomer would, and the site builds offline with
+warnings as errors, with a page per public object, the gallery's figures and math from its own
+files."""
 
+import ast
 import importlib.util
+import inspect
+import os
+import re
+import shutil
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
 
+import fohw
+
 ROOT = Path(__file__).resolve().parents[1]
+DOCS_PACKAGES = ("sphinx", "myst_parser", "numpydoc", "pydata_sphinx_theme", "sphinx-mathjax-offline")
+
+# Any name lookup (but localhost's) and any TCP/UDP connection made by the build (Sphinx, an
+# extension, an example it runs) raises.
+NO_NETWORK = textwrap.dedent('''
+    import socket
+
+    def _refuse(self, address, *args):
+        if self.family in (socket.AF_INET, socket.AF_INET6):
+            raise OSError(f"the docs build tried the network: {address!r}")
+        return _connect(self, address, *args)
+
+    def _no_lookup(host, *args, **kwargs):
+        if host not in (None, "localhost", b"localhost", "127.0.0.1", "::1"):
+            raise OSError(f"the docs build tried the network: lookup of {host!r}")
+        return _getaddrinfo(host, *args, **kwargs)
+
+    _connect, _getaddrinfo = socket.socket.connect, socket.getaddrinfo
+    socket.socket.connect = _refuse
+    socket.socket.connect_ex = _refuse
+    socket.getaddrinfo = _no_lookup
+''')
 
 
 def test_tutorial_runs(tmp_path):
@@ -19,15 +50,103 @@ def test_tutorial_runs(tmp_path):
     assert proc.stderr == ""
 
 
-@pytest.mark.skipif(importlib.util.find_spec("sphinx") is None
-                    or importlib.util.find_spec("myst_parser") is None,
-                    reason="the docs extra is not installed")
-def test_docs_build_without_warnings(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "-q", "-b", "html",
-                           str(ROOT / "docs"), str(tmp_path / "html")],
-                          capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert (tmp_path / "html" / "api.html").is_file()
+@pytest.mark.parametrize("code", ["socket.create_connection(('127.0.0.1', 9), timeout=1)",
+                                  "socket.getaddrinfo('example.org', 443)"])
+def test_network_guard_refuses(code, tmp_path):
+    # The guard is what makes "offline" testable: check that it refuses a connection and a lookup.
+    (tmp_path / "sitecustomize.py").write_text(NO_NETWORK)
+    proc = subprocess.run([sys.executable, "-c", "import socket; " + code], capture_output=True,
+                          text=True, timeout=60, env={"PYTHONPATH": str(tmp_path), "PATH": ""})
+    assert proc.returncode != 0
+    assert "the docs build tried the network" in proc.stderr
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    """The site built from a copy of docs/ and examples/ (the checkout stays clean), offline."""
+    missing = [p for p in DOCS_PACKAGES if importlib.util.find_spec(p) is None]
+    if missing:
+        pytest.skip(f"the docs extra is not installed (missing {missing})")
+    base = tmp_path_factory.mktemp("docs")
+    shutil.copytree(ROOT / "docs", base / "docs",
+                    ignore=shutil.ignore_patterns("_build", "api", "gallery", "_executed"))
+    shutil.copytree(ROOT / "examples", base / "examples")
+    guard = base / "guard"
+    guard.mkdir()
+    (guard / "sitecustomize.py").write_text(NO_NETWORK)
+    src = str(Path(fohw.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": f"{guard}:{src}"}
+    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+                           str(base / "docs"), str(base / "html")],
+                          capture_output=True, text=True, timeout=900, env=env)
+    assert proc.returncode == 0, proc.stderr[-5000:]
+    return base
+
+
+@pytest.mark.slow
+def test_docs_build_without_warnings(site):
+    assert (site / "html" / "api.html").is_file()
+    assert (site / "html" / "objects.inv").is_file()
+
+
+@pytest.mark.slow
+def test_one_page_per_public_object(site):
+    api = site / "html" / "api"
+    for name in fohw.__all__:
+        page = api / f"fohw.{name}.html"
+        assert page.is_file(), name
+        html = page.read_text()
+        target = f"module-fohw.{name}" if inspect.ismodule(getattr(fohw, name)) else f"fohw.{name}"
+        assert f'id="{target}"' in html, name
+    index = (site / "html" / "api.html").read_text()
+    assert all(f'href="api/fohw.{name}.html' in index for name in fohw.__all__)
+
+
+@pytest.mark.slow
+def test_gallery_shows_every_example_with_its_figures(site):
+    html_dir = site / "html" / "gallery"
+    index = (html_dir / "index.html").read_text()
+    for script in sorted((ROOT / "examples").glob("*.py")):
+        page = html_dir / f"{script.stem}.html"
+        assert page.is_file(), script.name
+        assert f'href="{script.stem}.html"' in index, script.name
+        html = page.read_text()
+        shown = dict(re.findall(r'<img alt="([^"]+)" src="([^"]+)"', html))
+        for alt, src in shown.items():
+            assert (page.parent / src).resolve().is_file(), (script.name, alt, src)
+        written = {p.name for p in (site / "docs" / "gallery" / script.stem).glob("*.png")}
+        assert written <= set(shown), (script.name, written - set(shown))
+        doc = ast.get_docstring(ast.parse(script.read_text()))
+        named = set(re.findall(r"\w+\.png", doc))
+        if "Executed while these pages were built" in html:
+            assert named <= written, (script.name, named - written)
+        else:
+            assert "Not executed while these pages were built" in html and shown, script.name
+
+
+@pytest.mark.slow
+def test_tutorial_page_is_executed(site):
+    html = (site / "html" / "tutorial.html").read_text()
+    assert "saved and reloaded exactly" in html
+    assert "max |y - Phi theta - v| =" in html
+    images = re.findall(r'<img alt="figure" class="fohw-output-image" src="([^"]+)"', html)
+    assert images and all((site / "html" / src).is_file() for src in images)
+    assert 'class="fohw-output-html"' in html   # a result's HTML repr
+
+
+@pytest.mark.slow
+def test_math_is_rendered_offline(site):
+    html_dir = site / "html"
+    pages = list(html_dir.rglob("*.html"))
+    remote = re.compile(r'<(?:script|link|img)\b[^>]*\b(?:src|href)="(?:https?:)?//', re.IGNORECASE)
+    assert not [p.name for p in pages if remote.search(p.read_text())]
+    mathjax = re.compile(r'<script[^>]*src="([^"]*mathjax[^"]*)"')
+    with_math = [p for p in pages if 'class="math' in p.read_text()]
+    assert len(with_math) >= 3
+    for page in with_math:
+        sources = mathjax.findall(page.read_text())
+        assert sources, page.name
+        assert all((page.parent / s).resolve().is_file() for s in sources), (page.name, sources)
 
 
 def test_every_docs_page_is_in_the_toctree():

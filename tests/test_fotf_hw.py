@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.estimators.fit import free_jacobian
 from fohw.exceptions import DimensionError, ParameterError
 from fohw.model.parameters import ORDER_RANGE
 
@@ -189,11 +188,11 @@ def _data(kind, seed):
 
 
 def _crb_sd(model, u, sigma):
-    """sigma (J^T J)^(-1/2) diagonal at the truth, J = d yhat / d free (tested above against
-    central differences)."""
-    _, jac, how = free_jacobian(model, u)
-    assert how == "exact"
-    return sigma * np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)))
+    """Standard deviations of fohw.crb at the truth (sigma^2 (S^T S)^-1, S the free run's
+    sensitivity, the exact Jacobian tested above against central differences), free order."""
+    bound = fohw.crb(model, u, sigma ** 2)
+    assert tuple(bound.parameter_names) == model.parameters.free_names
+    return np.sqrt(np.diag(bound.covariance))
 
 
 @pytest.mark.parametrize("kind", ["identity", "polynomial", "saturation"])
@@ -254,7 +253,8 @@ def test_fixed_and_tied_parameters_and_a_start():
 
 def test_a_limit_never_reached_is_rank_deficient_and_named():
     """The lower limit -5 lies below every x: its Jacobian column is zero at every sample, so
-    the data say nothing about it (the old fit reported a nan standard error)."""
+    the data say nothing about it: the CRB and the fit name it (the old ones gave a nan
+    standard error)."""
     G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
     model = fohw.FractionalHW(G, output_map=fohw.Saturation(), output_params=[-5.0, 0.2], dt=0.1)
     rng = np.random.default_rng(0)
@@ -262,6 +262,8 @@ def test_a_limit_never_reached_is_rank_deficient_and_named():
     _, jac = model.jacobian(u)
     names = list(model.parameters)
     assert not np.any(jac[:, names.index("h_lower")]) and np.any(jac[:, names.index("h_upper")])
+    with pytest.raises(ParameterError, match="h_lower are not identifiable"):
+        fohw.crb(model, u, 0.01 ** 2)
     y = model.simulate(u) + 0.01 * rng.standard_normal(300)
     with pytest.warns(fohw.RankDeficiencyWarning, match="h_lower"):
         fit = fohw.fit(model, u, y)

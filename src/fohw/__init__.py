@@ -16,7 +16,6 @@ from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
-from .analysis.tf_selection import select_fractional_tf
 from .analysis.validation import Validation, compare
 from .estimators.circuit_fit import CircuitFit, fit_circuit
 from .estimators.fit import fit
@@ -31,7 +30,6 @@ from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
 from .estimators.structured import StructuredOptions
-from .estimators.tf_fit import FractionalTFFit, fit_fractional_tf, fractional_tf_crb
 from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
@@ -99,7 +97,6 @@ __all__ = [
     "read_record",
     "Selection",
     "select_structure",
-    "select_fractional_tf",
     "Basis",
     "InputBases",
     "CRBResult",
@@ -152,13 +149,10 @@ __all__ = [
     "InitialState",
     "initial_state",
     "FractionalTF",
-    "FractionalTFFit",
-    "fit_fractional_tf",
     "LRTest",
     "lr_test",
     "ProfileInterval",
     "profile_interval",
-    "fractional_tf_crb",
     "FractionalHW",
     "Saturation",
     "DeadZone",

@@ -197,3 +197,12 @@ def input_in_range(u, u_range, tolerance=RANGE_TOLERANCE) -> bool:
     lo, hi = u_range
     slack = tolerance * (hi - lo)
     return bool(u.size == 0 or (u.min() >= lo - slack and u.max() <= hi + slack))
+
+
+def check_pair(value, name):
+    """``value`` as a pair of finite floats (``past``, ``operating_point``), or a ParameterError."""
+    try:
+        a, b = value
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be a pair of numbers; got {value!r}.") from None
+    return check_scalar(a, f"{name}[0]"), check_scalar(b, f"{name}[1]")

@@ -15,7 +15,8 @@
   [--initial rest|fitted] [--output FILE]`` — simulate a saved model (``fohw.save_model``), or
   the result of ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an
   input, from the initial state ``--initial`` (needed for a result fitted with
-  ``past="estimate"``).
+  ``past="estimate"``); a model or fit of any other kind (``fohw.save_model``,
+  ``fohw.save_result``) is simulated by its own ``simulate``, with one ``--column`` per input.
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``) or a simulated one (``paper_example [--samples N] [--seed S]``) as a file to try
   the commands on; without NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
@@ -467,11 +468,16 @@ def _add_simulate_parser(sub):
     sim = sub.add_parser("simulate", help="simulate a saved model for an input")
     sim.add_argument("--model", required=True, help="model JSON written by fohw.save_model, or "
                      "a result JSON written by `fohw identify --save` (the fitted predictor is "
-                     "simulated, as result.simulate does)")
-    sim.add_argument("--input", required=True, help="data file with the input column")
-    sim.add_argument("--column", default="0", help="input column number or name (default 0)")
+                     "simulated, as result.simulate does) or fohw.save_result; a model of any "
+                     "kind")
+    sim.add_argument("--input", required=True, help="data file with the input column(s)")
+    sim.add_argument("--column", default="0", help="input column number or name (default 0); "
+                     "a model with several inputs takes one per input, e.g. --column i,soc "
+                     "for a circuit")
     sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
-    sim.add_argument("--noise-std", type=float, default=0.0)
+    sim.add_argument("--noise-std", type=float, default=0.0,
+                     help="white Gaussian noise: in the equation for the lagged kind, on the "
+                     "output for any other kind")
     sim.add_argument("--seed", type=int, default=None)
     sim.add_argument("--initial", choices=("rest", "fitted"), default=None,
                      help="the state before the input: rest (the operating point) or fitted "
@@ -788,13 +794,24 @@ def _simulate(args):
     import numpy as np
 
     from .model.initial import initial_state, simulate_from
-    from .model.simulation import equation_noise, simulate
+    from .model.simulation import equation_noise, generic_model, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.input, _decimal(args))
-    (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
-    if kind == "result" and args.initial is None and loaded.structure.past == "estimate":
+    other = generic_model(loaded)
+    if other is not None:                     # a model (or fit) of any kind but the lagged one
+        if args.initial is not None:
+            raise UsageError(f"--initial is for the lagged HammersteinWiener kind; "
+                             f"{args.model} holds a {type(other).__name__}, simulated from "
+                             "its own initial state.")
+        columns = _pick_columns(data, names, args.column, other.n_inputs, args.input,
+                                flag="--column")
+        u = columns[0] if len(columns) == 1 else np.column_stack(columns)
+    else:
+        (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    if other is None and kind == "result" and args.initial is None \
+            and loaded.structure.past == "estimate":
         raise UsageError(f"{args.model} was fitted with past='estimate': its levels (u_past, "
                          f"y_past) = ({loaded.past[0]:.6g}, {loaded.past[1]:.6g}) are those "
                          "before its estimation record. Say which initial state to start "
@@ -805,7 +822,9 @@ def _simulate(args):
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():
             warnings.simplefilter("always", category)
-        if kind == "result":        # the predictor that was fitted: theta itself, as identify's
+        if other is not None:       # white noise on the output of an output-error model
+            y = other.simulate(u) + equation_noise(u.shape[0], None, args.noise_std, args.seed)
+        elif kind == "result":      # the predictor that was fitted: theta itself, as identify's
             noise = equation_noise(u.shape[0], None, args.noise_std, args.seed)   # free-run fit used
             y = loaded.simulate(u, initial=args.initial, noise=noise)
         elif args.initial is None:

@@ -125,11 +125,19 @@ class FitResult(metaclass=abc.ABCMeta):
         return self.model.dt
 
     def standard_errors(self) -> dict:
-        """``{name: standard error}`` of the free parameters (raises when there is no covariance)."""
+        """``{name: standard error}`` of the free parameters and of the tied ones.
+
+        A tied parameter ``factor * source`` has ``|factor|`` times its source's standard error
+        (a tie to a fixed parameter, 0). Raises when there is no covariance.
+        """
         if self.covariance is None:
             raise ParameterError(f"this fit has no covariance (status {self.status.name}: "
                                  f"{self.message}); no standard errors.")
-        return dict(zip(self.free_names, np.sqrt(np.diag(self.covariance)).tolist()))
+        se = dict(zip(self.free_names, np.sqrt(np.diag(self.covariance)).tolist()))
+        for name, par in self.parameters.items():
+            if par.tie is not None:
+                se[name] = abs(par.tie[1]) * se.get(par.tie[0], 0.0)
+        return se
 
     def confidence_intervals(self, level=0.95) -> dict:
         """``{name: (low, high)}`` Wald intervals ``estimate ± z se`` of the free parameters."""
@@ -189,11 +197,12 @@ class FitResult(metaclass=abc.ABCMeta):
     # --- files -------------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """JSON-ready values (:func:`fohw.save_result` writes them)."""
-        return {"model": self.model.to_dict(), "covariance": None if self.covariance is None
+        return {"model": Model.to_dict(self.model), "covariance": None if self.covariance is None
                 else self.covariance.tolist(), "status": self.status.name, "sse": self.sse,
                 "n_samples": self.n_samples, "message": self.message, "nfev": self.nfev,
                 "jacobian": self.jacobian,
-                "starts": [[dict(s), float(v)] for s, v in self.starts],
+                "starts": [[dict(s), float(v) if math.isfinite(v) else None]
+                           for s, v in self.starts],
                 "residuals": None if self.residuals is None else self.residuals.tolist(),
                 "data_digest": self.data_digest, "options": _jsonable(dict(self.options))}
 
@@ -213,7 +222,8 @@ class FitResult(metaclass=abc.ABCMeta):
                    status=status, sse=float(d["sse"]), n_samples=int(d["n_samples"]),
                    message=str(d.get("message", "")), nfev=int(d.get("nfev", 0)),
                    jacobian=str(d.get("jacobian", "exact")),
-                   starts=tuple((dict(s), float(v)) for s, v in d.get("starts", [])),
+                   starts=tuple((dict(s), math.inf if v is None else float(v))
+                                for s, v in d.get("starts", [])),
                    residuals=None if res is None else np.array(res, dtype=float),
                    data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}))
 

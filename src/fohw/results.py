@@ -23,6 +23,7 @@ from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
+from .model.parameters import Parameter, Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.simulation import check_input_point
@@ -417,6 +418,28 @@ class IdentificationResult(ResultPresentation):
     def dt(self) -> float:
         """Sampling time of the model."""
         return self.structure.dt
+
+    @property
+    def parameters(self) -> Parameters:
+        """The estimates as :class:`fohw.Parameters` (:attr:`estimate_names`, the order of ``covariance``).
+
+        The free orders are marked ``order=True``; this is the vocabulary every kind's result
+        shares (:class:`fohw.FitResult`).
+        """
+        orders = set(self.orders)
+        return Parameters(Parameter(n, float(v), order=n in orders)
+                          for n, v in zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+
+    @property
+    def sse(self) -> float:
+        """The criterion's sum of squares.
+
+        The simulation error where the method fits it (``details["simulation_sse"]``,
+        ``method="output_error"``), else ``J * n_samples`` (the one-step error, Eq. 41).
+        """
+        if "simulation_sse" in self.details:
+            return float(self.details["simulation_sse"])
+        return float(self.J * self.n_samples)
 
     @property
     def converged(self) -> bool:

@@ -6,6 +6,7 @@ import warnings
 
 from .._parallel import TaskError, run_tasks
 from ..exceptions import ConvergenceWarning, ParameterError
+from ..model.base import Model
 from ..record import Record
 
 __all__ = ["identify_many", "identify_quietly"]
@@ -34,8 +35,17 @@ def _identify_one(u, y, kwargs):
         return exc
 
 
-def identify_many(records, *, executor=None, progress=None, **kwargs):
-    """Run :func:`fohw.identify` with the same keywords on many records.
+def _fit_one(model, u, y, kwargs):
+    from ..estimators.fit import fit
+
+    try:
+        return fit(model, u, y, **kwargs)
+    except Exception as exc:                 # one record never loses the others
+        return exc
+
+
+def identify_many(records, *, executor=None, progress=None, model=None, **kwargs):
+    """Run :func:`fohw.identify` (or :func:`fohw.fit` of a model) with the same keywords on many records.
 
     Parameters
     ----------
@@ -46,15 +56,19 @@ def identify_many(records, *, executor=None, progress=None, **kwargs):
         default serially. The results do not depend on the backend.
     progress : bool, optional
         A progress bar on stderr; default: when stderr is a terminal.
+    model : Model, optional
+        A start model of any kind: every record is fitted by :func:`fohw.fit` from it (then
+        ``**kwargs`` are keywords of :func:`fohw.fit`: ``order_grid``, ``n_starts``, …).
     **kwargs
-        Keywords of :func:`fohw.identify` (``na``, ``nb``, ``f_basis``, ``g_basis``, …).
+        Keywords of :func:`fohw.identify` (``na``, ``nb``, ``f_basis``, ``g_basis``, …), or of
+        :func:`fohw.fit` with ``model``.
 
     Returns
     -------
     list
-        One entry per record, in order: its :class:`fohw.IdentificationResult`, or the
-        exception its fit raised (so one bad record never loses the others; test with
-        ``isinstance(entry, Exception)``).
+        One entry per record, in order: its :class:`fohw.IdentificationResult` (a
+        :class:`fohw.FitResult` with ``model``), or the exception its fit raised (so one bad
+        record never loses the others; test with ``isinstance(entry, Exception)``).
 
     Examples
     --------
@@ -64,17 +78,20 @@ def identify_many(records, *, executor=None, progress=None, **kwargs):
     >>> [type(r).__name__ for r in out]
     ['IdentificationResult', 'IdentificationResult', 'IdentificationResult']
     """
+    if model is not None and not isinstance(model, Model):
+        raise ParameterError(f"`model` must be a fohw.Model (a start model of any kind); got "
+                             f"{type(model).__name__}.")
     tasks = []
     for i, rec in enumerate(records):
         if isinstance(rec, Record):
-            tasks.append((rec.u, rec.y, kwargs))
-            continue
-        try:
-            u, y = rec
-        except (TypeError, ValueError):
-            raise ParameterError(f"`records[{i}]` must be a Record or a pair (u, y); got "
-                                 f"{type(rec).__name__}.") from None
-        tasks.append((u, y, kwargs))
-    out = run_tasks(_identify_one, tasks, executor=executor, progress=progress,
-                    label="identify_many")
+            u, y = rec.u, rec.y
+        else:
+            try:
+                u, y = rec
+            except (TypeError, ValueError):
+                raise ParameterError(f"`records[{i}]` must be a Record or a pair (u, y); got "
+                                     f"{type(rec).__name__}.") from None
+        tasks.append((u, y, kwargs) if model is None else (model, u, y, kwargs))
+    out = run_tasks(_identify_one if model is None else _fit_one, tasks, executor=executor,
+                    progress=progress, label="identify_many")
     return [entry.exception if isinstance(entry, TaskError) else entry for entry in out]

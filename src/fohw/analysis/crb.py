@@ -36,13 +36,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._linalg import inverse_gram_triangular, triangular
+from .._linalg import inverse_gram, inverse_gram_triangular, triangular
 from .._types import ArrayLike, RandomStateLike
 from .._validation import check_array, check_int, check_random_state, check_scalar
+from ..estimators.fit import free_jacobian, rank_rcond
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
-from ..model.simulation import simulate
+from ..model.simulation import generic_model, simulate
 from ..model.system import HammersteinWiener
 
 __all__ = ["crb", "CRBResult"]
@@ -80,6 +81,14 @@ class CRBResult:
         Where the white Gaussian noise enters (the equation, or the measured output).
     theta_covariance : ndarray, shape (n, n) or None
         The bound on theta's covariance (for ``"structured"``, ``M C M^T``; rank deficient).
+    kind : str
+        ``""`` for the lagged kind; else the model kind's name. For a kind other than the
+        lagged one the bound is of its free parameters (``parametrisation="free"``,
+        ``noise="output"``); "theta" then means the free parameters: :attr:`theta_std`,
+        :attr:`rms_relative_error` and :attr:`theta_covariance` are of all of them, and
+        :attr:`alpha_std` is that of the first free order (``nan`` when none is free).
+    jacobian : str
+        For another kind: ``"exact"`` (the kind's own Jacobian) or ``"finite differences"``.
     """
 
     covariance: np.ndarray
@@ -92,10 +101,16 @@ class CRBResult:
     parametrisation: str = "theta"
     noise: str = "equation"
     theta_covariance: np.ndarray | None = None
+    kind: str = ""
+    jacobian: str = ""
 
     @property
     def description(self) -> str:
         """Which bound this is, in words."""
+        if self.parametrisation == "free":
+            return (f"Cramér–Rao bound of the free parameters {', '.join(self.estimate_names)} "
+                    f"of a {self.kind}, under white Gaussian noise on the measured output "
+                    f"(Jacobian by {self.jacobian})")
         what = ("the structured parameters " + ", ".join(self.estimate_names)
                 if self.parametrisation == "structured" else
                 "the unstructured parameters " + ", ".join(self.estimate_names))
@@ -115,31 +130,37 @@ class CRBResult:
 
 
 PARAMETRISATIONS = ("theta", "structured")
+#: The one bound of a model of any other kind: its free parameters, noise on the output.
+GENERIC = ("free", "output")
 NOISE_MODELS = ("equation", "output")
 
 
 def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
-        parametrisation: str = "theta", noise: str = "equation", n_realizations: int | None = None,
-        random_state: RandomStateLike = None) -> CRBResult:
+        parametrisation: str | None = None, noise: str | None = None,
+        n_realizations: int | None = None, random_state: RandomStateLike = None) -> CRBResult:
     """Cramér–Rao bound of a model's parameters for an input and a noise level.
 
     Parameters
     ----------
-    model : HammersteinWiener
-        The true system.
+    model : HammersteinWiener or Model
+        The true system. A :class:`fohw.Model` of any other kind (a :class:`fohw.FitResult`:
+        its fitted model) gets the output-noise bound of its free parameters,
+        ``noise_variance (S^T S)^{-1}`` with ``S`` the sensitivity of its free run
+        (:func:`fohw.estimators.fit.free_jacobian`: the kind's exact Jacobian, else finite
+        differences); ``parametrisation`` is then ``"free"`` and ``noise`` ``"output"``.
     u : array_like, shape (N,)
         The input of the experiment.
     noise_variance : float
         Variance ``sigma^2 > 0`` of the white Gaussian noise.
-    parametrisation : {"theta", "structured"}, optional
-        ``"theta"`` (default): the structure's linear then nonlinear parameters, theta
+    parametrisation : {"theta", "structured", "free"}, optional
+        ``"theta"`` (default for the lagged kind): the structure's linear then nonlinear parameters, theta
         unstructured (for the paper's model ``(theta, alpha)``). ``"structured"``: the model's
         own parameters :attr:`fohw.Structure.structured_names` (``a, b, p_2.., q_2..``, then
         the offset and the nonlinear ones), with ``theta = [q ⊗ a, p ⊗ b]``.
     noise : {"equation", "output"}, optional
-        ``"equation"`` (default): the noise enters the equation (Eq. 16), the setting of the
-        paper. ``"output"``: the system runs noise-free and the noise is added to the measured
-        output.
+        ``"equation"`` (default for the lagged kind): the noise enters the equation (Eq. 16),
+        the setting of the paper. ``"output"``: the system runs noise-free and the noise is
+        added to the measured output.
     n_realizations : int, optional
         Equation noise: realisations over which ``G^T G`` is averaged (default 4). Output
         noise: not used (the information is deterministic); giving it is an error.
@@ -185,8 +206,15 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
     >>> round(tight.rms_relative_error, 3), round(tight.alpha_std, 4)
     (0.019, 0.0037)
     """
+    other = generic_model(model)
+    if other is not None:
+        return _crb_model(other, u, noise_variance, parametrisation, noise, n_realizations,
+                          random_state)
     if not isinstance(model, HammersteinWiener):
-        raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
+        raise ParameterError(f"`model` must be a HammersteinWiener or a fohw.Model; got "
+                             f"{type(model).__name__}.")
+    parametrisation = "theta" if parametrisation is None else parametrisation
+    noise = "equation" if noise is None else noise
     if parametrisation not in PARAMETRISATIONS:
         raise ParameterError(f"`parametrisation` must be one of {PARAMETRISATIONS}; got "
                              f"{parametrisation!r}.")
@@ -244,13 +272,52 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
                      theta_covariance=theta_cov)
 
 
+def _crb_model(model, u, noise_variance, parametrisation, noise, n_realizations, random_state):
+    """:func:`crb` of a model of any kind but the lagged one: its free parameters, output noise."""
+    kind = type(model).__name__
+    for name, value, allowed in (("parametrisation", parametrisation, GENERIC[0]),
+                                 ("noise", noise, GENERIC[1])):
+        if value is not None and value != allowed:
+            raise ParameterError(f"`{name}` must be {allowed!r} (or omitted) for a {kind}: its "
+                                 "bound is of its free parameters with white noise on the "
+                                 f"measured output (an output-error model); got {value!r}.")
+    for name, value in (("n_realizations", n_realizations), ("random_state", random_state)):
+        if value is not None:
+            raise ParameterError(f"`{name}` is not used for a {kind} (its bound is "
+                                 f"deterministic: no noise realisations); got {value!r}.")
+    sigma2 = check_scalar(noise_variance, "noise_variance", lower=0.0, lower_inclusive=False)
+    u = model.check_input(u)
+    names = model.parameters.free_names
+    if not names:
+        raise ParameterError(f"every parameter of the {kind} is fixed or tied: no free "
+                             "parameter has a bound.")
+    yhat, jac, how = free_jacobian(model, u)
+    if not (np.all(np.isfinite(yhat)) and np.all(np.isfinite(jac))):
+        raise ParameterError(f"the {kind}'s free run or its sensitivity on `u` is not finite: "
+                             "no bound at a model that does not simulate this input.")
+    cov = _named(*inverse_gram(jac, rcond=rank_rcond(how, *jac.shape)), sigma2, names)
+    values = model.parameters.free_values()
+    orders = [i for i, n in enumerate(names) if model.parameters[n].order]
+    std = np.sqrt(np.diag(cov))
+    return CRBResult(covariance=cov, theta_std=std,
+                     alpha_std=float(std[orders[0]]) if orders else float("nan"),
+                     rms_relative_error=float(np.sqrt(np.trace(cov)) / np.linalg.norm(values)),
+                     parameter_names=names, n_realizations=0, estimate_names=names,
+                     parametrisation=GENERIC[0], noise=GENERIC[1], theta_covariance=cov,
+                     kind=kind, jacobian=how)
+
+
 def _inverse(root, n_rows, variance, names):
     """``variance (A^T A)^{-1}``, symmetrised, with ``A = Q root`` of ``n_rows`` rows.
 
     The information matrix is ``A^T A / variance``; it is inverted from the equilibrated,
     pivoted QR of ``root`` (:func:`fohw._linalg.inverse_gram_triangular`), never formed.
     """
-    inverse, fac = inverse_gram_triangular(root, n_rows)
+    return _named(*inverse_gram_triangular(root, n_rows), variance, names)
+
+
+def _named(inverse, fac, variance, names):
+    """``variance * inverse``, symmetrised; a singular one raises naming the parameters."""
     if inverse is None:
         dependent = ", ".join(names[i] for i in fac.dependent)
         raise ParameterError("the Fisher information is singular: the parameters "

@@ -40,6 +40,7 @@ fohw uses ``n log``. For ``n`` in the hundreds and ``d`` parameters the two diff
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -48,14 +49,17 @@ import scipy.stats
 
 from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
-from ..exceptions import ParameterError
+from ..estimators.fit import fit
+from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.orders import Orders
 from ..model.structure import Structure
 from ..results import REFITS
 from .profile_interval import (
     check_data,
+    check_fit_record,
     check_result,
     criterion,
+    is_fit,
     order_bounds,
     orders_with,
     refit,
@@ -97,6 +101,9 @@ class LRTest:
         Carlo error.
     bootstrap : ndarray or None
         The bootstrap statistics.
+    hypothesis : str
+        For fits of a kind other than the lagged one: the null, the values the restricted fit
+        holds fixed (e.g. ``"alpha = 1"``); empty for the lagged kind (orders 0).
     """
 
     statistic: float
@@ -111,9 +118,11 @@ class LRTest:
     unidentified: tuple = ()
     note: str = ""
     bootstrap: np.ndarray | None = field(default=None, repr=False)
+    hypothesis: str = ""
 
     def __str__(self):
-        text = (f"LR test of the fractional orders against orders 0: LR = {self.statistic:.4g} "
+        null = self.hypothesis or "the fractional orders against orders 0"
+        text = (f"LR test of {null}: LR = {self.statistic:.4g} "
                 f"({self.criterion}, n = {self.n}), df = {self.df}, p = {self.pvalue:.4g} "
                 f"({self.distribution}).")
         return text + (f" {self.note}" if self.note else "")
@@ -356,12 +365,18 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
 
     Parameters
     ----------
-    restricted : IdentificationResult
+    restricted : IdentificationResult or FitResult
         The integer class: ``full``'s structure with every order 0 (for the mixed class, the
-        order-0 terms only), same method, same record.
-    full : IdentificationResult
+        order-0 terms only), same method, same record. Or a :class:`fohw.FitResult` of any
+        other kind: ``full``'s model (same kind and settings) with some of its free parameters
+        held fixed (e.g. an order at 1), fitted to the same record (its ``data_digest``,
+        ``n_samples`` and ``dt``).
+    full : IdentificationResult or FitResult
         A ``"varpro"``, ``"structured"`` or ``"output_error"`` fit with free orders bounded
-        below by 0.
+        below by 0; or the FitResult with those parameters free. Their statistic is
+        ``n log(SSE_restricted / SSE_full)`` with ``df`` the parameters fixed in
+        ``restricted``, referred to ``chi2_df``, or to the chi-bar-squared mixture for
+        values on their bounds in ``full`` (an order at 0 with bounds (0, 2)).
     reference : {"auto", "mixture", "davies", "bootstrap"}
         The reference distribution. ``"auto"``: the chi-bar-squared mixture when every free
         order is on the boundary under the null, Davies' bound when an order is not identified
@@ -369,7 +384,10 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     u, y : array_like, optional
         The record both were fitted to (results keep no data): needed by the bootstrap and by
         Davies' bound unless ``full`` is a ``"varpro"`` fit of one free order (its scan is the
-        profile). When given, they are checked against both fits' ``J``.
+        profile). When given, they are checked against both fits' ``J``. For two FitResults,
+        checked against their fingerprint, and ``full`` is refitted from its own and the
+        restricted estimate (:func:`fohw.fit` with ``start=``), so its SSE never ends above
+        the restricted one (without them a full fit above it gives 0 and a warning).
     n_bootstrap : int
         Bootstrap records (default 199).
     random_state : None, int or Generator
@@ -401,6 +419,8 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
     >>> t.distribution, t.df, t.pvalue < 1e-6
     ('chi2 mixture 0.5*chi2_0 + 0.5*chi2_1', 1, True)
     """
+    if is_fit(restricted) or is_fit(full):
+        return _lr_fits(restricted, full, reference, u, y)
     restricted = check_result(restricted, "restricted")
     full = check_result(full, "full")
     if reference not in REFERENCES:
@@ -458,6 +478,108 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
                   criterion=crit_name, n=n, rss_restricted=rss_r, rss_full=rss_f,
                   boundary=boundary, unidentified=unidentified, note=" ".join(notes),
                   bootstrap=boot)
+
+
+def nested_fits(restricted, full):
+    """``(fixed names, boundary names)`` of two FitResults, or a ParameterError saying why not.
+
+    Same kind and settings, one record (its fingerprint, ``n_samples`` and ``dt``), and
+    ``restricted`` is ``full`` with some free parameters held fixed at values inside their
+    bounds in ``full`` (on a bound: a boundary of the parameter space).
+    """
+    for name, res in (("restricted", restricted), ("full", full)):
+        if not is_fit(res):
+            raise ParameterError(f"`restricted` and `full` must both be fohw.FitResult (fits of "
+                                 f"the same kind); `{name}` is a {type(res).__name__}.")
+    rm, fm = restricted.model, full.model
+    if rm.dt != fm.dt:
+        raise ParameterError(f"`restricted` and `full` were fitted at different step sizes "
+                             f"(dt {rm.dt!r} and {fm.dt!r}): their criteria are of different "
+                             "records, so their ratio tests nothing.")
+    same = type(rm) is type(fm)
+    if same:        # the settings apart from the values (a kind's config may hold values too)
+        try:
+            same = rm.with_parameters(fm.parameters.valuesdict()).config() == fm.config()
+        except ParameterError:
+            same = False
+    if not same:
+        raise ParameterError(f"`restricted` and `full` must be fits of one model kind with the "
+                             f"same settings; got a {type(rm).__name__} {rm.config()!r} and a "
+                             f"{type(fm).__name__} {fm.config()!r}.")
+    if restricted.n_samples != full.n_samples or restricted.data_digest != full.data_digest:
+        raise ParameterError(f"`restricted` and `full` were not fitted to the same record "
+                             f"({restricted.n_samples} and {full.n_samples} samples, "
+                             f"fingerprints {restricted.data_digest or 'none'} and "
+                             f"{full.data_digest or 'none'}): their criteria are of different "
+                             "data, so their ratio tests nothing.")
+    rp, fp = restricted.parameters, full.parameters
+    if rp.names != fp.names:
+        raise ParameterError(f"`restricted` and `full` have different parameters ({list(rp)} and "
+                             f"{list(fp)}): they are not one model with some of them fixed.")
+    fixed, boundary = [], []
+    for name, f in fp.items():
+        r = rp[name]
+        if f.free and r.fixed:
+            if not f.bounds[0] <= r.value <= f.bounds[1]:
+                raise ParameterError(f"`restricted` holds {name} = {r.value!r}, outside its "
+                                     f"bounds {f.bounds} in `full`: the restricted model is not "
+                                     "in the full class.")
+            fixed.append(name)
+            if r.value in f.bounds:
+                boundary.append(name)
+        elif (r.bounds, r.fixed, r.tie, r.order) != (f.bounds, f.fixed, f.tie, f.order) or \
+                (f.fixed and r.value != f.value):
+            raise ParameterError(
+                f"`restricted` is not `full` with some free parameters fixed: parameter {name} "
+                f"is {r!r} in `restricted` and {f!r} in `full` (the call is "
+                "lr_test(restricted, full)).")
+    if not fixed:
+        raise ParameterError(f"`restricted` fixes no parameter that `full` frees (free in both: "
+                             f"{list(fp.free_names)}): nothing to test.")
+    return tuple(fixed), tuple(boundary)
+
+
+def _lr_fits(restricted, full, reference, u, y):
+    """:func:`lr_test` of two :class:`fohw.FitResult` (any kind but the lagged one)."""
+    fixed, boundary = nested_fits(restricted, full)
+    if reference not in REFERENCES:
+        raise ParameterError(f"`reference` must be one of {REFERENCES}; got {reference!r}.")
+    if reference not in ("auto", "mixture"):
+        raise ParameterError(f"`reference={reference!r}` is for the lagged kind's orders; a fit "
+                             f"of a {type(full.model).__name__} is tested against chi2 (or the "
+                             "chi-bar-squared mixture for a value on its bound): use 'auto'.")
+    notes = []
+    rss_r, rss_f, n = restricted.sse, full.sse, full.n_samples
+    if u is not None or y is not None:
+        u, y = check_fit_record(restricted, u, y, "restricted")
+        with warnings.catch_warnings():       # its status is the user's `full`'s business
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            again = fit(full.model, u, y, start=restricted.model, **dict(full.options))
+        if again.sse < rss_f * (1 - 1e-6):
+            notes.append(f"`full` refitted from its estimate and the restricted one: SSE "
+                         f"{rss_f:.6g} -> {again.sse:.6g}.")
+        rss_f = min(rss_f, again.sse)
+    if rss_f > rss_r * (1 + 1e-9):
+        text = (f"The full fit's SSE ({rss_f:.6g}) is above the restricted one's ({rss_r:.6g}), "
+                "though its class contains it: the full fit missed its optimum (pass u=, y= to "
+                "refit it from the restricted estimate); the statistic is set to 0.")
+        notes.append(text)
+        warnings.warn(text, ConvergenceWarning, stacklevel=3)
+    stat = _statistic(rss_r, rss_f, n)
+    df, k = len(fixed), len(boundary)
+    if k == 0:
+        pvalue, distribution = float(scipy.stats.chi2.sf(stat, df)), f"chi2_{df}"
+    elif k == df:
+        pvalue, distribution = _mixture(stat, k)
+    else:       # Self & Liang: k values on their bounds, df - k inside
+        pvalue = float(sum(math.comb(k, j) * 0.5 ** k * scipy.stats.chi2.sf(stat, df - k + j)
+                           for j in range(k + 1)))
+        distribution = f"chi-bar-squared sum_j C({k},j)/2^{k} chi2_({df - k}+j)"
+    rp = restricted.parameters
+    return LRTest(statistic=stat, df=df, pvalue=pvalue, distribution=distribution,
+                  criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
+                  boundary=boundary, note=" ".join(notes),
+                  hypothesis=", ".join(f"{name} = {rp[name].value:g}" for name in fixed))
 
 
 REFITS["order_test"] = order_test            # IdentificationResult.order_test calls it

@@ -25,7 +25,15 @@ import numpy as np
 from .._parallel import TaskError, progress_bar, run_tasks
 from .._threads import thin_solves
 from ..datasets import paper_example
-from ..exceptions import FohwError, ParameterError, SimulationDivergedError
+from ..estimators.fit import fit
+from ..exceptions import (
+    ConvergenceWarning,
+    FohwError,
+    ParameterError,
+    RankDeficiencyWarning,
+    SimulationDivergedError,
+)
+from ..model.base import Model
 from .batch import identify_quietly
 
 __all__ = ["monte_carlo", "summarise"]
@@ -43,12 +51,17 @@ def _run_task(make_data, methods, seed, setting):
     except SimulationDivergedError as exc:
         return [dict(seed=seed, **setting, method=name, error=str(exc)) for name in methods]
     model = data.model
-    struct = dict(na=model.na, nb=model.nb, f_basis=model.f_basis, g_basis=model.g_basis)
-    if model.nk != 1:
-        struct["nk"] = model.nk
-    theta = model.theta
+    if not all(isinstance(options, Model) for options in methods.values()):
+        struct = dict(na=model.na, nb=model.nb, f_basis=model.f_basis, g_basis=model.g_basis)
+        if model.nk != 1:
+            struct["nk"] = model.nk
+        theta = model.theta
     for name, options in methods.items():
         t0 = time.perf_counter()
+        if isinstance(options, Model):
+            rows.append(dict(seed=seed, **setting, method=name,
+                             **_fit_row(options, data, t0)))
+            continue
         res = identify_quietly(data.u, data.y, **{**struct, **options})
         rows.append(dict(seed=seed, **setting, method=name, alpha=res.alpha,
                          alpha_error=res.alpha - model.alpha,
@@ -59,15 +72,40 @@ def _run_task(make_data, methods, seed, setting):
     return rows
 
 
+def _fit_row(start, data, t0):
+    """The row of :func:`fohw.fit` from ``start`` on ``data``: estimates, errors, status."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            warnings.simplefilter("ignore", RankDeficiencyWarning)
+            res = fit(start, data.u, data.y)
+    except FohwError as exc:
+        return dict(status="", converged=False, error=f"{type(exc).__name__}: {exc}",
+                    seconds=time.perf_counter() - t0)
+    row = {name: res.parameters[name].value for name in res.free_names}
+    truth = getattr(data, "model", None)
+    known = [n for n in res.free_names if isinstance(truth, Model) and n in truth.parameters]
+    for n in known:
+        row[f"{n}_error"] = res.parameters[n].value - truth.parameters[n].value
+    if known and len(known) == res.n_free:
+        x = np.array([truth.parameters[n].value for n in known])
+        row["delta"] = float(np.linalg.norm([row[f"{n}_error"] for n in known])
+                             / np.linalg.norm(x))
+    return dict(row, sse=res.sse, status=res.status.name, converged=res.converged,
+                nfev=res.nfev, seconds=time.perf_counter() - t0, error="")
+
+
 def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_jobs=1,
                 progress=None, executor=None):
     """Run identification methods over many simulated records.
 
     Parameters
     ----------
-    methods : dict of str to dict
+    methods : dict of str to dict or Model
         Name of each configuration and the keyword arguments of :func:`fohw.identify` it uses
-        (the model structure is taken from the simulated record unless given).
+        (the model structure is taken from the simulated record unless given), or a start
+        :class:`fohw.Model` of any kind, fitted by :func:`fohw.fit` (with a ``make_data``
+        whose records carry ``u``, ``y`` and, for the errors, the true ``model``).
     seeds : iterable of int, optional
         One record per seed and setting (default ``range(20)``).
     settings : sequence of dict, optional
@@ -92,7 +130,11 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
         One row per (setting, seed, method): ``seed``, the setting's keys, ``method``,
         ``alpha``, ``alpha_error``, ``delta`` (``||theta_hat - theta|| / ||theta||``), ``J``,
         ``status`` (the name of :class:`fohw.Status`), ``converged``, ``nit``, ``nfev``,
-        ``seconds``, ``error`` (the message when the record diverged, else ``""``).
+        ``seconds``, ``error`` (the message when the record diverged, else ``""``). For a
+        Model method: each free parameter's estimate by name, ``<name>_error`` against the
+        record's true model (where it has that parameter), ``delta`` (``||x_hat - x|| /
+        ||x||`` over the free parameters, when all have a true value), ``sse``, ``status``,
+        ``converged``, ``nfev``, ``seconds``, ``error`` (a fit that raised).
 
     Examples
     --------

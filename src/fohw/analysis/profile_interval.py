@@ -20,6 +20,7 @@ record the fit was made on, checked against the fit's ``J``) are passed again.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -28,13 +29,15 @@ import scipy.optimize
 import scipy.stats
 
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
+from ..estimators.fit import check_record, data_digest, fit
 from ..estimators.identify import identify
-from ..exceptions import ConvergenceWarning, ParameterError
+from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
+from ..fit_result import FitResult
 from ..model.orders import Orders
 from ..results import REFITS, IdentificationResult
 
 __all__ = ["ProfileInterval", "profile_interval", "refit", "orders_with", "criterion",
-           "check_data", "LIKELIHOOD_METHODS"]
+           "check_data", "check_fit_record", "sse_with_fixed", "LIKELIHOOD_METHODS"]
 
 #: Methods whose estimate is a least-squares (Gaussian likelihood) optimum.
 LIKELIHOOD_METHODS = ("varpro", "structured", "output_error")
@@ -87,6 +90,60 @@ def check_data(result, u, y, name):
     return u, y
 
 
+def is_fit(result):
+    """Whether ``result`` is a fit of a kind other than the lagged one (a fohw.FitResult)."""
+    return isinstance(result, FitResult) and not isinstance(result, IdentificationResult)
+
+
+def check_fit_record(result, u, y, name):
+    """``u``, ``y`` checked to be the record the FitResult ``result`` was fitted to.
+
+    The fit keeps a fingerprint of its record (:func:`fohw.estimators.fit.data_digest`: the
+    samples and ``dt``); another record, a part of it or another step size is refused.
+    """
+    if u is None or y is None:
+        raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
+                             "(fohw's results keep no data).")
+    u, y = check_record(result.model, u, y)
+    if y.size != result.n_samples:
+        raise ParameterError(f"`u` and `y` have {y.size} samples, but `{name}` was fitted to "
+                             f"{result.n_samples}: pass the record it was fitted to.")
+    digest = data_digest(u, y, result.model.dt)
+    if result.data_digest and digest != result.data_digest:
+        raise ParameterError(f"`u` and `y` (at dt = {result.model.dt!r}) are not the record "
+                             f"`{name}` was fitted to: their fingerprint is {digest}, the fit's "
+                             f"{result.data_digest}.")
+    return u, y
+
+
+def sse_with_fixed(result, u, y, values):
+    """The least SSE of ``result``'s model with ``values`` (``{name: value}``) held fixed.
+
+    The other free parameters are refitted by :func:`fohw.fit` from the estimate, with the
+    fit's options; when none is left, the SSE of the model's free run. A refit next to the
+    optimum may stop without a step or end rank deficient (an order at 0 can make a gain and a
+    time constant one): its SSE is still an upper bound of the profile there, which can only
+    widen an interval, so those warnings are not the user's business. ``inf`` when no start
+    simulates finitely.
+    """
+    params = result.parameters
+    for name, value in values.items():
+        params = params.replace(name, value=float(value), fixed=True)
+    model = result.model.with_parameters(params)
+    if not params.free_names:
+        with np.errstate(all="ignore"):
+            r = y - np.asarray(model.simulate(u), dtype=float)
+        sse = float(r @ r)
+        return sse if math.isfinite(sse) else math.inf
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        warnings.simplefilter("ignore", RankDeficiencyWarning)
+        try:
+            return fit(model, u, y, **dict(result.options)).sse
+        except ParameterError:
+            return math.inf
+
+
 def orders_with(orders, fixed):
     """``orders`` with the free orders in ``fixed`` (``{name: value}``) replaced by numbers."""
     def branch(terms):
@@ -134,18 +191,19 @@ def order_bounds(result, name):
 
 @dataclass(frozen=True)
 class ProfileInterval:
-    """A profile-likelihood interval of one free order.
+    """A profile-likelihood interval of one free order (or a free parameter of any kind).
 
     Attributes
     ----------
     name : str
     estimate : float
     low, high : float
-        The interval; an end equal to the order's bound when the criterion never reaches the
-        quantile on that side (``one_sided`` says which).
+        The interval (also :attr:`lower`, :attr:`upper`); an end equal to the parameter's
+        bound when the criterion never reaches the quantile on that side (``one_sided`` says
+        which).
     level : float
     grid, statistic : ndarray
-        The order values where the class was refitted and ``n log(RSS(nu) / RSS_hat)`` there.
+        The values where the model was refitted and ``n log(RSS(nu) / RSS_hat)`` there.
     one_sided : str
         ``""``, ``"low"`` (the lower end is the bound), ``"high"`` or ``"both"``.
     """
@@ -162,6 +220,16 @@ class ProfileInterval:
     def __iter__(self):
         return iter((self.low, self.high))
 
+    @property
+    def lower(self) -> float:
+        """The lower end (:attr:`low`)."""
+        return self.low
+
+    @property
+    def upper(self) -> float:
+        """The upper end (:attr:`high`)."""
+        return self.high
+
 
 def _fixed_value_ok(orders, name, value):
     """Whether fixing ``name`` at ``value`` leaves distinct terms (the mixed class at 0 does not)."""
@@ -177,16 +245,22 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
 
     Parameters
     ----------
-    result : IdentificationResult
-        A ``"varpro"``, ``"structured"`` or ``"output_error"`` fit with free order ``name``.
+    result : IdentificationResult or FitResult
+        A ``"varpro"``, ``"structured"`` or ``"output_error"`` fit with free order ``name``,
+        or a :class:`fohw.FitResult` of any other kind (:func:`fohw.fit`): then ``name`` may be
+        any of its free parameters, each ``RSS(nu)`` is a :func:`fohw.fit` of its model with
+        ``name`` fixed at ``nu`` and the others refitted from the estimate (the fit's options),
+        and the scan stays inside the parameter's own bounds in ``result.parameters`` (a side
+        without a bound is scanned to 10 standard errors from the estimate).
     name : str
-        One of ``result.orders``.
+        One of ``result.orders`` (of ``result.free_names`` for a FitResult).
     level : float
         Coverage, in (0, 1).
     u, y : array_like
-        The record ``result`` was fitted to (checked through its ``J``).
+        The record ``result`` was fitted to (checked through its ``J``; for a FitResult,
+        through its ``data_digest``: the same samples at the same ``dt``).
     n_grid : int
-        Points of the coarse grid over the order's bounds (at least 3).
+        Points of the coarse grid over the parameter's bounds (at least 3).
     xtol : float
         Absolute tolerance of the ends (Brent).
 
@@ -218,6 +292,8 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     >>> bool(low < res.alpha < high)
     True
     """
+    if is_fit(result):
+        return _profile_fit(result, name, level, u, y, n_grid, xtol)
     result = check_result(result, "result")
     if not isinstance(name, str) or name not in result.orders:
         raise ParameterError(f"`name` must be one of the free orders {list(result.orders)}; "
@@ -247,7 +323,16 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     grid = np.unique(np.r_[np.linspace(lo_ok, hi_ok, n_grid), np.clip(est, lo_ok, hi_ok)])
     values = np.array([stat(v) for v in grid])
     k = int(np.argmin(np.abs(grid - np.clip(est, lo_ok, hi_ok))))
+    return _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol)
 
+
+def _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol):
+    """The :class:`ProfileInterval` from ``stat`` on a grid: Brent between bracketing points.
+
+    From the grid point ``k`` nearest the estimate outwards, the first point whose statistic
+    exceeds ``quantile`` brackets the end with its inner neighbour; a side where none does
+    ends at its bound (``lo`` or ``hi``), one-sided.
+    """
     def end(side):
         idx = range(k - 1, -1, -1) if side < 0 else range(k + 1, grid.size)
         inner = k
@@ -265,6 +350,44 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
                  (True, True): "both"}[(low_open, high_open)]
     return ProfileInterval(name=name, estimate=est, low=float(low), high=float(high),
                            level=level, grid=grid, statistic=values, one_sided=one_sided)
+
+
+#: How far (in standard errors) the profile of a parameter without a bound on a side is scanned.
+SCAN_STANDARD_ERRORS = 10.0
+
+
+def _profile_fit(result, name, level, u, y, n_grid, xtol):
+    """:func:`profile_interval` of a FitResult: refits with ``name`` fixed, in its own bounds."""
+    free = result.free_names
+    if not isinstance(name, str) or name not in free:
+        raise ParameterError(f"`name` must be one of the free parameters {list(free)} of the "
+                             f"{type(result.model).__name__} fit; got {name!r}.")
+    level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
+                         upper_inclusive=False)
+    n_grid = check_int(n_grid, "n_grid", minimum=3)
+    xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
+    u, y = check_fit_record(result, u, y, "result")
+    rss_hat, n = result.sse, result.n_samples
+    quantile = float(scipy.stats.chi2.ppf(level, 1))
+    est = result.parameters[name].value
+    lo, hi = result.parameters[name].bounds
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        if result.covariance is None:
+            raise ParameterError(f"parameter {name!r} has no bound on a side and the fit no "
+                                 f"covariance (status {result.status.name}) to scale a scan: "
+                                 "give it finite bounds.")
+        se = result.standard_errors()[name]
+        lo = lo if math.isfinite(lo) else est - SCAN_STANDARD_ERRORS * se
+        hi = hi if math.isfinite(hi) else est + SCAN_STANDARD_ERRORS * se
+
+    def stat(value):     # no finite free run there (sse inf): far past any quantile, finite
+        value = n * math.log(sse_with_fixed(result, u, y, {name: value}) / rss_hat)
+        return min(max(value, 0.0), 1e12)
+
+    grid = np.unique(np.r_[np.linspace(lo, hi, n_grid), est])
+    values = np.array([stat(v) for v in grid])
+    k = int(np.argmin(np.abs(grid - est)))
+    return _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol)
 
 
 REFITS["profile_interval"] = profile_interval      # IdentificationResult.order_interval calls it

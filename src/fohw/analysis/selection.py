@@ -42,6 +42,7 @@ import numpy as np
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
 from .._validation import check_array, check_inputs, check_same_length
+from ..estimators.fit import fit
 from ..estimators.problem import split_inputs
 from ..exceptions import (
     ExtrapolationWarning,
@@ -49,8 +50,9 @@ from ..exceptions import (
     ParameterError,
     SimulationDivergedError,
 )
+from ..model.base import Model
 from ..record import Record
-from .lrtest import cancelled_orders, lr_test, null_orders
+from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
@@ -333,9 +335,9 @@ class Selection:
         bound is cheap, a ``"varpro"`` fit of one order; :func:`lr_columns`),
         ``lr_reference`` (the reference distribution and the nested candidate, or why the
         p-value was not computed).
-    best : IdentificationResult or None
+    best : IdentificationResult, FitResult or None
         The winner refitted on all the data given as estimation data (a
-        :class:`fohw.FractionalTFFit` from :func:`fohw.select_fractional_tf`). ``None`` means nothing
+        :class:`fohw.FitResult` for model candidates). ``None`` means nothing
         was selected: every candidate failed, or every refit was rejected (a
         :class:`fohw.ConvergenceWarning` says so).
     best_index : int or None
@@ -402,7 +404,7 @@ class Selection:
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
             cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
-        if columns is None:        # rows of fohw.select_fractional_tf have no in_range, ...
+        if columns is None:        # rows without an in_range, ... column leave it out
             cols = [c for c in cols if any(c in r for r in self.rows)]
         rows = self.ranked()[:top]
         out = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
@@ -473,8 +475,7 @@ def split_validation(u, y, validation):
 
     A fraction or a number of samples held back at the end (``score_from`` is where they
     start), or a separate record ``(u_val, y_val)`` (``score_from`` 0); checked, with a
-    :class:`fohw.ParameterError` naming ``validation``. Shared with
-    :func:`fohw.select_fractional_tf`.
+    :class:`fohw.ParameterError` naming ``validation``.
     """
     n = len(y)
     if isinstance(validation, Record):
@@ -574,11 +575,19 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     u, y : array_like or Record
         The estimation data (``u`` may be a :class:`fohw.Record`, then ``y`` is omitted).
         Only this record is used to choose: the benchmark's validation record stays unseen.
-    candidates : list of dict, or dict of lists
+    candidates : list of dict, dict of lists, list of Model or dict of Model
         Keyword arguments of :func:`fohw.identify` for each candidate, or a grid
         ``{"na": [1, 2, 3], "orders": [0, "mixed"], ...}`` (all combinations). ``na``,
         ``f_basis`` and ``g_basis`` are required (here or in ``**common``); ``nb`` defaults to
-        ``na`` (as ``fohw select`` without ``--nb``).
+        ``na`` (as ``fohw select`` without ``--nb``). Or start models of any kinds
+        (:class:`fohw.Model`; a dict labels them): each is fitted by :func:`fohw.fit` on the
+        estimation part (``**common`` are then its keywords: ``order_grid``, ``n_starts``,
+        …), simulated by its own ``simulate`` over the whole record (or from rest on a
+        separate one) and scored the same way; the winner is refitted on all the data from
+        its estimate, and ``.best`` is a :class:`fohw.FitResult`. Rows then have ``kind`` and
+        no ``in_range``; ``lr_pvalue`` tests a candidate against the nested one (same kind,
+        some of its free parameters fixed) with the most free parameters, if any
+        (:func:`fohw.lr_test` of the estimation fits).
     validation : float, int or (u_val, y_val), optional
         The held-back part: a fraction (default 0.25, a float in (0, 1)) or a number of
         samples (an int, at least 2) at the end of the record. Each candidate is fitted on the
@@ -591,7 +600,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         before this one).
     method : str, optional
         The ``identify`` method of every candidate that does not name its own (default: that of
-        :func:`fohw.identify`, ``"varpro"``).
+        :func:`fohw.identify`, ``"varpro"``). Not with model candidates.
     score : {"fit", "rmse", "aic", "bic"}
         How candidates are ranked (default: the held-back fit %; AIC and BIC use the
         estimation part only).
@@ -656,6 +665,13 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     if candidates is None:
         raise ParameterError("`candidates` is missing: a list of dicts of identify keywords "
                              "or a dict of lists (a grid).")
+    models = model_candidates(candidates)
+    if models is not None:
+        if method is not None:
+            raise ParameterError(f"`method` is for identify keyword candidates; model "
+                                 f"candidates are fitted by fohw.fit; got method={method!r}.")
+        return _select_models(u, y, models, validation, score, refit, executor, progress,
+                              envelope, common)
     u, names = split_inputs(u)
     if names is not None and "inputs" not in common:
         common = dict(common, inputs=names)
@@ -692,6 +708,193 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
+    if selection.best is None:
+        warn_nothing_selected("select_structure", rows)
+    return selection
+
+
+def model_candidates(candidates):
+    """``[(label, Model)]`` when ``candidates`` are models (a list, or a dict label -> model).
+
+    None when they are keyword dicts (the lagged kind's candidates); a mixture is refused.
+    """
+    if isinstance(candidates, Mapping):
+        items = list(candidates.items())
+    elif isinstance(candidates, Sequence) and not isinstance(candidates, (str, bytes)):
+        items = [(None, c) for c in candidates]
+    else:
+        return None
+    is_model = [isinstance(m, Model) for _, m in items]
+    if not any(is_model):
+        return None
+    if not all(is_model):
+        i = is_model.index(False)
+        raise ParameterError(f"`candidates` mixes fohw.Model start models with other entries "
+                             f"(entry {i} is {type(items[i][1]).__name__}): give models only, "
+                             "or identify keyword dicts only.")
+    out = []
+    for i, (key, m) in enumerate(items):
+        if key is None:
+            fixed = ", ".join(f"{n}={p.value:g}" for n, p in m.parameters.items() if p.fixed)
+            key = f"{i}: {type(m).__name__}" + (f" ({fixed})" if fixed else "")
+        out.append((str(key), m))
+    return out
+
+
+def _model_row(**changes):
+    """A row of a model candidate before (or without) a fit."""
+    return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
+                     bic=np.nan, n_params=0, estimated_orders="", fit_status="",
+                     refit_status="", seconds=np.nan, reason="", lr_pvalue=np.nan,
+                     lr_reference=""), **changes)
+
+
+def model_free_run(model, u, reference, envelope):
+    """``(ysim, status, reason)`` of a model's free run on ``u``; ``ysim`` None unless ok."""
+    try:
+        with np.errstate(all="ignore"):
+            ysim = np.asarray(model.simulate(u), dtype=float)
+    except SimulationDivergedError as exc:
+        return None, "diverged" if exc.cause == "growth" else "nan", str(exc)
+    bad = np.flatnonzero(~np.isfinite(ysim))
+    if bad.size:
+        return None, "diverged", (f"the free run leaves the finite numbers at sample "
+                                  f"k = {int(bad[0])}.")
+    found = implausible_sample(ysim, reference, envelope)
+    if found is not None:
+        return None, "implausible", implausible_message(found, envelope)
+    return ysim, "ok", ""
+
+
+@thin_solves
+def _fit_and_score_model(u_est, y_est, u_sim, y_score, score_from, model, options, reference,
+                         envelope):
+    """One model candidate: :func:`fohw.fit` on the estimation part, free run, score the tail.
+
+    Module level (it is pickled for process and dask executors). Never raises.
+    """
+    t0 = time.perf_counter()
+    row = _model_row()
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                res = fit(model, u_est, y_est, **options)
+            except Exception as exc:          # noqa: BLE001 - one candidate never loses the others
+                row.update(status="failed", reason=f"fit: {type(exc).__name__}: {exc}",
+                           seconds=time.perf_counter() - t0)
+                return row, None
+            n, d = len(y_est), res.n_free
+            orders = [k for k in res.free_names if res.parameters[k].order]
+            row.update(n_params=d, fit_status=res.status.name, estimated_orders=", ".join(
+                f"{k}={res.parameters[k].value:.4g}" for k in orders))
+            if res.sse > 0:
+                row["aic"], row["bic"] = aic(res.sse / n, n, d), bic(res.sse / n, n, d)
+            ysim, status, reason = model_free_run(res.model, u_sim, reference, envelope)
+            reason = _where(status, reason, score_from)
+            if status == "ok" and not score_from:            # a separate validation record
+                yest, status, reason = model_free_run(res.model, u_est, reference, envelope)
+                reason = reason and f"on the estimation input: {reason}"
+        notes = sorted({str(w.message).split("\n")[0] for w in caught})
+        row["seconds"] = time.perf_counter() - t0
+        if status != "ok":
+            row.update(status=status, reason="; ".join([reason, *notes]))
+            return row, res
+        if np.ptp(y_est) > 0:
+            row["fit_estimation"] = fit_percent(y_est, ysim[:score_from] if score_from else yest)
+        row["rmse"] = rmse(y_score, ysim[score_from:])
+        if np.ptp(y_score) > 0:
+            row["fit"] = fit_percent(y_score, ysim[score_from:])
+        else:
+            notes.append("the held-back output is constant: its fit % is undefined (NaN)")
+        row["reason"] = "; ".join(notes)
+        return row, res
+    except Exception as exc:                    # noqa: BLE001 - one candidate never loses the others
+        return _model_row(status="failed", reason=f"scoring: {type(exc).__name__}: {exc}",
+                          seconds=time.perf_counter() - t0), None
+
+
+def model_lr_columns(rows, results):
+    """Fill ``lr_pvalue`` and ``lr_reference`` of model candidates (in place).
+
+    Each fit is tested against the nested candidate of most free parameters (the same kind
+    with some of them fixed) by :func:`fohw.lr_test` on the estimation part (no refits).
+    """
+    fitted = [(i, r) for i, r in enumerate(results) if r is not None]
+    for i, full in fitted:
+        nested = []
+        for j, restricted in fitted:
+            try:
+                nested_fits(restricted, full)
+            except ParameterError:
+                continue
+            nested.append((restricted.n_free, j))
+        if not nested:
+            continue
+        j = max(nested)[1]
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            test = lr_test(results[j], full)
+        rows[i]["lr_pvalue"] = test.pvalue
+        rows[i]["lr_reference"] = (f"{test.distribution}, {test.criterion} vs "
+                                   f"{rows[j]['candidate']} ({test.hypothesis})"
+                                   + "".join(f"; {w.message}" for w in caught))
+
+
+def _select_models(u, y, models, validation, score, refit, executor, progress, envelope,
+                   common):
+    """:func:`select_structure` of model candidates (any kind), fitted by :func:`fohw.fit`."""
+    known = {p.name for p in inspect.signature(fit).parameters.values()
+             if p.kind is p.KEYWORD_ONLY} - {"start"}
+    unknown = sorted(set(common) - known)
+    if unknown:
+        close = difflib.get_close_matches(unknown[0], sorted(known), n=1)
+        raise ParameterError(f"the keywords shared by every model candidate give "
+                             f"{unknown[0]!r}: not a keyword of fohw.fit ({sorted(known)})"
+                             + (f"; did you mean {close[0]!r}?" if close else "") + ".")
+    y = check_array(y, "y")
+    for _, m in models:                        # every input checked before any fit
+        check_same_length(m.check_input(u), y, "u", "y")
+    u = np.asarray(u, dtype=float)
+    if score not in SCORES:
+        raise ParameterError(f"`score` must be one of {sorted(SCORES)}; got {score!r}.")
+    if not isinstance(refit, (bool, np.bool_)):
+        raise ParameterError(f"`refit` must be True or False; got {refit!r}.")
+    factor = check_envelope(envelope)
+    u_est, y_est, u_sim, y_score, score_from, described = split_validation(u, y, validation)
+    if score == "fit" and np.ptp(y_score) == 0:
+        raise ParameterError(f"the held-back output ({described}) is constant "
+                             f"({float(y_score[0])!r}): no candidate can be ranked by its fit %. "
+                             "Hold back a part where the output moves (`validation`), or rank "
+                             "by score='rmse'.")
+    reference = np.r_[y, y_score] if score_from == 0 else y
+    tasks = [(u_est, y_est, u_sim, y_score, score_from, m, common, reference, factor)
+             for _, m in models]
+    t0 = time.perf_counter()
+    outcomes = run_tasks(_fit_and_score_model, tasks, executor=executor, progress=progress,
+                         label="select_structure")
+    seconds = time.perf_counter() - t0
+    rows, results = [], []
+    for (label, m), outcome in zip(models, outcomes):
+        if isinstance(outcome, TaskError):
+            row, res = _model_row(status="failed", reason=f"executor: {outcome.message}"), None
+        else:
+            row, res = outcome
+        rows.append(dict(candidate=label, kind=type(m).__name__, **row))
+        results.append(res)
+    model_lr_columns(rows, results)
+    selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
+                          validation=described, seconds=seconds)
+
+    def refit_one(index):
+        start = None if results[index] is None else results[index].model
+        best = fit(models[index][1], u, y, start=start, **common)
+        return (best, *model_free_run(best.model, u, y, factor)[1:])
+
+    def finish(row, best):
+        row["refit_status"] = best.status.name
+
+    pick_refitted(selection, refit_one, finish, refit=bool(refit) and score_from > 0)
     if selection.best is None:
         warn_nothing_selected("select_structure", rows)
     return selection
@@ -780,8 +983,7 @@ def pick_refitted(selection, refit_one, finish, *, refit, keep=lambda w: True):
     free run; ``finish(row, fit)`` records a kept refit in its row. A refit that raises, or
     whose status is not ``"ok"``, is not kept: its row says why (``refit_*`` status, with its
     warnings) and the next ranked candidate is refitted. The kept refit's warnings are the
-    user's (re-issued), those ``keep`` rejects excepted. Shared by :func:`select_structure`
-    and :func:`fohw.analysis.tf_selection.select_fractional_tf`.
+    user's (re-issued), those ``keep`` rejects excepted. Used by :func:`select_structure`.
     """
     col = SCORES[selection.score][0]
     rows = selection.rows

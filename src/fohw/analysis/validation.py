@@ -26,6 +26,7 @@ from .._validation import check_array, check_inputs, check_int, check_same_lengt
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
+from ..model.simulation import generic_model
 from ..model.system import HammersteinWiener
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
@@ -114,23 +115,27 @@ class Validation:
     simulated : ndarray or None
         The free-run output (``None`` if it diverged or was implausible: see ``status`` and
         ``diverged``).
-    predicted : ndarray
-        The one-step-ahead prediction from the measured data.
+    predicted : ndarray or None
+        The one-step-ahead prediction from the measured data (None for a model of a kind other
+        than the lagged one: an output-error model, whose one-step prediction is its free run).
     fit_simulation, rmse_simulation : float
         Fit % ``100 (1 - ||y - ysim|| / ||y - mean y||)`` and RMSE (data units) of the free
         run, after ``n_init`` samples (NaN if it diverged or was implausible; the fit % is NaN
         too for a constant measured output, where it is undefined: see ``notes``).
     fit_prediction, rmse_prediction : float
-        The same for the one-step prediction.
+        The same for the one-step prediction (NaN when there is none).
     whiteness, cross_correlation : CorrelationTest or None
-        Residual tests of the one-step errors (``None`` for records too short for them, and
-        when they are undefined: a constant input or residual; ``notes`` says which).
+        Residual tests of the one-step errors (of the free-run errors for an output-error
+        model of another kind; ``None`` for records too short for them, and when they are
+        undefined: a constant input or residual, or a free run that was not scored; ``notes``
+        says which).
     diverged : str
         Why the free run was not scored (empty if it was): the divergence or the implausible
         sample, with its index and value.
     in_range : bool
         Whether the input stayed inside the estimation input's range (5 % slack); always True
-        for a :class:`fohw.HammersteinWiener`, which carries no estimation range.
+        for a model (rather than an identification result), which carries no estimation range,
+        unless its simulator warns with :class:`fohw.ExtrapolationWarning`.
     n_init : int
         Leading samples left out of every measure.
     status : str
@@ -178,9 +183,11 @@ class Validation:
         sim_fit = f"{self.fit_simulation:.1f}" if ok else self.status
         sim_rmse = f"{self.rmse_simulation:.4g}" if ok else self.status
         out = [f"| | fit % | RMSE{u} |", "|---|---:|---:|",
-               f"| free-run simulation | {sim_fit} | {sim_rmse} |",
-               f"| one-step prediction | {self.fit_prediction:.1f} | "
-               f"{self.rmse_prediction:.4g} |", ""]
+               f"| free-run simulation | {sim_fit} | {sim_rmse} |"]
+        if self.predicted is not None:
+            out.append(f"| one-step prediction | {self.fit_prediction:.1f} | "
+                       f"{self.rmse_prediction:.4g} |")
+        out.append("")
         if self.diverged:
             out.append(f"Free run: {self.diverged}")
         if self.initial is not None and self.initial.n_estimated:
@@ -245,12 +252,18 @@ def _free_run(model, u, state):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ExtrapolationWarning)
         try:
-            if isinstance(model, HammersteinWiener):
+            if isinstance(model, HammersteinWiener) and isinstance(state, InitialState):
                 ysim = simulate_from(model, u, state)
             else:
                 ysim = model.simulate(u, initial=state)
         except SimulationDivergedError as exc:
             return None, "nan" if exc.cause == "output_basis" else "diverged", str(exc), caught
+    ysim = np.asarray(ysim, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(ysim))
+    if bad.size:               # a kind whose simulator returns inf or NaN instead of raising
+        k = int(bad[0])
+        return None, "diverged", (f"the free run leaves the finite numbers at sample k = {k} "
+                                  f"(y[k] = {ysim[k]!r})."), caught
     return ysim, "ok", "", caught
 
 
@@ -277,15 +290,21 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
 
     Parameters
     ----------
-    model : IdentificationResult or HammersteinWiener
+    model : IdentificationResult, HammersteinWiener, Model or FitResult
         The model: a result (its fitted predictor, as ``result.simulate``) or a
         :class:`fohw.HammersteinWiener` (simulated by :func:`fohw.simulate`, predicted one
-        step ahead through its theta ``[q (x) a, p (x) b]``, Eq. 19).
+        step ahead through its theta ``[q (x) a, p (x) b]``, Eq. 19). A :class:`fohw.Model`
+        of any other kind, or a :class:`fohw.FitResult` (its fitted model), is an output-error
+        model: its free run (``model.simulate(u, initial=initial)``) is scored the same way,
+        the residual tests are of the free-run errors, and there is no separate one-step
+        prediction (``predicted`` None, its fit NaN, a note says so).
     u, y : array_like
         The validation record, in the data's units (at least 2 samples).
     initial : str, tuple or InitialState, optional
-        The state the free run starts from (:mod:`fohw.model.initial`): ``"rest"`` (the
-        default of a ``past="rest"`` fit); ``"fitted"`` (the levels a ``past="estimate"`` fit
+        For a model of another kind: passed to its ``simulate`` (``"estimate"`` is refused).
+        For the lagged kind, the state the free run starts from
+        (:mod:`fohw.model.initial`): ``"rest"`` (the default of a ``past="rest"`` fit);
+        ``"fitted"`` (the levels a ``past="estimate"`` fit
         estimated before its *estimation* record; a HammersteinWiener's own levels, its
         default); ``"estimate"`` or ``("estimate", n)`` (this record's levels, and ``n`` free
         past outputs, fitted by least squares on ``y`` with the model fixed, as MATLAB's
@@ -296,7 +315,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         has no default: a ParameterError lists the choices.
     history : (u_past, y_past), optional
         The older spelling of ``initial=(u_past, y_past)``: measured data just before the
-        record (the free run continues from them). Not with ``initial``.
+        record (the free run continues from them). Not with ``initial``; lagged kind only.
     n_init : int
         Leading samples left out of every measure (a start-up transient).
     max_lag, confidence :
@@ -319,7 +338,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     Raises
     ------
     ParameterError
-        ``model`` is neither a result nor a HammersteinWiener, or a bad ``n_init`` or
+        ``model`` is neither a result nor a model, or a bad ``n_init`` or
         ``envelope``; no ``initial`` for a ``past="estimate"`` result, a bad ``initial``, or
         both ``initial`` and ``history``.
     DimensionError
@@ -335,6 +354,10 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     >>> v.fit_prediction > v.fit_simulation, v.diverged, v.status
     (True, '', 'ok')
     """
+    other = generic_model(model)
+    if other is not None:
+        return _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
+                              max_lag=max_lag, confidence=confidence, envelope=envelope)
     is_model = isinstance(model, HammersteinWiener)
     if not is_model and not all(callable(getattr(model, name, None))
                                 for name in ("simulate", "predict")):
@@ -361,16 +384,67 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         if found is not None:
             ysim, status = None, "implausible"
             diverged = implausible_message(found, factor)
-    notes = []
     yhat = _one_step(model, u, y) if is_model else model.predict(u, y)
-    fit_s = rmse_s = np.nan
+    return _scored(u, y, ysim, yhat, y - yhat, status, diverged, in_range, state, [],
+                   n_init=n_init, max_lag=max_lag, confidence=confidence)
+
+
+def _compare_model(model, u, y, *, initial, history, n_init, max_lag, confidence, envelope):
+    """:func:`compare` of a model of any kind but the lagged one (an output-error model).
+
+    Its one-step prediction is its free run (the noise is on the output), so the free run is
+    scored and the residual tests are of its errors; ``initial`` goes to ``model.simulate``.
+    """
+    kind = type(model).__name__
+    if history is not None:
+        raise ParameterError(f"`history` is for the lagged HammersteinWiener kind; a {kind} "
+                             "takes its initial state through `initial` (passed to its "
+                             "simulate).")
+    if _is_estimate(initial):
+        raise ParameterError(f"initial={initial!r} (the record's initial state fitted to its "
+                             f"output) is for the lagged HammersteinWiener kind; a {kind} "
+                             "takes its own `initial` (passed to its simulate).")
+    u = model.check_input(u)
+    y = check_array(y, "y")
+    check_same_length(u, y, "u", "y")
+    if y.size < 2:
+        raise DimensionError(f"the record has {y.size} sample (`u` and `y`); compare needs at "
+                             "least 2 (a fit % compares the output with its mean).")
+    n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
+    factor = check_envelope(envelope)
+    ysim, status, diverged, caught = _free_run(model, u, initial)
+    in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
+    for w in caught:
+        if not issubclass(w.category, ExtrapolationWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if ysim is not None:
+        found = implausible_sample(ysim, y, factor)
+        if found is not None:
+            ysim, status = None, "implausible"
+            diverged = implausible_message(found, factor)
+    notes = [f"one-step prediction: a {kind} is an output-error model (the noise on the "
+             "output), whose one-step prediction is its free run; the residual tests are of "
+             "the free-run errors"]
+    return _scored(u, y, ysim, None, None if ysim is None else y - ysim, status, diverged,
+                   in_range, None, notes, n_init=n_init, max_lag=max_lag,
+                   confidence=confidence)
+
+
+def _scored(u, y, ysim, yhat, residual, status, diverged, in_range, state, notes, *, n_init,
+            max_lag, confidence):
+    """The :class:`Validation` of a free run ``ysim`` and a prediction ``yhat`` (None: none).
+
+    The residual tests are of ``residual`` (None: not tested).
+    """
+    fit_s = rmse_s = fit_p = rmse_p = np.nan
     if ysim is not None:
         fit_s = _measure("free-run fit %", fit_percent, notes, y, ysim, n_init=n_init)
         rmse_s = rmse(y, ysim, n_init=n_init)
-    fit_p = _measure("one-step fit %", fit_percent, notes, y, yhat, n_init=n_init)
-    residual = y - yhat
+    if yhat is not None:
+        fit_p = _measure("one-step fit %", fit_percent, notes, y, yhat, n_init=n_init)
+        rmse_p = rmse(y, yhat, n_init=n_init)
     white = xcorr = None
-    if y.size - n_init > 3 * max_lag:
+    if residual is not None and y.size - n_init > 3 * max_lag:
         white = _measure("whiteness test skipped", whiteness_test, notes, residual,
                          max_lag=max_lag, confidence=confidence, n_init=n_init)
         if u.ndim == 1:
@@ -384,6 +458,6 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         xcorr = None if isinstance(xcorr, float) else xcorr
     return Validation(y=y, simulated=ysim, predicted=yhat, fit_simulation=fit_s,
                       rmse_simulation=rmse_s, fit_prediction=fit_p,
-                      rmse_prediction=rmse(y, yhat, n_init=n_init), whiteness=white,
+                      rmse_prediction=rmse_p, whiteness=white,
                       cross_correlation=xcorr, diverged=diverged, in_range=in_range,
                       n_init=n_init, status=status, notes=tuple(notes), initial=state)

@@ -44,10 +44,17 @@ from ..model.base import Model
 from ..results import Status
 from ._common import bounded_least_squares, dependent_columns_note
 
-__all__ = ["fit", "free_jacobian", "data_digest", "MAX_SCAN"]
+__all__ = ["fit", "free_jacobian", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
+           "PENALTY", "FD_RCOND"]
 
 #: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model).
 MAX_SCAN = 20_000
+
+#: A free run beyond this many times the largest measured ``|y|`` is out of range: the search
+#: treats it as a penalty (a residual of ``PENALTY`` times ``max |y|`` at every sample, larger
+#: than any run inside the range), and a fitted model whose free run leaves it is ``FAILED``.
+ESCAPE = 1e3
+PENALTY = 1e4
 
 #: Magnitudes of the data fohw fits without rescaling: beyond them sums of squares of the
 #: simulation error overflow or underflow in double precision.
@@ -114,6 +121,35 @@ def free_jacobian(model, u, *, exact=True):
         cols.append((np.asarray(y_up) - np.asarray(y_down)) / (up[j] - down[j]))
     jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
     return yhat, jac, "finite differences"
+
+
+def stationary(jac, r, x, lower, upper, rtol=1e-6):
+    """Whether ``x`` is a stationary point of ``||r||^2`` within its bounds (Gauss–Newton).
+
+    The reduction a Gauss–Newton step predicts, ``||P r||^2`` (``P`` the projection onto the
+    columns of ``jac`` not held at an active bound), is below ``rtol`` times ``||r||^2``: a
+    search that ends where it started there has converged (an estimate on a bound with a zero
+    projected gradient included); elsewhere it is stuck.
+    """
+    g = jac.T @ r                                   # d (||r||^2 / 2) / d x is -g
+    free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
+    if not np.any(free):
+        return True
+    q, _ = np.linalg.qr(jac[:, free])
+    pred = float(np.sum((q.T @ r) ** 2))
+    return pred <= rtol * float(r @ r)
+
+
+#: Relative rank tolerance of a Jacobian by central differences: their error is about
+#: ``eps**(2/3)`` (4e-11) of a column, far above the default ``N eps`` of an exact one, so a
+#: dependence between columns hidden by that noise is still found.
+FD_RCOND = 1e-8
+
+
+def rank_rcond(how, n_rows, n_cols):
+    """The ``rcond`` of the rank decision for a Jacobian obtained ``how`` (see :data:`FD_RCOND`)."""
+    exact = _linalg.rank_tolerance(n_rows, n_cols)
+    return exact if how == "exact" else max(exact, FD_RCOND)
 
 
 def _order_grid(model, grid):
@@ -210,9 +246,8 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
              for m in list(model.starts(u, y)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
-    penalty = np.full(y.size, 1e4 * y_scale)
+    penalty = np.full(y.size, PENALTY * y_scale)
     lower, upper = params.free_bounds()
-    t_matrix = params.tie_matrix()
     counter = {"nfev": 0}
 
     def at(x):
@@ -225,20 +260,17 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
                 yhat = np.asarray(at(x).simulate(u), dtype=float)
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return penalty
-        if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > 1e8 * y_scale:
+        if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
             return penalty
         return y - yhat
 
-    how = "exact" if exact_jacobian and model.jacobian(u) is not None else "finite differences"
+    has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
 
     def jacobian(x):
         m = at(x)
         try:
             with np.errstate(all="ignore"):
-                if how == "exact":
-                    jac = np.asarray(m.jacobian(u)[1], dtype=float) @ t_matrix
-                else:
-                    jac = free_jacobian(m, u, exact=False)[1]
+                jac = free_jacobian(m, u, exact=has_exact)[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return np.zeros((y.size, len(names)))
         return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
@@ -248,8 +280,11 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     for base in bases:
         for m in _order_grid(base, order_grid):
             candidates.append(m)
-            with np.errstate(all="ignore"):
-                solved = m.linear_start(u, y)
+            try:
+                with np.errstate(all="ignore"):
+                    solved = m.linear_start(u, y)
+            except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+                solved = None
             if solved is not None:
                 candidates.append(solved.with_parameters(params.with_values(
                     {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None})))
@@ -286,23 +321,24 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
-    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and np.max(np.abs(ls.grad)) > 0:
+    yhat, jac, how_cov = free_jacobian(fitted, u, exact=has_exact)
+    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, y - yhat, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
-    yhat, jac, how_cov = free_jacobian(fitted, u, exact=(how == "exact"))
-    bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > 1e8 * y_scale))
+    bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > ESCAPE * y_scale))
     if bad.size:
         status = Status.FAILED
         messages.append(f"The fitted model's free run on its own input leaves the range of the data "
-                        f"at sample {int(bad[0])} (|yhat| beyond 1e8 max|y| or not finite).")
+                        f"at sample {int(bad[0])} (|yhat| beyond {ESCAPE:g} max|y| or not finite).")
         covariance = None
     else:
         note = fitted.check_fitted(u, y)
         if note:
             status = Status.FAILED
             messages.append(note)
-        inverse, fac = _linalg.inverse_gram(jac)
+        inverse, fac = _linalg.inverse_gram(jac, rcond=rank_rcond(how_cov, *jac.shape))
         if inverse is None:
             status = Status.RANK_DEFICIENT
             note = dependent_columns_note(fac, list(names))

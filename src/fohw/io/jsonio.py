@@ -25,8 +25,11 @@ import numpy as np
 
 from ..estimators.identify import METHODS
 from ..exceptions import DataFileError, DimensionError, ParameterError
+from ..fit_result import FitResult
+from ..model.base import Model
 from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis
 from ..model.orders import ORDER_RANGE
+from ..model.parameters import Parameters
 from ..model.structure import Structure
 from ..model.system import HammersteinWiener
 from ..results import IdentificationResult, Status
@@ -220,9 +223,106 @@ def _basis(d, given, name, path) -> Basis:
         raise ParameterError(f"{path}: {exc}") from None
 
 
+# ---- models and results of any other kind (fohw.Model, fohw.FitResult) -------------------------
+#: The fields of a model file of a kind other than the lagged one (:meth:`fohw.Model.to_dict`).
+GENERIC_MODEL_FIELDS = ("kind", "config", "parameters")
+#: The fields of a result file of another kind (:meth:`fohw.FitResult.to_dict`).
+GENERIC_RESULT_FIELDS = ("model", "covariance", "status", "sse", "n_samples", "message", "nfev",
+                         "jacobian", "starts", "residuals", "data_digest", "options")
+
+
+def _number_list(d, key, path, ndim):
+    """A JSON list (of lists, for ``ndim`` 2) of finite numbers as an array, or raise."""
+    value = d[key]
+    rows = value if ndim == 2 else [value]
+    if not isinstance(value, list) or not all(
+            isinstance(r, list) and all(_is_number(v) and np.isfinite(v) for v in r)
+            for r in rows) or len({len(r) for r in rows}) > 1:
+        need = "a list of finite numbers" if ndim == 1 else "a matrix (list of equal rows)"
+        raise DataFileError(f"{path}: field {key!r} must be null or {need} of finite numbers.")
+    return np.array(value, dtype=np.float64).reshape(-1, len(rows[0]) if rows else 0) \
+        if ndim == 2 else np.array(value, dtype=np.float64)
+
+
+def _is_generic_model(body):
+    return isinstance(body, dict) and "kind" in body
+
+
+def _is_generic_result(body):
+    return isinstance(body, dict) and _is_generic_model(body.get("model"))
+
+
+def _generic_model_from_dict(body, version, path, field="the file"):
+    """A Model of a registered kind from its ``{"kind", "config", "parameters"}``, checked."""
+    if version != MODEL_FORMAT_VERSION:
+        raise DataFileError(f"{path}: a model of kind {body['kind']!r} in a version-{version} "
+                            f"file; models of any kind are written from version "
+                            f"{MODEL_FORMAT_VERSION} on.")
+    _require_fields(body, GENERIC_MODEL_FIELDS, "fohw-model", version, path)
+    if not isinstance(body["kind"], str):
+        _bad(body, "kind", "the name of a registered model kind (a string)", path)
+    if not isinstance(body["config"], dict):
+        _bad(body, "config", "an object (the kind's settings)", path)
+    if not isinstance(body["parameters"], dict) or not body["parameters"]:
+        _bad(body, "parameters", "an object name -> parameter", path)
+    try:
+        stored = Parameters.from_dict(body["parameters"])
+        model = Model.from_dict(body)
+    except (ParameterError, DimensionError, TypeError, ValueError, KeyError,
+            AttributeError) as exc:
+        raise DataFileError(f"{path}: cannot rebuild the {body['kind']!r} model of {field}: "
+                            f"{exc}") from None
+    if model.parameters != stored:
+        raise DataFileError(f"{path}: the {body['kind']!r} model rebuilt from {field} has the "
+                            f"parameters {model.parameters!r}, not the file's {stored!r}: the "
+                            "kind or the file disagree.")
+    return model
+
+
+def _generic_result_from_dict(body, version, path):
+    """A FitResult of any kind but the lagged one, every field checked before it is built."""
+    _require_fields(body, GENERIC_RESULT_FIELDS, "fohw-result", version, path)
+    model = _generic_model_from_dict(body["model"], version, path, "field 'model'")
+    if body["status"] not in Status.__members__:
+        _bad(body, "status", f"one of {list(Status.__members__)}", path)
+    _number(body, "sse", path, lower=0.0)
+    _integer(body, "n_samples", path, 1)
+    _integer(body, "nfev", path, 0)
+    for key in ("message", "jacobian", "data_digest"):
+        if not isinstance(body[key], str):
+            _bad(body, key, "a string", path)
+    if not isinstance(body["options"], dict):
+        _bad(body, "options", "an object", path)
+    starts = body["starts"]
+    if not isinstance(starts, list) or not all(
+            isinstance(r, list) and len(r) == 2 and isinstance(r[0], dict)
+            and (r[1] is None or _is_number(r[1])) for r in starts):
+        _bad(body, "starts", "a list of [order values, sse or null]", path)
+    n_free = len(model.parameters.free_names)
+    cov = None
+    if body["covariance"] is not None:
+        cov = _number_list(body, "covariance", path, 2)
+    if body["residuals"] is not None:
+        res = _number_list(body, "residuals", path, 1)
+        if res.shape != (body["n_samples"],):
+            raise DataFileError(f"{path}: field 'residuals' has {res.size} values for "
+                                f"n_samples = {body['n_samples']}: the file contradicts itself.")
+    try:
+        result = FitResult.from_dict(body)
+    except (ParameterError, DimensionError, KeyError, TypeError, ValueError) as exc:
+        raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
+                            f"{exc})") from None
+    _check_covariance(cov, n_free, path)
+    return result
+
+
 # ---- models -----------------------------------------------------------------------------------
-def model_to_dict(model: HammersteinWiener) -> dict:
-    """The content of a model file: the header and :meth:`HammersteinWiener.to_dict`."""
+def model_to_dict(model: HammersteinWiener | Model) -> dict:
+    """The content of a model file: the header and the model's ``to_dict()``.
+
+    :meth:`HammersteinWiener.to_dict` for the lagged kind, :meth:`fohw.Model.to_dict`
+    (``kind``, ``config``, ``parameters``) for any other.
+    """
     return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION, **model.to_dict()}
 
 
@@ -248,13 +348,26 @@ def _model_from_v2(d, path):
             "operating_point": d["operating_point"]}
 
 
+def _no_bases(f_basis, g_basis, output_map, kind, path):
+    for name, value in (("f_basis", f_basis), ("g_basis", g_basis), ("output_map", output_map)):
+        if value is not None:
+            raise ParameterError(f"`{name}` is for files of the lagged HammersteinWiener kind; "
+                                 f"{path} holds a {kind!r} model; got {name}={value!r}.")
+
+
 def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> HammersteinWiener:
     """The model of a model file's content (:func:`model_to_dict`; version 2 files too).
 
-    Fields of the wrong type or value are a :class:`~fohw.DataFileError` naming the file.
+    A file with a ``kind`` field holds a model of that registered kind
+    (:meth:`fohw.Model.from_dict`; its module must be imported first); the parameters it
+    rebuilds must be the file's. Fields of the wrong type or value are a
+    :class:`~fohw.DataFileError` naming the file.
     """
     version = _check_header(d, "fohw-model", path)
     body = {k: v for k, v in d.items() if k not in _HEADER}
+    if _is_generic_model(body):
+        _no_bases(f_basis, g_basis, None, body["kind"], path)
+        return _generic_model_from_dict(body, version, path)
     if version == 2:
         body = _model_from_v2(body, path)
     _require_fields(body, HammersteinWiener.DICT_FIELDS, "fohw-model", version, path)
@@ -273,8 +386,12 @@ def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> Ha
         raise DataFileError(f"{path}: malformed fohw-model file: {exc}") from None
 
 
-def save_model(model: HammersteinWiener, path: str | os.PathLike) -> None:
+def save_model(model: HammersteinWiener | Model, path: str | os.PathLike) -> None:
     """Write a model to a JSON file (atomically; :func:`load_model` reads it back exactly).
+
+    A :class:`fohw.HammersteinWiener` is written in its own layout; a :class:`fohw.Model` of
+    any other kind as ``kind``, ``config`` and ``parameters`` (:meth:`fohw.Model.to_dict`),
+    which :func:`load_model` rebuilds through the registry of kinds.
 
     Examples
     --------
@@ -285,14 +402,29 @@ def save_model(model: HammersteinWiener, path: str | os.PathLike) -> None:
     ...     fohw.load_model(os.path.join(d, "m.json")) == m
     True
     """
-    if not isinstance(model, HammersteinWiener):
-        raise ParameterError(f"`model` must be a HammersteinWiener; got {type(model).__name__}.")
-    write_json(model_to_dict(model), path)
+    if not isinstance(model, (HammersteinWiener, Model)):
+        raise ParameterError(f"`model` must be a fohw.Model (a HammersteinWiener or any other "
+                             f"kind); got {type(model).__name__}.")
+    _write(model_to_dict(model), path)
+
+
+def _write(content, path):
+    """:func:`write_json`, with a kind's settings that JSON cannot hold named."""
+    try:
+        write_json(content, path)
+    except TypeError as exc:
+        raise ParameterError(f"cannot save to {os.fspath(path)}: {exc} (a model kind's "
+                             "`config()` must hold JSON values only); nothing was written.") \
+            from None
 
 
 def load_model(path: str | os.PathLike, *, f_basis: Basis | None = None,
-               g_basis: Basis | None = None) -> HammersteinWiener:
-    """Read a model written by :func:`save_model` (custom bases must be passed again)."""
+               g_basis: Basis | None = None) -> HammersteinWiener | Model:
+    """Read a model written by :func:`save_model` (custom bases must be passed again).
+
+    The file says which kind it holds; a kind of one's own must be defined (its module
+    imported) before loading.
+    """
     return model_from_dict(read_json(path), f_basis=f_basis, g_basis=g_basis,
                            path=os.fspath(path))
 
@@ -307,7 +439,7 @@ _V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_hi
 
 
 def result_to_dict(result) -> dict:
-    """The content of a result file: the header and :meth:`IdentificationResult.to_dict`."""
+    """The content of a result file: the header and the result's ``to_dict()``."""
     return {"format": "fohw-result", "version": RESULT_FORMAT_VERSION, **result.to_dict()}
 
 
@@ -603,6 +735,9 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
     """
     version = _check_header(d, "fohw-result", path)
     body = {k: v for k, v in d.items() if k not in _HEADER}
+    if _is_generic_result(body):
+        _no_bases(f_basis, g_basis, output_map, body["model"]["kind"], path)
+        return _generic_result_from_dict(body, version, path)
     copies = None
     if version == 2:
         body, copies = _result_from_v2(body, path)
@@ -624,11 +759,13 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
     return result
 
 
-def save_result(result: IdentificationResult, path: str | os.PathLike) -> None:
-    """Write an identification result to a JSON file (atomically).
+def save_result(result: IdentificationResult | FitResult, path: str | os.PathLike) -> None:
+    """Write an identification result, or a fit of any kind, to a JSON file (atomically).
 
     :func:`load_result` reads it back with every float exact. Settings without a JSON form (a
-    ``start`` result) are left out of ``options``.
+    ``start`` result) are left out of ``options``. A :class:`fohw.FitResult` of another kind
+    is written as :meth:`fohw.FitResult.to_dict` (its model as ``kind``, ``config`` and
+    ``parameters``).
 
     Raises
     ------
@@ -649,15 +786,15 @@ def save_result(result: IdentificationResult, path: str | os.PathLike) -> None:
     >>> back.alpha == res.alpha and bool((back.theta == res.theta).all())
     True
     """
-    if not isinstance(result, IdentificationResult):
-        raise ParameterError(f"`result` must be an IdentificationResult; got "
-                             f"{type(result).__name__}.")
-    write_json(result_to_dict(result), path)
+    if not isinstance(result, (IdentificationResult, FitResult)):
+        raise ParameterError(f"`result` must be an IdentificationResult or a fohw.FitResult; "
+                             f"got {type(result).__name__}.")
+    _write(result_to_dict(result), path)
 
 
 def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
-                g_basis: Basis | None = None, output_map=None) -> IdentificationResult:
-    """Read an identification result written by :func:`save_result`.
+                g_basis: Basis | None = None, output_map=None) -> IdentificationResult | FitResult:
+    """Read an identification result (or a fit of any kind) written by :func:`save_result`.
 
     Parameters
     ----------
@@ -670,7 +807,9 @@ def load_result(path: str | os.PathLike, *, f_basis: Basis | None = None,
 
     Returns
     -------
-    IdentificationResult
+    IdentificationResult or FitResult
+        As the file says (a fit of a kind other than the lagged one is a FitResult; its kind
+        must be defined before loading).
 
     Raises
     ------

@@ -105,7 +105,8 @@ def _keep_settings(method):
     def with_parameters(self, values):
         new = method(self, values)
         if isinstance(values, Parameters):
-            settings = values
+            # in the kind's own order (the Jacobian's columns follow it)
+            settings = new.parameters.merged(values)
         else:
             settings = getattr(self, _SETTINGS, None)
         if settings is not None and new is not self:

@@ -19,19 +19,27 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
+import scipy.fft
 
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from .base import Model
 from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
 from .frequency_response import gl_operator_response, operator_response
-from .gl import gl_weights
-from .series_division import causal_product, series_divide
+from .gl import gl_weights, gl_weights_derivative
+from .orders import ORDER_RANGE
+from .parameters import Parameter, Parameters
+from .series_division import causal_product, series_divide, series_reciprocal
 
-__all__ = ["FractionalTF", "operator_weights", "delay_samples"]
+__all__ = ["FractionalTF", "operator_weights", "delay_samples", "NUM_ORDER_RANGE"]
 
 # Orders closer than this are one term (their coefficients are summed).
 ORDER_TOL = 1e-12
 # A delay counts as a multiple of dt when delay/dt is within this of an integer.
 DELAY_TOL = 1e-9
+#: Default bounds of a numerator order ``beta_j``: the order range mirrored, ``(-2, 2)``. A
+#: numerator order may be negative (a fractional integral, e.g. a Warburg term ``s^{-1/2}``);
+#: denominator orders take :data:`fohw.model.orders.ORDER_RANGE` ``[0, 2]`` like every other order.
+NUM_ORDER_RANGE = (-ORDER_RANGE[1], ORDER_RANGE[1])
 
 
 def operator_weights(coefs, orders, h, n):
@@ -115,6 +123,32 @@ def _vector(x, name):
     return arr.copy()
 
 
+def _names(m, k):
+    """The parameter names of ``m`` numerator and ``k`` denominator terms, in order."""
+    return (tuple(f"b{j}" for j in range(m)) + tuple(f"beta{j}" for j in range(m))
+            + tuple(f"a{i}" for i in range(k)) + tuple(f"alpha{i}" for i in range(k)))
+
+
+def _order(name, value, order_range):
+    """An order parameter: bounds ``order_range`` (widened to hold ``value``), fixed at 0."""
+    lo, hi = order_range
+    return Parameter(name, value, bounds=(min(lo, value), max(hi, value)), fixed=value == 0.0,
+                     order=True)
+
+
+def _input(u, name="u"):
+    try:
+        u = np.asarray(u, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be an array of real numbers; got {type(u).__name__}.") from None
+    if u.ndim != 1 or u.size == 0:
+        raise DimensionError(f"`{name}` must be a non-empty 1-D array; got shape {u.shape}.")
+    if not np.all(np.isfinite(u)):
+        bad = int(np.flatnonzero(~np.isfinite(u))[0])
+        raise ParameterError(f"`{name}` must contain only finite values; got {u[bad]!r} at index {bad}.")
+    return u
+
+
 def _merge(coefs, orders):
     """Sum the coefficients of equal orders; sort by decreasing order."""
     idx = np.argsort(-orders, kind="stable")
@@ -152,7 +186,7 @@ def _poly_text(coefs, orders):
     return text.replace("+ -", "- ")
 
 
-class FractionalTF:
+class FractionalTF(Model):
     """A fractional transfer function ``G(s) = sum_j b_j s^{beta_j} / sum_i a_i s^{alpha_i} e^{-s delay}``.
 
     Parameters
@@ -166,7 +200,8 @@ class FractionalTF:
         it that way). The coefficient of the highest denominator order must be non-zero.
     dt : float, optional
         Sampling time used by :meth:`simulate` (and :meth:`step`, :meth:`impulse`) when they are
-        not given one.
+        not given one. Required by :func:`fohw.fit` and every verb that calls
+        ``simulate(u)`` (a clear error otherwise).
     delay : float, optional
         Input delay ``tau >= 0``; the simulation needs it to be a multiple of the sampling time.
 
@@ -176,6 +211,17 @@ class FractionalTF:
         The terms after merging equal orders and dropping zero coefficients, sorted by
         decreasing order (read-only copies).
     dt, delay : float or None, float
+    parameters : Parameters
+        The terms as given (before merging), named ``b0, b1, …`` (numerator coefficients),
+        ``beta0, …`` (their orders), ``a0, …`` (denominator coefficients), ``alpha0, …`` (their
+        orders), indexed in the order given. By default every coefficient is free except the
+        normalising denominator coefficient (the one of the lowest order: numerator and
+        denominator can be scaled together), and every order is free except those that are 0.
+        Orders are bounded by the one order range: denominator orders by
+        :data:`fohw.model.orders.ORDER_RANGE` ``[0, 2]``, numerator orders by
+        :data:`NUM_ORDER_RANGE` ``(-2, 2)``; an order given outside that range widens its own
+        bound to its value. Change any of this with
+        ``G.with_parameters(G.parameters.replace(name, fixed=..., bounds=..., tie=...))``.
 
     Notes
     -----
@@ -185,6 +231,10 @@ class FractionalTF:
     series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log^2 N)``. The
     method is first order in ``dt`` (measured in ``docs/transfer_functions.md``). Sample
     alignment: see the module docstring.
+
+    A :class:`fohw.Model`: :func:`fohw.fit` estimates its free parameters by simulation error
+    with the exact Jacobian (:meth:`jacobian`), starting from a scan of the free orders with
+    the coefficients of each grid point from the linear equation error (:meth:`linear_start`).
 
     Examples
     --------
@@ -215,6 +265,8 @@ class FractionalTF:
             bad = float(alpha[np.argmin(alpha)])
             raise ParameterError(f"`den_orders` must be non-negative; got {bad!r}. Multiply numerator "
                                  "and denominator by s^(-that order) to write the same model.")
+        # The terms as given name the parameters (b0 is num[0], ...); the merged ones simulate.
+        self._terms = tuple(x.copy() for x in (b, beta, a, alpha))
         a, alpha = _merge(a, alpha)
         if a[0] == 0.0:
             raise ParameterError(f"`den`: the leading coefficient (of s^{alpha[0]:g}, the highest "
@@ -230,7 +282,7 @@ class FractionalTF:
         if self._dt is not None:
             delay_samples(delay, self._dt)
         self._delay = delay
-        for arr in (self._num, self._num_orders, self._den, self._den_orders):
+        for arr in (self._num, self._num_orders, self._den, self._den_orders, *self._terms):
             arr.setflags(write=False)
 
     # ------------------------------------------------------------------ attributes
@@ -258,6 +310,215 @@ class FractionalTF:
             text += f" · exp(-{self._delay:g} s)"
         return text
 
+    # ------------------------------------------------------------------ the Model protocol
+    @property
+    def parameters(self):
+        """The terms as given, named ``b0…``, ``beta0…``, ``a0…``, ``alpha0…`` (see the class).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0], dt=0.05)
+        >>> G.parameters.free_names                    # a1 normalises; beta0 = 0 is fixed
+        ('b0', 'a0', 'alpha0')
+        >>> G.parameters["alpha0"].bounds
+        (0.0, 2.0)
+        """
+        b, beta, a, alpha = self._terms
+        normaliser = int(np.argmin(alpha))
+        pars = [Parameter(f"b{j}", v) for j, v in enumerate(b.tolist())]
+        pars += [_order(f"beta{j}", v, NUM_ORDER_RANGE) for j, v in enumerate(beta.tolist())]
+        pars += [Parameter(f"a{i}", v, fixed=i == normaliser) for i, v in enumerate(a.tolist())]
+        pars += [_order(f"alpha{i}", v, ORDER_RANGE) for i, v in enumerate(alpha.tolist())]
+        return Parameters(pars)
+
+    def with_parameters(self, values):
+        """A copy with new values (a mapping ``name -> float`` or a :class:`fohw.Parameters`).
+
+        ``dt`` and ``delay`` are kept. A :class:`fohw.Parameters` also sets which parameters
+        are free, fixed, tied and their bounds (:func:`fohw.fit` holds them).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0], dt=0.05)
+        >>> print(G.with_parameters({"a0": 3.0, "alpha0": 0.5}))
+        1 / (3 s^0.5 + 1)
+        """
+        m, k = self._terms[0].size, self._terms[2].size
+        if isinstance(values, Parameters):
+            if values.names != _names(m, k):
+                self.parameters.merged(values)              # raises naming the difference
+            v = values.valuesdict()
+            for name, par in values.items():               # ties applied (fohw.fit's are)
+                if par.tie is not None:
+                    v[name] = par.tie[1] * v[par.tie[0]]
+        else:
+            v = self.parameters.with_values(values).valuesdict()
+        return FractionalTF([v[f"b{j}"] for j in range(m)], [v[f"beta{j}"] for j in range(m)],
+                            [v[f"a{i}"] for i in range(k)], [v[f"alpha{i}"] for i in range(k)],
+                            dt=self._dt, delay=self._delay)
+
+    def config(self):
+        """``{"dt", "delay", "n_num", "n_den"}``: the settings that are not parameters.
+
+        ``n_num`` and ``n_den`` (the numbers of terms as given) let :meth:`from_config` rebuild
+        the parameter names.
+        """
+        return {"dt": self._dt, "delay": self._delay, "n_num": int(self._terms[0].size),
+                "n_den": int(self._terms[2].size)}
+
+    @classmethod
+    def from_config(cls, config):
+        """A transfer function with :meth:`config`'s settings and default values (1, order 0)."""
+        config = dict(config)
+        try:
+            m, k = int(config.pop("n_num")), int(config.pop("n_den"))
+        except (KeyError, TypeError, ValueError):
+            raise ParameterError("a FractionalTF's config needs integer 'n_num' and 'n_den' (its "
+                                 f"numbers of terms); got {config!r}.") from None
+        return cls(np.ones(m), np.zeros(m), np.ones(k), np.zeros(k), **config)
+
+    def check_input(self, u):
+        """``u`` checked as a 1-D signal; refused when the model has no ``dt`` to simulate with."""
+        if self._dt is None:
+            raise ParameterError("this FractionalTF has no sampling time: fohw.fit and the other "
+                                 "verbs simulate it with its own `dt`; build it with "
+                                 "FractionalTF(..., dt=...).")
+        return super().check_input(u)
+
+    def _delayed(self, u, h):
+        u = _input(u)
+        shift = delay_samples(self._delay, h)
+        ud = np.zeros(u.size)
+        if shift < u.size:
+            ud[shift:] = u[:u.size - shift]
+        return ud
+
+    def jacobian(self, u):
+        """``(yhat, J)``: the free run and its exact derivative by every parameter.
+
+        With ``c`` and ``d`` the GL weights of the denominator and numerator
+        (:func:`operator_weights`), ``R = 1 / c`` (power-series reciprocal) and ``W_nu`` the
+        weights of ``dt^{-nu} D^nu``: ``d yhat / d b_j = R * W_{beta_j} * u``,
+        ``d yhat / d beta_j = R * b_j (d W_{beta_j} / d beta_j) * u``, ``d yhat / d a_i =
+        -R * W_{alpha_i} * yhat`` and ``d yhat / d alpha_i = -R * a_i (d W_{alpha_i} / d alpha_i)
+        * yhat``, each a causal convolution by one zero-padded FFT product.
+
+        Parameters
+        ----------
+        u : array_like, shape (N,)
+            Input (the model's ``dt`` and ``delay`` apply).
+
+        Returns
+        -------
+        yhat : ndarray, shape (N,)
+        J : ndarray, shape (N, len(parameters))
+            Columns in :attr:`parameters` order (fixed ones included).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.0, 0.0], dt=1.0)
+        >>> yhat, J = G.jacobian(np.ones(3))
+        >>> J[:, 0]                                  # d yhat / d b0 = yhat / b0
+        array([0.5  , 0.75 , 0.875])
+        """
+        h = self._resolve_dt(None)
+        ud = self._delayed(u, h)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return self._gl_jacobian(ud, h)
+
+    def _gl_jacobian(self, ud, h):
+        b, beta, a, alpha = self._terms
+        n = ud.size
+        c = operator_weights(a, alpha, h, n)
+        if c[0] == 0.0 or not np.isfinite(c[0]):
+            raise ParameterError(f"the implicit GL step is singular for dt = {h!r}: sum_i a_i "
+                                 "dt^(-alpha_i) = 0 (`den`).")
+        d = operator_weights(b, beta, h, n)
+        yhat = series_divide(causal_product(d, ud, n), c)
+        r = series_reciprocal(c, n)
+        nfft = scipy.fft.next_fast_len(3 * n - 2, real=True)
+        rr = scipy.fft.rfft(r, nfft)
+        uu = rr * scipy.fft.rfft(ud, nfft)
+        yy = -rr * scipy.fft.rfft(yhat, nfft)
+        log_h = np.log(h)
+        cols = []
+        for coefs, orders, x in ((b, beta, uu), (a, alpha, yy)):
+            scale = h ** (-orders)
+            block_c, block_o = [], []
+            for cf, nu, sc in zip(coefs, orders, scale):
+                w = gl_weights(nu, n)
+                dw = gl_weights_derivative(nu, n) - log_h * w
+                block_c.append(scipy.fft.irfft(x * scipy.fft.rfft(sc * w, nfft), nfft)[:n])
+                block_o.append(scipy.fft.irfft(x * scipy.fft.rfft(cf * sc * dw, nfft), nfft)[:n])
+            cols += block_c + block_o
+        return yhat, np.column_stack(cols)
+
+    def linear_start(self, u, y):
+        """The model with its free coefficients from the linear equation error (or ``None``).
+
+        At the current orders, ``sum_i a_i W_{alpha_i} y - sum_j b_j W_{beta_j} u`` is linear in
+        the coefficients; its least-squares solution (fixed and tied coefficients honoured,
+        clipped into the bounds) is the start :func:`fohw.fit` ranks beside the model itself
+        at each point of its scan of the orders. ``None`` when no coefficient is free or a
+        coefficient is tied to an order.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0], dt=0.05)
+        >>> u = np.random.default_rng(0).standard_normal(300)
+        >>> start = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.6, 0.0], dt=0.05)
+        >>> print(start.linear_start(u, G.simulate(u)))   # exact from noiseless data
+        1 / (2 s^0.6 + 1)
+        """
+        params = self.parameters
+        m, k = self._terms[0].size, self._terms[2].size
+        t_all = params.tie_matrix()
+        coef_idx = np.r_[0:m, 2 * m:2 * m + k]
+        order_idx = np.r_[m:2 * m, 2 * m + k:2 * m + 2 * k]
+        t_coef = t_all[coef_idx]
+        free_coef = np.flatnonzero(np.any(t_coef != 0, axis=0))
+        if free_coef.size == 0 or np.any(t_all[np.ix_(order_idx, free_coef)] != 0):
+            return None
+        h = self._resolve_dt(None)
+        ud = self._delayed(u, h)
+        y = _input(y, "y")
+        if y.size != ud.size:
+            raise DimensionError(f"`u` and `y` must have the same length; got {ud.size} and {y.size}.")
+        n = y.size
+        b, beta, a, alpha = self._terms
+        theta = np.array(list(params.valuesdict().values()))
+        names = params.names
+        free_idx = np.array([names.index(f) for f in params.free_names], dtype=int)
+        lower, upper = params.free_bounds()
+        with np.errstate(over="ignore", invalid="ignore"):
+            cols = [-causal_product(operator_weights([1.0], [nu], h, n), ud, n) for nu in beta]
+            cols += [causal_product(operator_weights([1.0], [nu], h, n), y, n) for nu in alpha]
+            mat = np.column_stack(cols)
+            base = theta[coef_idx] - t_coef[:, free_coef] @ theta[free_idx[free_coef]]
+            lhs = mat @ t_coef[:, free_coef]
+            rhs = -mat @ base
+            scale = np.linalg.norm(lhs, axis=0)
+        scale[scale == 0] = 1.0
+        if not (np.all(np.isfinite(lhs)) and np.all(np.isfinite(rhs)) and np.all(np.isfinite(scale))):
+            return None                  # the equations overflow: no linear start, not an error
+        try:
+            sol = np.linalg.lstsq(lhs / scale, rhs, rcond=None)[0] / scale
+        except np.linalg.LinAlgError:
+            return None
+        p = theta[free_idx].copy()
+        p[free_coef] = np.clip(sol, lower[free_coef], upper[free_coef])
+        p = np.where(np.isfinite(p), p, theta[free_idx])
+        try:
+            return self.with_parameters(params.with_free(p))
+        except ParameterError:        # e.g. a highest denominator coefficient solved to 0
+            return None
+
     # ------------------------------------------------------------------ time domain
     def _resolve_dt(self, dt):
         dt = _check_positive(dt, "dt")
@@ -267,7 +528,7 @@ class FractionalTF:
             raise ParameterError("`dt` is needed: pass dt=... here or to FractionalTF(...).")
         return dt
 
-    def simulate(self, u, dt=None):
+    def simulate(self, u, dt=None, *, initial=None):
         """Output for the input samples ``u`` (zero initial conditions), by the GL discretisation.
 
         Parameters
@@ -276,6 +537,8 @@ class FractionalTF:
             Input samples ``u[k]``, standing for the input on ``(t_{k-1}, t_k]``.
         dt : float, optional
             Sampling time (default: the model's ``dt``).
+        initial : None or "rest", optional
+            The state before ``k = 0``: only rest (zero signals) is implemented.
 
         Returns
         -------
@@ -286,7 +549,8 @@ class FractionalTF:
         ------
         ParameterError
             No sampling time; a delay that is not a multiple of ``dt``; ``u`` not finite; the
-            implicit step is singular (``sum_i a_i dt^{-alpha_i} = 0``).
+            implicit step is singular (``sum_i a_i dt^{-alpha_i} = 0``); an ``initial`` other
+            than rest.
         SimulationDivergedError
             The output overflowed (an unstable model on a long record).
 
@@ -304,21 +568,12 @@ class FractionalTF:
         >>> G.simulate([1.0, 1.0, 1.0], dt=1.0)                             # backward Euler
         array([0.5  , 0.75 , 0.875])
         """
+        if not (initial is None or (isinstance(initial, str) and initial == "rest")):
+            raise ParameterError("a FractionalTF simulates from rest (zero signals before k = 0): "
+                                 f"`initial` must be None or 'rest'; got {initial!r}.")
         h = self._resolve_dt(dt)
-        try:
-            u = np.asarray(u, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ParameterError(f"`u` must be an array of real numbers; got {type(u).__name__}.") from None
-        if u.ndim != 1 or u.size == 0:
-            raise DimensionError(f"`u` must be a non-empty 1-D array; got shape {u.shape}.")
-        if not np.all(np.isfinite(u)):
-            bad = int(np.flatnonzero(~np.isfinite(u))[0])
-            raise ParameterError(f"`u` must contain only finite values; got {u[bad]!r} at index {bad}.")
-        n = u.size
-        shift = delay_samples(self._delay, h)
-        ud = np.zeros(n)
-        if shift < n:
-            ud[shift:] = u[:n - shift]
+        ud = self._delayed(u, h)
+        n = ud.size
         c = operator_weights(self._den, self._den_orders, h, n)
         if c[0] == 0.0:
             raise ParameterError(f"the implicit GL step is singular for dt = {h!r}: sum_i a_i dt^(-alpha_i)"

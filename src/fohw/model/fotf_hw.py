@@ -41,7 +41,7 @@ from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
 from .base import Model
 from .basis import Basis, as_basis
-from .fotf import FractionalTF, delay_samples, operator_weights
+from .fotf import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights
 from .gl import gl_weights, gl_weights_derivative
 from .output_map import (
     CustomMap,
@@ -55,7 +55,7 @@ from .output_map import (
 from .parameters import ORDER_RANGE, Parameter, Parameters
 from .series_division import causal_product, series_divide, series_reciprocal
 
-__all__ = ["FractionalHW", "NUM_ORDER_RANGE", "tf_sensitivities"]
+__all__ = ["FractionalHW", "tf_sensitivities"]
 
 #: Rounds of :meth:`FractionalHW.linear_start` (G's coefficients, then b and p, then the map).
 ROUNDS = 2
@@ -65,8 +65,6 @@ ROUNDS = 2
 START_NFEV = 30
 START_TOL = 1e-4
 
-#: Default bounds of a numerator order of ``G`` (it may be negative: a fractional integral).
-NUM_ORDER_RANGE = (-ORDER_RANGE[1], ORDER_RANGE[1])
 
 
 def _terms(G):
@@ -178,7 +176,7 @@ class FractionalHW(Model):
     ``y = h(x)``; the tests compare every sample with the literal per-sample loop.
 
     Parameters (:attr:`parameters`): every term of ``G`` (orders ``order=True``, numerator orders
-    bounded by :data:`NUM_ORDER_RANGE`, denominator orders by :data:`fohw.ORDER_RANGE`, each
+    bounded by :data:`fohw.model.fotf.NUM_ORDER_RANGE`, denominator orders by ``ORDER_RANGE``, each
     widened to reach a value given beyond them), ``p2…`` and the map's. Fixed by default: the
     denominator coefficient of the lowest order (the scale normaliser) and every order that is
     0 in the ``G`` given (a constant term). Change that with ``model.with_parameters(parameters)``.

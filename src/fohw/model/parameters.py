@@ -7,8 +7,10 @@ is tied to another one (``value = factor * source``) and whether it is a fractio
 bound, the LR test and the profile interval read the free ones from it. Nothing else in fohw
 slices a parameter vector by hand. After lmfit's ``Parameter``/``Parameters``.
 
-Fractional orders have one range rule: :data:`ORDER_RANGE` (``[0, 2]``) unless the kind
-declares other bounds for a term (a numerator order of a transfer function may be negative).
+Fractional orders have one range rule: :data:`ORDER_RANGE` (``[0, 2]``), mirrored to
+``(-2, 2)`` where an order may be negative (a numerator order of a transfer function, a fractional
+integral: :data:`fohw.model.fotf.NUM_ORDER_RANGE`). A kind whose model was given an order
+outside its range widens that order's own bound to its value.
 """
 
 from __future__ import annotations
@@ -43,7 +45,8 @@ class Parameter:
         Its value (the start value when it is free).
     bounds : (float, float), optional
         Closed interval the value must stay in; ``-inf``/``inf`` for none. Default: no bounds
-        for a coefficient, :data:`ORDER_RANGE` for an order.
+        for a coefficient, :data:`ORDER_RANGE` for an order (a kind gives ``(-2, 2)`` to an
+        order that may be negative, such as a transfer function's numerator order).
     fixed : bool, optional
         Held at ``value`` by :func:`fohw.fit` (and left out of covariances). Default False.
     tie : (str, float), optional

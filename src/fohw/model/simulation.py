@@ -25,6 +25,7 @@ from .._types import ArrayLike, PairLike, RandomStateLike
 from .._validation import (
     check_array,
     check_inputs,
+    check_pair,
     check_random_state,
     check_same_length,
     check_scalar,
@@ -32,12 +33,12 @@ from .._validation import (
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
 from ._online import HalfMerge, divide_and_conquer
+from .base import Model
 from .gl import causal_convolve, gl_weights, gl_weights_unchecked, past_transient
 from .structure import Structure
-from .system import HammersteinWiener, check_pair
 
-__all__ = ["simulate", "simulate_predictor", "equation_noise", "free_run", "forcing", "recursion",
-           "accumulators", "output_terms", "Accumulators", "apply_output_map",
+__all__ = ["simulate", "generic_model", "simulate_predictor", "equation_noise", "free_run",
+           "forcing", "recursion", "accumulators", "output_terms", "Accumulators", "apply_output_map",
            "check_input_point", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
 
 #: Below this record length the simulator runs the recursion directly (one dot product per
@@ -52,7 +53,7 @@ LEAF_SIZE = 256
 LEAF_SIZE_COMPILED = 256
 
 
-def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
+def simulate(model: Model | Structure | Any, u: ArrayLike, *,
              params: ArrayLike | Mapping[str, float] | None = None,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
@@ -63,12 +64,15 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
 
     Parameters
     ----------
-    model : HammersteinWiener, IdentificationResult or Structure
+    model : Model, FitResult, HammersteinWiener, IdentificationResult or Structure
         What to simulate: a model (its ``a, b, p, q``); an identification result (its fitted
         predictor: theta itself, the offset, orders and past levels, in the data's units; the
         same as ``result.simulate(u)``; anything with ``structure``, ``linear`` and
         ``nonlinear`` is accepted); or a :class:`fohw.Structure`, whose parameter values are
-        then given by ``params``.
+        then given by ``params``. A :class:`fohw.Model` of any other kind (or a
+        :class:`fohw.FitResult`: its fitted model) is simulated by its own
+        ``simulate(u, initial=initial)``; the keywords below other than ``initial`` are for
+        the lagged kind and are refused with it, by name.
     u : array_like, shape (N,)
         Input signal, finite, in the model's units (its operating point is subtracted inside
         and the output's added back). Shape ``(N, m)`` for a structure (or result) with ``m``
@@ -99,8 +103,9 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         from them, its GL memory holding that history, in free run from the first sample of
         ``u``. The model's past levels (if any) apply before the history.
     initial : str, tuple or InitialState, optional
-        With an identification result only: its initial state, as ``result.simulate(u,
-        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit).
+        With an identification result: its initial state, as ``result.simulate(u,
+        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit). With
+        a model of another kind: passed to its ``simulate`` (what it accepts is the kind's).
 
     Returns
     -------
@@ -156,7 +161,20 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
     >>> bool(np.max(np.abs(y - fohw.simulate(model, u))) < 1e-13)
     True
     """
-    kinds = "a HammersteinWiener, an identification result or a Structure with `params`"
+    kinds = ("a HammersteinWiener, an identification result or a Structure with `params` (or "
+             "a fohw.Model of any other kind, or its fohw.FitResult)")
+    other = generic_model(model)
+    if other is not None:
+        lagged = {"params": params, "operating_point": operating_point, "noise": noise,
+                  "noise_std": noise_std or None, "random_state": random_state,
+                  "divergence_threshold": divergence_threshold, "history": history}
+        given = [f"{k}={v!r}" for k, v in lagged.items() if v is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)}: these keywords are for the lagged "
+                                 f"HammersteinWiener kind; a {type(other).__name__} is simulated "
+                                 "by its own simulate(u, initial=...) (add noise to the output "
+                                 "yourself).")
+        return other.simulate(u, initial=initial)
     if initial == "estimate" or (isinstance(initial, tuple) and initial[:1] == ("estimate",)):
         raise ParameterError("initial='estimate' fits the record's initial state to its "
                              "measured output, which fohw.simulate does not take: use "
@@ -166,11 +184,10 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         raise ParameterError(f"`initial` is for an identification result; got it with a "
                              f"{type(model).__name__} (fohw.compare takes `initial` for a "
                              "HammersteinWiener too).")
-    if isinstance(model, HammersteinWiener):
-        _only_for_structure(params, operating_point, "a HammersteinWiener")
-        return _simulate_model(model, u, noise=noise, noise_std=noise_std,
-                               random_state=random_state,
-                               divergence_threshold=divergence_threshold, history=history)
+    if isinstance(model, Model):        # a model kind (the lagged HammersteinWiener among them)
+        _only_for_structure(params, operating_point, f"a {type(model).__name__}")
+        return model.simulate(u, noise=noise, noise_std=noise_std, random_state=random_state,
+                              divergence_threshold=divergence_threshold, history=history)
     if isinstance(model, Structure):
         if params is None:
             raise ParameterError("simulating a Structure needs its parameter values `params` "
@@ -192,6 +209,22 @@ def simulate(model: HammersteinWiener | Structure | Any, u: ArrayLike, *,
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
+
+
+def generic_model(obj):
+    """The :class:`fohw.Model` behind ``obj`` when it is not of the lagged kind, else None.
+
+    ``obj`` a model of any kind but :class:`fohw.HammersteinWiener`, or a fit result of one
+    (anything but an :class:`fohw.IdentificationResult` whose ``model`` is a Model, e.g. a
+    :class:`fohw.FitResult`, whatever its kind): the verbs' generic branches take it; a
+    HammersteinWiener, a Structure and an IdentificationResult keep the lagged paths.
+    """
+    if isinstance(obj, Structure) or isinstance(getattr(obj, "structure", None), Structure):
+        return None                    # the lagged kind: a Structure, a model or a result of one
+    if isinstance(obj, Model):
+        return obj
+    inner = getattr(obj, "model", None)
+    return inner if isinstance(inner, Model) else None
 
 
 def _only_for_structure(params, operating_point, what):
@@ -221,8 +254,8 @@ def _split_params(structure, params):
     return params[:k], params[k:]
 
 
-def _simulate_model(model, u, *, noise, noise_std, random_state, divergence_threshold,
-                    history):
+def simulate_model(model, u, *, noise=None, noise_std=0.0, random_state=None,
+                   divergence_threshold=None, history=None):
     """A model through its rank-one blocks: ``gbar`` is the one output signal fed back."""
     u = check_array(u, "u")
     v = equation_noise(u.shape[0], noise, noise_std, random_state)

@@ -17,21 +17,29 @@ from __future__ import annotations
 import numpy as np
 
 from .._types import ArrayLike, PairLike
-from .._validation import check_alpha, check_array, check_scalar
+from .._validation import check_alpha, check_array, check_pair, check_scalar
 from ..exceptions import DimensionError, ParameterError
+from .base import Model
 from .basis import Basis, BasisLike, as_basis, polynomial_basis
 from .orders import ORDER_RANGE, Orders, OrdersLike
+from .parameters import Parameter, Parameters
+from .simulation import simulate_model
 from .structure import Structure
 
-__all__ = ["HammersteinWiener", "ALPHA_BOUNDS", "check_pair"]
+__all__ = ["HammersteinWiener", "ALPHA_BOUNDS"]
 
 #: Closed interval of fractional orders a model may have (0: the integer-order model); the one
 #: rule for every order (:data:`fohw.model.orders.ORDER_RANGE`).
 ALPHA_BOUNDS = ORDER_RANGE
 
 
-class HammersteinWiener:
+class HammersteinWiener(Model):
     """A fractional-order Hammerstein–Wiener model (Eq. 16; Eq. 14 with an order per term).
+
+    The lagged model kind of :class:`fohw.Model`: its :attr:`parameters` are ``a``, ``b``,
+    ``p[1:]``, ``q[1:]`` (``p[0] = q[0] = 1``, Eq. 17), the free orders and the offset (when it
+    has one); :func:`fohw.fit` fits them by simulation error like any kind, and
+    :func:`fohw.identify` is its own front door with the paper's and further methods.
 
     Parameters
     ----------
@@ -280,6 +288,66 @@ class HammersteinWiener:
 
         return f"<pre>{html.escape(repr(self))}</pre>"
 
+    # --- the Model protocol ---------------------------------------------------------------
+    def _names(self):
+        a_names = tuple(self.layout.a_names)
+        b_names = tuple(self.layout.b_names)
+        p_names = tuple(f"p{j}" for j in range(2, self.p.size + 1))
+        q_names = tuple(f"q{j}" for j in range(2, self.q.size + 1))
+        return a_names, b_names, p_names, q_names
+
+    @property
+    def parameters(self) -> Parameters:
+        """``a``, ``b``, ``p[1:]``, ``q[1:]``, the free orders and the offset, as :class:`fohw.Parameters`.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> m = fohw.HammersteinWiener([0.1, 0.2], [-0.4, -0.2], [1, 0.5], [1, 0.7, 0.35], 0.6)
+        >>> m.parameters.names
+        ('a1', 'a2', 'b1', 'b2', 'p2', 'q2', 'q3', 'alpha')
+        """
+        a_names, b_names, p_names, q_names = self._names()
+        pars = [Parameter(n, v) for n, v in zip(a_names, self.a.tolist())]
+        pars += [Parameter(n, v) for n, v in zip(b_names, self.b.tolist())]
+        pars += [Parameter(n, v) for n, v in zip(p_names, self.p[1:].tolist())]
+        pars += [Parameter(n, v) for n, v in zip(q_names, self.q[1:].tolist())]
+        pars += [Parameter(n, v, order=True) for n, v in self.orders.items()]
+        if self.structure.offset:
+            pars.append(Parameter("offset", self.offset))
+        return Parameters(pars)
+
+    def with_parameters(self, values) -> HammersteinWiener:
+        """A copy with new values of :attr:`parameters` (a mapping by name, or Parameters)."""
+        v = self.parameters.with_values(values).valuesdict()
+        a_names, b_names, p_names, q_names = self._names()
+        return HammersteinWiener(
+            [v[n] for n in a_names], [v[n] for n in b_names], [1.0] + [v[n] for n in p_names],
+            [1.0] + [v[n] for n in q_names], {n: v[n] for n in self.orders} or None,
+            f_basis=self.f_basis, g_basis=self.g_basis, orders=self.structure.orders,
+            dt=self.dt, offset=v.get("offset", self.offset), past=self.past,
+            operating_point=self.operating_point)
+
+    def simulate(self, u, *, initial=None, noise=None, noise_std=0.0, random_state=None,
+                 divergence_threshold=None, history=None):
+        """The model's output for ``u``: :func:`fohw.simulate` (the same keywords)."""
+        kwargs = dict(noise=noise, noise_std=noise_std, random_state=random_state,
+                      divergence_threshold=divergence_threshold, history=history)
+        if initial is not None:
+            raise ParameterError("HammersteinWiener.simulate: `initial` needs an identification "
+                                 "result's estimated state; use `history=(u_past, y_past)` to "
+                                 "continue from measured samples.")
+        return simulate_model(self, u, **kwargs)
+
+    def config(self) -> dict:
+        """The model in its own file format (:meth:`to_dict`): what :meth:`fohw.Model.to_dict` stores."""
+        return self.to_dict()
+
+    @classmethod
+    def from_config(cls, config) -> HammersteinWiener:
+        """Inverse of :meth:`config`."""
+        return cls.from_dict(config)
+
     #: The fields of :meth:`to_dict`, each fact once.
     DICT_FIELDS = ("a", "b", "p", "q", "orders", "terms", "f_basis", "g_basis", "dt", "offset",
                    "past", "operating_point")
@@ -322,11 +390,3 @@ class HammersteinWiener:
                    orders=Orders.from_dict(d["terms"]), dt=d["dt"], offset=d["offset"],
                    past=d["past"], operating_point=d["operating_point"])
 
-
-def check_pair(value, name):
-    """``value`` as a pair of finite floats (``past``, ``operating_point``), or a ParameterError."""
-    try:
-        a, b = value
-    except (TypeError, ValueError):
-        raise ParameterError(f"`{name}` must be a pair of numbers; got {value!r}.") from None
-    return check_scalar(a, f"{name}[0]"), check_scalar(b, f"{name}[1]")
