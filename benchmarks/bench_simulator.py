@@ -35,7 +35,7 @@ import numpy as np
 
 import fohw
 from fohw.model import _compiled, simulation
-from fohw.model._online import HalfMerge, divide_and_conquer
+from fohw.model.kernels import HalfMerge, divide_and_conquer
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))

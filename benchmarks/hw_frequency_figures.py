@@ -20,8 +20,8 @@ def paper_example(outdir):
     data = fohw.datasets.paper_example(1000, random_state=0)
     res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     print(res.summary().split("\n\n")[-1])
-    fig, _ = res.bode(others={"true model": fohw.datasets.paper_model()},
-                      title="paper example: linear block, varpro estimate (N = 1000)")
+    fig = res.bode(others={"true model": fohw.datasets.paper_model()},
+                   title="paper example: linear block, varpro estimate (N = 1000)")
     fig.savefig(outdir / "hw_linear_block_bode.png", dpi=90)
 
 
@@ -37,7 +37,7 @@ def fractional_hw(outdir):
                               f_basis=2, output_map=2, dt=0.05)
     fit = fohw.fit(start, u, y)
     print(fit.summary())
-    fig, _ = fit.model.G.bode(others={"true G": G}, title="f → G(s) → h: G of the fit beside the truth")
+    fig = fit.model.G.bode(others={"true G": G}, title="f → G(s) → h: G of the fit beside the truth")
     fig.savefig(outdir / "fotf_hw_bode.png", dpi=90)
 
 

@@ -13,7 +13,8 @@ import numpy as np
 
 from fohw.exceptions import SimulationDivergedError
 from fohw.model import simulation
-from fohw.model.gl import causal_convolve, gl_weights
+from fohw.model.gl import gl_weights
+from fohw.model.kernels import causal_convolve
 
 LEAF = 128
 

@@ -69,8 +69,8 @@ def identify(outdir):
               + ", ".join(f"{k} {fit.parameters[k].value:.5g} ± {v:.2g}" for k, v in se.items())
               + "\n```\n")
         print("```\n" + fit.summary() + "\n```")
-        fig, axes = fit.model.bode(np.logspace(-3, 3, 400), others={"truth " + str(G): G},
-                                   title=f"estimate beside the truth: {name}")
+        fig = fit.model.bode(np.logspace(-3, 3, 400), others={"truth " + str(G): G},
+                             title=f"estimate beside the truth: {name}")
         fig.savefig(outdir / f"tf_bode_fit_{i + 1}.png", dpi=90)
 
 
@@ -88,8 +88,8 @@ def main():
     from fohw.analysis.frequency import bode_plot
     curves = {"1/(s^0.5+1)": G.frequency_response(w), "Oustaloup N=4": approx.frequency_response(w),
               "refined N=4": refined.frequency_response(w)}
-    fig, _ = bode_plot(w, curves, band=(1e-2, 1e2),
-                       title="Oustaloup approximations in [0.01, 100] rad/s")
+    fig = bode_plot(w, curves, band=(1e-2, 1e2),
+                    title="Oustaloup approximations in [0.01, 100] rad/s")
     fig.savefig(outdir / "tf_oustaloup.png", dpi=90)
     for a in (approx, refined):
         e = a.errors()

@@ -2,7 +2,7 @@
 
     python examples/accuracy_noise_models.py --outdir results [--fast] [--seeds 100] [--jobs 2]
 
-Part 1 (the must-show of issue 13): the structured estimator (method="structured") and varpro on
+Part 1: the structured estimator (method="structured") and varpro on
 the paper's example, N = 10 000, --seeds seeds: RMS of delta = ||theta_hat - theta|| / ||theta||
 and of the alpha error against the unstructured and the structured bound.
 Part 2, equation noise: varpro and structured on the paper's example and systems B and C of

@@ -160,9 +160,7 @@ def main(argv=None):
         if pool is not None:
             pool.shutdown()
     sel.to_csv(args.outdir / "cascaded_tanks_selection.csv")
-    fig, _ = sel.plot()
-    fig.savefig(args.outdir / "cascaded_tanks_selection.png", dpi=110)
-    plt.close(fig)
+    sel.plot().savefig(args.outdir / "cascaded_tanks_selection.png", dpi=110)
 
     # 2. The best of each class of orders, refitted and validated once.
     best = sel.best_by("orders")

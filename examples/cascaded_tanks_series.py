@@ -43,9 +43,9 @@ MAPS = {"none": None, "saturation (both limits free)": "saturation",
         "saturation (upper limit free)": fohw.Saturation(lower=-np.inf),
         "saturation at the sensor's 10 V (fixed)": fohw.Saturation(lower=-np.inf, upper=10.0),
         "piecewise linear (5 breakpoints)": "piecewise_linear"}
-#: The published free-run validation RMSE (V) the issue compares with (docs/real_data.md).
+#: Published free-run validation RMSEs (V) to compare with (docs/real_data.md).
 PUBLISHED = [("Grey-box with a physical overflow model (Rogers et al. 2017)", 0.18),
-             ("CT-SUBNET, black box (Beintema, Schoukens & Toth 2023; figure as quoted in issue 24)", 0.31),
+             ("CT-SUBNET, black box (Beintema, Schoukens & Toth 2023)", 0.31),
              ("Neural state space TSEM (Forgione & Piga 2021)", 0.33),
              ("NLSS2 (Relan et al. 2017)", 0.34),
              ("PNLSS-I (Relan et al. 2017)", 0.45)]

@@ -17,7 +17,7 @@ from models import MODELS
 
 import fohw
 from fohw.model import _compiled, sensitivity, simulation
-from fohw.model._online import HalfMerge, divide_and_conquer
+from fohw.model.kernels import HalfMerge, divide_and_conquer
 
 # The comparisons need numba and the compiled leaf switched on (not FOHW_NO_NUMBA=1); the test
 # extra installs numba, so CI runs them.

@@ -306,3 +306,11 @@ def test_a_tied_parameter_has_its_sources_standard_error_times_the_factor():
     assert res.parameters["b"].value == pytest.approx(2 * res.parameters["a"].value)
     assert se["b"] == pytest.approx(2 * se["a"], rel=1e-12)
 
+
+
+def test_bounds_can_be_widened_and_a_value_beyond_the_old_ones_given_at_once():
+    wide = Lag().parameters.replace("a", bounds=(-0.999, 0.999)).with_values({"a": 0.995})
+    m = Lag().with_parameters(wide)
+    assert m.parameters["a"].value == 0.995 and m.parameters["a"].bounds == (-0.999, 0.999)
+    narrow = Lag(0.9).parameters.replace("a", value=0.2, bounds=(0.0, 0.5))
+    assert Lag(0.9).with_parameters(narrow).parameters["a"].bounds == (0.0, 0.5)

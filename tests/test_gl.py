@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from scipy.special import binom
 
 import fohw
-from fohw.model.gl import _DIRECT_MAX_LENGTH, _DIRECT_MAX_MEMORY, past_transient
+from fohw.model.gl import past_transient
+from fohw.model.kernels import _DIRECT_MAX_LENGTH, _DIRECT_MAX_MEMORY
 
 ALPHAS = [0.1, 0.5, 0.6, 0.999, 1.0, 1.3, 1.75, 1.999]
 # Lengths on both sides of the direct/FFT switch, including non-"fast" FFT sizes.

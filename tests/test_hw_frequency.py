@@ -194,7 +194,8 @@ def test_result_frequency_view_summary_and_bode(tmp_path):
     assert "stability: stable (argument principle" in text
     assert text.startswith(res.summary(linear_block=False))
     before = plt.get_fignums()
-    fig, axes = res.bode()
+    fig = res.bode()
+    axes = fig.axes
     assert plt.get_fignums() == before                  # never registered with pyplot, never shown
     assert len(axes) == 2 and axes[0].get_ylabel() == "magnitude [dB]"
     fig.savefig(tmp_path / "bode.png")
@@ -202,7 +203,7 @@ def test_result_frequency_view_summary_and_bode(tmp_path):
     w = blk.default_frequencies()
     line = axes[0].get_lines()[0]
     np.testing.assert_allclose(line.get_ydata(), 20 * np.log10(np.abs(blk.frequency_response(w))))
-    fig, axes = res.bode(others={"true model": fohw.datasets.paper_model()})
+    axes = res.bode(others={"true model": fohw.datasets.paper_model()}).axes
     labels = [ln.get_label() for ln in axes[0].get_lines()]
     assert labels == ["estimate", "true model"]
 

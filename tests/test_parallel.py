@@ -11,10 +11,14 @@ import pytest
 from fohw._parallel import TaskError, progress_bar, run_tasks
 
 
-def test_progress_is_silent_unless_asked_or_on_a_terminal(capsys):
-    bar = progress_bar(3, "job")                    # stderr is captured: not a terminal
+def test_progress_is_silent_for_short_work_unless_asked(capsys):
+    bar = progress_bar(3, "job")              # default: shown only after AUTO_DELAY seconds
     bar.update(1)
     bar.write("stage")
+    bar.close()
+    assert capsys.readouterr().err == ""
+    bar = progress_bar(3, "job", False)
+    bar.update(3)
     bar.close()
     assert capsys.readouterr().err == ""
 
@@ -30,7 +34,66 @@ def test_stage_messages_and_the_plain_counter(capsys, monkeypatch):
     bar.update(1)
     bar.update(1)
     bar.close()
-    assert capsys.readouterr().err == "\rtasks: 1/2\rtasks: 2/2\n"
+    # not a terminal (captured): whole lines, never a carriage return
+    assert capsys.readouterr().err == "tasks: 1/2 (0 s)\ntasks: 2/2 (0 s)\n"
+
+
+@pytest.mark.parametrize("tqdm_installed", [False, True])
+def test_long_work_shows_progress_by_default(capsys, monkeypatch, tqdm_installed):
+    """progress=None: nothing for the first AUTO_DELAY seconds, then the count (to a file too)."""
+    import fohw._parallel as parallel
+
+    if not tqdm_installed:
+        monkeypatch.setitem(sys.modules, "tqdm", None)
+        monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    else:
+        pytest.importorskip("tqdm")
+    monkeypatch.setattr(parallel, "AUTO_DELAY", 0.2)
+    monkeypatch.setattr(parallel, "LINE_INTERVAL", 0.1)      # a file's line interval (10 s)
+    out = run_tasks(time.sleep, [(0.15,)] * 4, label="slow")
+    assert out == [None] * 4
+    err = capsys.readouterr().err
+    assert "slow" in err and "4/4" in err
+    assert ("\r" not in err) if not tqdm_installed else True
+
+
+def test_an_inner_display_stays_quiet(capsys, monkeypatch):
+    import fohw._parallel as parallel
+
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    monkeypatch.setattr(parallel, "AUTO_DELAY", 0.0)
+    outer = progress_bar(1, "outer", True)
+    inner = progress_bar(5, "inner")                    # auto, inside another display
+    inner.update(5)
+    inner.close()
+    outer.update(1)
+    outer.close()
+    err = capsys.readouterr().err
+    assert "outer: 1/1" in err and "inner" not in err
+    bar = progress_bar(2, "after")                      # the counter of open displays is back to 0
+    bar.update(2)
+    bar.close()
+    assert "after: 2/2" in capsys.readouterr().err
+
+
+def test_identify_reports_a_long_fit_and_is_quiet_when_asked(capsys, monkeypatch):
+    import fohw
+    import fohw._parallel as parallel
+
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    d = fohw.datasets.paper_example(400, random_state=0)
+    kw = dict(na=2, nb=2, f_basis=2, g_basis=3)
+    quiet = fohw.identify(d.u, d.y, progress=False, **kw)
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(parallel, "AUTO_DELAY", 0.0)
+    shown = fohw.identify(d.u, d.y, **kw)
+    err = capsys.readouterr().err
+    assert "identify (varpro): running" in err and "identify (varpro): done in" in err
+    assert shown.theta.tolist() == quiet.theta.tolist()       # progress changes no number
+    with pytest.raises(fohw.ParameterError, match="`progress` must be True, False or None"):
+        fohw.identify(d.u, d.y, progress="yes", **kw)
 
 
 @pytest.mark.parametrize("progress", [False, True])

@@ -180,8 +180,8 @@ def test_csv_markdown_and_plot(paper, tmp_path):
     header = text.splitlines()[0].split(",")
     assert header[:3] == ["candidate", "status", "fit"] and "na" in header
     assert len(text.splitlines()) == 3
-    fig, ax = sel.plot()
-    assert len(ax.patches) == 2
+    fig = sel.plot()
+    assert len(fig.axes[0].patches) == 2
     fig.savefig(tmp_path / "sel.png")
 
 

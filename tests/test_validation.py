@@ -55,8 +55,8 @@ def test_a_diverging_free_run_is_reported_not_raised(fitted):
     assert v.simulated is None and np.isnan(v.fit_simulation)
     assert "diverged at sample" in v.diverged and not v.in_range
     assert "diverged" in v.to_markdown()
-    fig, axes = v.plot()
-    assert len(axes) == 2
+    fig = v.plot()
+    assert len(fig.axes) == 2
 
 
 def test_bad_input_names_the_argument(fitted):

@@ -10,14 +10,12 @@ matrix, and the paper's estimators.
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
 from .analysis.batch import identify_many
-from .analysis.circuit_checks import circuit_lr_test, circuit_order_interval
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
-from .estimators.circuit_fit import CircuitFit, fit_circuit
 from .estimators.fit import fit
 from .estimators.hybrid import (
     HybridIdentifier,
@@ -50,7 +48,7 @@ from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
-from .model.circuit import RC, ZARC, EquivalentCircuit, Warburg
+from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
 from .model.fotf import FractionalTF
 from .model.fotf_hw import FractionalHW
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
@@ -82,7 +80,13 @@ def _installed_version():
         return "0+unknown"
 
 
-__version__ = _installed_version()
+def __getattr__(name):
+    # The version is read from the distribution's metadata when first asked for, not at
+    # `import fohw` (importlib.metadata and the lookup cost about 40 ms: benchmarks/bench_import.py).
+    if name == "__version__":
+        globals()["__version__"] = version = _installed_version()
+        return version
+    raise AttributeError(f"module 'fohw' has no attribute {name!r}")
 
 __all__ = [
     "Model",
@@ -159,13 +163,10 @@ __all__ = [
     "PiecewiseLinear",
     "PolynomialMap",
     "CustomMap",
-    # issue 27
+    # battery cells: the fractional equivalent circuit
     "EquivalentCircuit",
+    "OCVTable",
     "RC",
     "ZARC",
     "Warburg",
-    "CircuitFit",
-    "fit_circuit",
-    "circuit_lr_test",
-    "circuit_order_interval",
 ]

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 __all__: list[str] = []
 

@@ -21,7 +21,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 from .exceptions import ParameterError
 
-__all__ = ["run_tasks", "progress_bar", "TaskError"]
+__all__ = ["run_tasks", "progress_bar", "heartbeat", "TaskError"]
 
 #: A task lost with its broken process pool, before its rerun.
 _LOST = object()
@@ -57,18 +57,37 @@ class TaskError:
         self.message = _explain(exc, isolated)
 
 
+#: Seconds a piece of work runs before its progress shows, when nobody asked (``progress=None``):
+#: short calls stay silent, long ones are never silent.
+AUTO_DELAY = 2.0
+#: Seconds between two plain progress lines written to a file or a pipe (not a terminal).
+LINE_INTERVAL = 10.0
+
+_active = [0]          # progress displays open in this process (an inner one stays quiet)
+
+
+def _auto_allowed():
+    """Automatic progress: in the main process, outside another progress display."""
+    import multiprocessing
+
+    return _active[0] == 0 and multiprocessing.parent_process() is None
+
+
 def progress_bar(total, label, enabled=None):
     """Progress on stderr: a bar over ``total`` steps, or stage messages (``total=None``).
 
     Parameters
     ----------
     total : int or None
-        Steps of the bar (tqdm if installed, else a plain ``label: i/total`` counter); ``None``
-        for stage messages only (:meth:`write`).
+        Steps of the bar (tqdm's ``tqdm.auto`` if installed, a widget in a notebook; else a
+        plain ``label: i/total`` counter); ``None`` for stage messages only (:meth:`write`).
     label : str
         Shown beside the count and before every message (``label: message``).
     enabled : bool, optional
-        Default (None): only when stderr is a terminal, never in pipes, files or tests.
+        True: shown from the start. False: nothing. None (default): a bar shows once the work
+        has run for :data:`AUTO_DELAY` seconds (terminal, notebook or file alike; in a file or a
+        pipe as a line every :data:`LINE_INTERVAL` seconds), never inside another progress
+        display or in a worker process; stage messages only when stderr is a terminal.
 
     Returns
     -------
@@ -76,18 +95,52 @@ def progress_bar(total, label, enabled=None):
         With ``update(n=1)``, ``write(message)`` and ``close()``; they do nothing when
         disabled.
     """
+    delay = 0.0
     if enabled is None:
-        enabled = sys.stderr.isatty()
+        if total is None:
+            enabled = sys.stderr.isatty()
+        else:
+            enabled, delay = _auto_allowed(), AUTO_DELAY
     if not enabled:
         return _Silent()
     if total is not None:
-        try:
+        bar = _tqdm(total, label, delay)
+        if bar is not None:
+            return _Tqdm(bar, label, delay)
+    return _Counter(total, label, delay)
+
+
+def _auto_tqdm():
+    """``tqdm.auto.tqdm``, or None without tqdm.
+
+    In a notebook without ipywidgets tqdm.auto falls back to its text bar with a TqdmWarning
+    ("IProgress not found"); the text bar is what fohw shows then, so that warning is not passed on.
+    """
+    import warnings
+
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="IProgress not found")
             from tqdm.auto import tqdm
-        except ImportError:
-            pass
-        else:
-            return _Tqdm(tqdm(total=total, desc=label, file=sys.stderr), label)
-    return _Counter(total, label)
+    except ImportError:
+        return None
+    return tqdm
+
+
+def _tqdm(total, label, delay):
+    """A ``tqdm.auto`` bar on stderr (a notebook widget where ipywidgets is installed), or None."""
+    tqdm = _auto_tqdm()
+    if tqdm is None:
+        return None
+    tty = sys.stderr.isatty()
+    kwargs = dict(total=total, desc=label, file=sys.stderr, delay=delay,
+                  mininterval=0.1 if tty else LINE_INTERVAL)
+    try:
+        return tqdm(**kwargs)
+    except ImportError:              # a notebook without ipywidgets: the text bar
+        from tqdm.std import tqdm as text_tqdm
+
+        return text_tqdm(**kwargs)
 
 
 class _Silent:
@@ -104,39 +157,150 @@ class _Silent:
 
 
 class _Tqdm:
-    """A tqdm bar whose messages go to stderr above it."""
+    """A tqdm bar whose messages go to stderr above it (once the bar shows, after its delay)."""
 
-    def __init__(self, bar, label):
+    def __init__(self, bar, label, delay=0.0):
+        import time
+
         self.bar, self.label = bar, label
+        self.clock, self.delay = time.monotonic, delay
+        self.start = self.clock()
+        _active[0] += 1
 
     def update(self, n=1):
         self.bar.update(n)
 
     def write(self, message):
-        self.bar.write(f"{self.label}: {message}", file=sys.stderr)
+        if self.clock() - self.start >= self.delay:
+            self.bar.write(f"{self.label}: {message}", file=sys.stderr)
 
     def close(self):
-        self.bar.close()
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+            _active[0] -= 1
 
 
 class _Counter:
-    """A plain ``label: i/total`` counter and ``label: message`` lines on stderr."""
+    """The plain display (no tqdm): ``label: i/total`` on stderr, and ``label: message`` lines.
 
-    def __init__(self, total, label):
+    On a terminal the count is rewritten in place; in a file or a pipe it is a line every
+    :data:`LINE_INTERVAL` seconds (and the last count at the end), so a log is never flooded.
+    Nothing shows before ``delay`` seconds have passed.
+    """
+
+    def __init__(self, total, label, delay=0.0):
+        import time
+
         self.total, self.label, self.n = total, label, 0
+        self.clock = time.monotonic
+        self.start = self.clock()
+        self.delay = delay
+        self.tty = sys.stderr.isatty()
+        self.last = None              # when a count was last shown
+        self.shown = False
+        if total is not None:         # a bar, not stage messages: inner bars stay quiet
+            _active[0] += 1
 
     def update(self, n=1):
         self.n += n
-        print(f"\r{self.label}: {self.n}/{self.total}", end="", file=sys.stderr, flush=True)
+        now = self.clock()
+        if now - self.start < self.delay:
+            return
+        if self.tty:
+            print(f"\r{self.label}: {self.n}/{self.total}", end="", file=sys.stderr, flush=True)
+            self.shown = True
+        elif self.last is None or now - self.last >= LINE_INTERVAL or self.n == self.total:
+            self._line(now)
+
+    def _line(self, now):
+        print(f"{self.label}: {self.n}/{self.total} ({now - self.start:.0f} s)", file=sys.stderr,
+              flush=True)
+        self.last, self.shown = now, True
 
     def write(self, message):
-        if self.n:                                    # below the counter's line
+        if self.shown and self.tty:                   # below the counter's line
             print(file=sys.stderr)
         print(f"{self.label}: {message}", file=sys.stderr, flush=True)
 
     def close(self):
+        if self.label is None:
+            return
+        if self.total is not None and self.shown:
+            if self.tty:
+                print(file=sys.stderr, flush=True)
+            elif self.last is not None and self.n != self.total:
+                self._line(self.clock())
         if self.total is not None:
-            print(file=sys.stderr, flush=True)
+            _active[0] -= 1
+        self.label = None
+
+
+class heartbeat:
+    """Progress of one call whose length is not known in steps (``with heartbeat(label, progress)``).
+
+    A background thread shows the elapsed time on stderr (a tqdm bar without a total, or a plain
+    ``label: running, 12 s`` line every :data:`LINE_INTERVAL` seconds) from the start with
+    ``enabled=True``, after :data:`AUTO_DELAY` seconds with ``enabled=None`` (not inside
+    another progress display, not in a worker process), never with False; and, if it showed,
+    ``label: done in 12.3 s`` at the end. Progress displays opened inside stay quiet.
+    """
+
+    def __init__(self, label, enabled=None):
+        self.label = label
+        self.delay = 0.0 if enabled else AUTO_DELAY
+        self.enabled = enabled is True or (enabled is None and _auto_allowed())
+        self.thread = None
+
+    def __enter__(self):
+        import threading
+        import time
+
+        self.start = time.monotonic()
+        if self.enabled:
+            self.stop = threading.Event()
+            self.shown = False
+            self.thread = threading.Thread(target=self._run, name="fohw-progress", daemon=True)
+            self.thread.start()
+        _active[0] += 1
+        return self
+
+    def _run(self):
+        import time
+
+        if self.stop.wait(self.delay):
+            return
+        self.shown = True
+        tqdm = _auto_tqdm()
+        if tqdm is not None:
+            try:
+                bar = tqdm(desc=self.label, file=sys.stderr, bar_format="{desc}: running, {elapsed}")
+            except ImportError:          # a notebook without ipywidgets
+                from tqdm.std import tqdm as text_tqdm
+
+                bar = text_tqdm(desc=self.label, file=sys.stderr,
+                                bar_format="{desc}: running, {elapsed}")
+            while not self.stop.wait(1.0 if sys.stderr.isatty() else LINE_INTERVAL):
+                bar.refresh()
+            bar.close()
+            return
+        while True:
+            print(f"{self.label}: running, {time.monotonic() - self.start:.0f} s",
+                  file=sys.stderr, flush=True)
+            if self.stop.wait(LINE_INTERVAL):
+                return
+
+    def __exit__(self, *exc):
+        import time
+
+        _active[0] -= 1
+        if self.thread is not None:
+            self.stop.set()
+            self.thread.join()
+            if self.shown:
+                print(f"{self.label}: done in {time.monotonic() - self.start:.1f} s",
+                      file=sys.stderr, flush=True)
+        return False
 
 
 def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
@@ -151,8 +315,9 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
     executor : concurrent.futures.Executor, optional
         Where to run the calls; default (None) serially in this process.
     progress : bool, optional
-        A progress bar on stderr (tqdm if installed, a plain counter otherwise); default: only
-        when stderr is a terminal.
+        A progress bar on stderr (tqdm if installed, a plain counter otherwise): True from the
+        start, False never; default (None): once the tasks have run for :data:`AUTO_DELAY`
+        seconds (:func:`progress_bar`).
     label : str
         Name shown beside the progress count.
 

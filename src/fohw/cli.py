@@ -17,9 +17,13 @@
   input, from the initial state ``--initial`` (needed for a result fitted with
   ``past="estimate"``); a model or fit of any other kind (``fohw.save_model``,
   ``fohw.save_result``) is simulated by its own ``simulate``, with one ``--column`` per input.
+* ``fohw compare --model MODEL.json --data DATA [--columns U,Y] [--initial rest|fitted|estimate]
+  [--n-init N] [--json] [--plot FILE]`` — score a saved model or result on a record, as
+  :func:`fohw.compare`: free-run and one-step fit % and RMSE, the residual tests.
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
-  ``robot_arm``) or a simulated one (``paper_example [--samples N] [--seed S]``) as a file to try
-  the commands on; without NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
+  ``robot_arm``, ``battery``: the cell's drive cycle as columns t, i, v, soc) or a simulated
+  one (``paper_example [--samples N] [--seed S]``) as a file to try the commands on; without
+  NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
   DATA reads the shipped file directly.
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
   ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
@@ -48,7 +52,7 @@ import sys
 from . import __version__
 from .io.files import save_figure
 
-_DATA_NAMES = ("cascaded_tanks", "robot_arm", "paper_example")
+_DATA_NAMES = ("cascaded_tanks", "robot_arm", "battery", "paper_example")
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -82,6 +86,14 @@ def _stage(args, message):
     """
     if not getattr(args, "quiet", False):
         print(f"fohw: {message}", file=sys.stderr, flush=True)
+
+
+def _bars(args):
+    """Progress bars of the library for the command: a terminal's default, none otherwise.
+
+    In a pipe or a file the stage messages (:func:`_stage`) say what runs; ``--quiet``: nothing.
+    """
+    return None if sys.stderr.isatty() and not getattr(args, "quiet", False) else False
 
 
 def _duration(seconds):
@@ -362,6 +374,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_identify_parser(sub)
     _add_select_parser(sub)
     _add_simulate_parser(sub)
+    _add_compare_parser(sub)
     _add_data_parser(sub)
     _add_reproduce_parser(sub)
     return parser
@@ -488,6 +501,27 @@ def _add_simulate_parser(sub):
     _add_quiet(sim)
 
 
+def _add_compare_parser(sub):
+    cmp = sub.add_parser("compare", help="score a saved model or result on a record: free run "
+                         "and one-step prediction (fohw.compare)")
+    cmp.add_argument("--model", required=True, help="model JSON (fohw.save_model) or result "
+                     "JSON (`fohw identify --save`, fohw.save_result)")
+    cmp.add_argument("--data", required=True, help="data file with the input and output columns "
+                     "(or @NAME for a shipped record)")
+    cmp.add_argument("--columns", default=None, help="input and output columns, numbers from 0 "
+                     "or header names (default: u,y, or the only two columns)")
+    cmp.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    cmp.add_argument("--initial", choices=("rest", "fitted", "estimate"), default=None,
+                     help="the state the free run starts from (fohw.compare's initial=): rest, "
+                     "fitted (a past='estimate' fit's levels) or estimate (levels fitted to "
+                     "this record's output: optimistic by two parameters)")
+    cmp.add_argument("--n-init", type=int, default=0, help="leading samples left out of every "
+                     "score (a start-up transient; default 0)")
+    cmp.add_argument("--json", action="store_true", help="print the scores as JSON")
+    cmp.add_argument("--plot", help="write a figure of the free run and the one-step prediction")
+    _add_quiet(cmp)
+
+
 def _add_data_parser(sub):
     dat = sub.add_parser("data", help="write a record shipped with fohw (or a simulated one) "
                          "to a file, to try the commands on; without NAME, list them")
@@ -584,7 +618,7 @@ def _fit_and_check(args, u, y, options, dt):
                        method=args.method, alpha_bounds=args.alpha_bounds, options=options,
                        offset=args.offset, operating_point=args.operating_point, dt=dt,
                        output_map=args.output_map,
-                       nk=args.nk, inputs=getattr(args, "inputs", None))
+                       nk=args.nk, inputs=getattr(args, "inputs", None), progress=_bars(args))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
@@ -637,12 +671,12 @@ def _save_identified(args, res, check):
 
         save_result(res, args.save)
     if args.plot:
-        fig, axes = check.plot() if check is not None else (None, None)
-        if fig is None:
+        if check is None:
             raise UsageError("--plot: the result has no model to simulate (see the message "
                              "above); no figure written.")
-        axes[0].set_title(f"fohw identify ({res.method}) on the estimation record: free run and "
-                          "one-step prediction", fontsize=10)
+        fig = check.plot()
+        fig.suptitle(f"fohw identify ({res.method}) on the estimation record: free run and "
+                     "one-step prediction", fontsize=10)
         save_figure(fig, args.plot, dpi=120)
 
 
@@ -697,8 +731,7 @@ def _select(args):
     if args.csv:
         sel.to_csv(args.csv)
     if args.plot:
-        fig, _ = sel.plot()
-        save_figure(fig, args.plot, dpi=120)
+        save_figure(sel.plot(), args.plot, dpi=120)
     return 0
 
 
@@ -750,7 +783,7 @@ def _run_selection(args, u, y, candidates, dt):
             sel = select_structure(u, y, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
                                    operating_point=args.operating_point, dt=dt,
-                                   executor=pool)
+                                   executor=pool, progress=_bars(args))
     finally:
         if pool is not None:
             pool.shutdown()
@@ -845,22 +878,63 @@ def _simulate(args):
     return int(not np.all(np.isfinite(y)))
 
 
+def _compare(args):
+    import warnings
+
+    from .analysis.validation import compare
+
+    _check_plot_out(args.plot, "--plot", [args.data, args.model])
+    _, loaded = _load_model_or_result(args.model)
+    data, names, _ = read_table(args.data, _decimal(args))
+    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    _stage(args, f"scoring on {u.shape[0]} samples ...")
+    with warnings.catch_warnings(record=True) as caught:
+        for category in _fohw_warnings():
+            warnings.simplefilter("always", category)
+        check = compare(loaded, u, y, initial=args.initial, n_init=args.n_init)
+    _print_warnings(caught)
+    if args.json:
+        out = _fit_dict(check)
+        out.update(status=check.status, n_samples=int(u.shape[0]), n_init=check.n_init)
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"{args.model} on {args.data} ({u.shape[0]} samples"
+              + (f", the first {check.n_init} left out" if check.n_init else "") + "):")
+        print(check.to_markdown())
+    if args.plot:
+        fig = check.plot()
+        fig.suptitle(f"fohw compare: {os.path.basename(args.model)} on "
+                     f"{os.path.basename(args.data)}", fontsize=10)
+        save_figure(fig, args.plot, dpi=120)
+    return 0
+
+
 def _data(args):
     """``fohw data``: list the records, or write one to ``--out`` (default stdout)."""
-    from .datasets import SHIPPED, paper_example, shipped_file
+    from .datasets import BATTERY_FILENAME, SHIPPED, paper_example, shipped_file
 
     if args.name is None:
         for name, (filename, _, what) in SHIPPED.items():
             print(f"{name:15s} {filename}: {what}")
+        print(f"{'battery':15s} {BATTERY_FILENAME}: an LG M50LT lithium-ion cell's drive cycle "
+              "(164 953 samples at 0.15 s; written as columns t, i, v, soc), its open-circuit "
+              "voltage and impedance spectra (all of it: fohw.datasets.battery_cell())")
         print(f"{'paper_example':15s} simulated (Section 6.1, Eq. 57): columns u, y; --samples N "
               "(default 2000), --seed S")
-        print("write one with `fohw data NAME --out FILE`, or read it in place as @NAME "
-              "(e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
+        print("write one with `fohw data NAME --out FILE`, or read a text record in place as "
+              "@NAME (e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
         return 0
     _check_file_out(args.out, "--out")
     if args.name == "paper_example":
         d = paper_example(args.samples, random_state=args.seed)
         text = "u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(d.u, d.y))
+    elif args.name == "battery":
+        from .datasets import battery_cell
+
+        cell = battery_cell()
+        text = "t,i,v,soc\n" + "".join(
+            f"{k * cell.dt:.2f},{float(i)!r},{float(v)!r},{float(q)!r}\n"
+            for k, (i, v, q) in enumerate(zip(cell.i, cell.v, cell.soc)))
     else:
         with open(shipped_file(args.name), encoding="utf-8") as fh:
             text = fh.read()
@@ -923,7 +997,7 @@ def _run(argv):
         parser.print_help()
         return 0
     handler = {"identify": _identify, "select": _select, "simulate": _simulate,
-               "data": _data, "reproduce": _reproduce}
+               "compare": _compare, "data": _data, "reproduce": _reproduce}
     try:
         return handler[args.command](args)
     except (UsageError, FohwError, FileNotFoundError) as exc:

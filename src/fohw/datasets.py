@@ -480,6 +480,36 @@ class BatteryCell:
         out = np.interp(y, self.x_pos, self.U_pos) - np.interp(x, self.x_neg, self.U_neg)
         return float(out) if out.ndim == 0 else out
 
+    def ocv_table(self):
+        """The open-circuit voltage as a :class:`fohw.OCVTable` (what a model file can hold).
+
+        Both electrodes' potentials are linear between their tabulated stoichiometries, and the
+        stoichiometries are linear in the state of charge, so the OCV is linear between the
+        states of charge where either electrode has a table point: the table holds those (and
+        0 and 1), and equals :meth:`ocv` at every state of charge in [0, 1] up to rounding.
+
+        Returns
+        -------
+        OCVTable
+
+        Examples
+        --------
+        >>> import numpy as np, fohw
+        >>> cell = fohw.datasets.battery_cell()
+        >>> soc = np.linspace(0, 1, 1001)
+        >>> bool(np.max(np.abs(cell.ocv_table()(soc) - cell.ocv(soc))) < 1e-12)
+        True
+        """
+        from .model.circuit import OCVTable
+
+        st = self.stoichiometry
+        knots = [np.array([0.0, 1.0])]
+        for points, s0, s1 in ((self.x_pos, st["y0"], st["y1"]), (self.x_neg, st["x0"], st["x1"])):
+            s = (np.asarray(points, dtype=np.float64) - s0) / (s1 - s0)
+            knots.append(s[(s > 0.0) & (s < 1.0)])
+        soc = np.unique(np.concatenate(knots))
+        return OCVTable(soc, self.ocv(soc))
+
     def decimate(self, factor):
         """The record averaged over blocks of ``factor`` samples (``i``, ``v`` and ``soc``).
 

@@ -22,15 +22,26 @@ class ResultPresentation:
         return list(self.structure.nonlinear_names) + list(self.structure.linear_names)
 
     def _repr_html_(self):
+        """The notebook view: what :meth:`summary` shows, its estimates as a table."""
         import html
 
-        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
-        rows = "".join(f"<tr><td>{html.escape(n)}</td><td>{est[n]:.6g}</td></tr>"
-                       for n in self._display_names())
-        return (f"<div><b>IdentificationResult</b> method={html.escape(self.method)!r}, "
-                f"N={self.n_samples}, J={self.J:.4g}, status={self.status.name}<br>"
-                f"<small>{html.escape(self.message)}</small>"
-                f"<table><tr><th>parameter</th><th>estimate</th></tr>{rows}</table></div>")
+        from ._repr import html_table
+
+        paragraphs = self.summary().split("\n\n")       # head, estimates, then the rest
+        names = self._display_names()
+        est = (self._estimates() if self.model is not None
+               else dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear])))
+        if self.covariance is not None:
+            se, ci = self.standard_errors(), self.confidence_intervals()
+            header = ["parameter", "estimate", "std err", "95% CI low", "95% CI high"]
+            rows = [(n, f"{est[n]:.6g}", f"{se[n]:.3g}", f"{ci[n][0]:.6g}", f"{ci[n][1]:.6g}")
+                    for n in names]                      # as summary() writes them
+        else:
+            header = ["parameter", "estimate"]
+            rows = [(n, f"{est[n]:.6g}") for n in names]
+        head = [line.strip() for line in paragraphs[0].splitlines()]
+        table = html_table(head[0], header, rows, lines=head[1:])
+        return table + "".join(f"<pre>{html.escape(p)}</pre>" for p in paragraphs[2:])
 
     def summary(self, linear_block=True) -> str:
         """A text table of the estimates and the run's diagnostics.
@@ -101,7 +112,7 @@ class ResultPresentation:
                 f"  static gain H(1) = {gain:.6g}{why}",
                 f"  stability: {block.stability()}"]
 
-    def bode(self, omega=None, *, others=None, title=None):
+    def bode(self, omega=None, *, others=None, title=None, ax=None):
         """Bode diagram of the linear block (:meth:`fohw.IdentificationResult.linear_block`).
 
         Parameters
@@ -114,12 +125,15 @@ class ResultPresentation:
             the same axes, e.g. the true model beside the estimate.
         title : str, optional
             Figure title.
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
 
         Returns
         -------
-        fig, axes
-            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); the figure is
-            not registered with pyplot, so it is never shown (save it with ``fig.savefig``).
+        matplotlib.figure.Figure
+            Magnitude and phase axes (:func:`fohw.analysis.frequency.bode_plot`); a new figure
+            is not registered with pyplot (no window; ``fig.savefig`` writes it) and shows as
+            the last expression of a notebook cell.
         """
         from .analysis.frequency import bode_plot
         from .model.hw_frequency import LinearBlock, linear_block
@@ -130,7 +144,7 @@ class ResultPresentation:
         for label, other in (others or {}).items():
             other = other if isinstance(other, LinearBlock) else linear_block(other)
             curves[label] = other.frequency_response(omega)
-        return bode_plot(omega, curves, title=title)
+        return bode_plot(omega, curves, title=title, ax=ax)
 
     def _estimate_table(self, names, est):
         """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""
@@ -158,29 +172,47 @@ class ResultPresentation:
                 f"{orders + ', ' if orders else ''}J={self.J:.6g}, status={self.status.name}, "
                 f"nit={self.nit}, n_params={self.theta.shape[0]})")
 
-    def plot(self, theta_true=None):
+    def plot(self, theta_true=None, *, ax=None):
         """Histories of theta (or delta, given ``theta_true``), alpha and J.
+
+        A batch method (no per-sample history) shows its estimates, the profile of J over
+        alpha where it has one, and J over the evaluations.
+
+        Parameters
+        ----------
+        theta_true : array_like, optional
+            The true theta: the first panel then shows the relative error delta(k).
+        ax : matplotlib Axes or sequence of three Axes, optional
+            One Axes receives the first panel only; three receive all (default: a new figure).
 
         Returns
         -------
-        fig, axes
-            Matplotlib figure and its three axes; nothing is shown.
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
         """
-        import matplotlib.pyplot as plt
+        from ._plotting import axes_for
 
-        fig, axes = plt.subplots(3, 1, figsize=(8, 7))
+        fig, axes = axes_for(ax, 3, figsize=(8, 7))
+        axes = axes + [None] * (3 - len(axes))
         if self.theta_history is None:       # batch methods: no per-sample history
             self._plot_batch(axes)
         else:
             self._plot_recursive(axes, theta_true)
-        fig.tight_layout()
-        return fig, axes
+        return fig
 
     def _plot_batch(self, axes):
-        names = ("alpha",) + self.parameter_names
-        axes[0].bar(range(len(names)), [self.alpha, *self.theta])
+        names = self._display_names()             # the free orders first, then theta
+        est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        yerr = None
+        if self.covariance is not None:           # 95 % intervals, as summary() gives them
+            ci = self.confidence_intervals()
+            yerr = np.array([[est[n] - ci[n][0] for n in names], [ci[n][1] - est[n] for n in names]])
+        axes[0].bar(range(len(names)), [est[n] for n in names], yerr=yerr, capsize=2)
         axes[0].set_xticks(range(len(names)), names, rotation=60, fontsize=7)
-        axes[0].set_ylabel("estimate")
+        axes[0].set_ylabel("estimate" if yerr is None else "estimate, 95 % interval")
+        if axes[1] is None:
+            return
         if self.alpha_profile is not None:
             axes[1].plot(*self.alpha_profile, marker=".")
             axes[1].set_xlabel("alpha")
@@ -198,6 +230,8 @@ class ResultPresentation:
             axes[0].semilogy(k, self.relative_error(theta_true, history=True))
             axes[0].set_ylabel("delta(k)")
         axes[0].set_xlabel("sample k (last pass)")
+        if axes[1] is None:
+            return
         axes[1].plot(k, self.alpha_sample_history)
         axes[1].set_ylabel("alpha(k)")
         axes[1].set_xlabel("sample k (last pass)")

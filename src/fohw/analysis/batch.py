@@ -55,7 +55,9 @@ def identify_many(records, *, executor=None, progress=None, model=None, **kwargs
         Where to run them (a ``ProcessPoolExecutor``, dask's ``Client.get_executor()``);
         default serially. The results do not depend on the backend.
     progress : bool, optional
-        A progress bar on stderr; default: when stderr is a terminal.
+        A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
+        otherwise): True from the start, False never; default (None) once the work has run
+        for 2 s.
     model : Model, optional
         A start model of any kind: every record is fitted by :func:`fohw.fit` from it (then
         ``**kwargs`` are keywords of :func:`fohw.fit`: ``order_grid``, ``n_starts``, …).

@@ -1,6 +1,6 @@
 """Does a circuit's fractional element earn its keep: LR test, profile interval of its order, impedance check.
 
-Three checks of a :class:`fohw.estimators.circuit_fit.CircuitFit`:
+Three checks of a :func:`fohw.fit` result of an :class:`fohw.EquivalentCircuit`:
 
 - :func:`circuit_lr_test`: the likelihood-ratio test of a fractional element against its integer
   limit (a ZARC's ``alpha = 1`` is the RC element), ``LR = n log(RSS_restricted / RSS_full)``.
@@ -21,14 +21,16 @@ be passed as ``n`` for a more honest (still approximate) statistic.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_int, check_scalar
-from ..estimators.circuit_fit import CircuitFit, fit_circuit
-from ..exceptions import ParameterError
+from ..estimators.fit import fit as fohw_fit
+from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
+from ..fit_result import FitResult
+from ..model.circuit import EquivalentCircuit
 from .lrtest import LRTest, chi_bar_squared_sf
 from .profile_interval import ProfileInterval
 
@@ -76,9 +78,11 @@ def effective_samples(residuals, max_lag=None):
 
 
 def _check_fit(fit, name):
-    if not isinstance(fit, CircuitFit):
-        raise ParameterError(f"`{name}` must be a CircuitFit (fohw.estimators.circuit_fit); got "
-                             f"{type(fit).__name__}.")
+    if not isinstance(fit, FitResult) or not isinstance(fit.model, EquivalentCircuit):
+        what = type(fit).__name__
+        if isinstance(fit, FitResult):
+            what += f" of a {type(fit.model).__name__}"
+        raise ParameterError(f"`{name}` must be a fohw.fit result of an EquivalentCircuit; got {what}.")
     return fit
 
 
@@ -87,71 +91,75 @@ def circuit_lr_test(restricted, full, *, n=None):
 
     Parameters
     ----------
-    restricted, full : CircuitFit
-        Fits of the same record: ``full`` with free orders, ``restricted`` the same circuit with
-        those orders fixed at 1 (``fixed={"alpha1": 1.0}``), or with the ZARC elements replaced by
-        RC elements.
+    restricted, full : FitResult
+        :func:`fohw.fit` results of circuits on the same record: ``full`` with free orders,
+        ``restricted`` the same circuit with those orders fixed at 1
+        (``circuit.parameters.replace("alpha1", value=1.0, fixed=True)``), or with the ZARC
+        elements replaced by RC elements.
     n : float, optional
-        Samples of the statistic; default ``full.n`` (white residuals). Pass
+        Samples of the statistic; default ``full.n_samples`` (white residuals). Pass
         :func:`effective_samples` of the residuals for correlated ones.
 
     Returns
     -------
     LRTest
-        ``statistic = n log(RSS_restricted / RSS_full)``, reference ``0.5 chi2_0 + 0.5 chi2_1``
+        ``statistic = n log(SSE_restricted / SSE_full)``, reference ``0.5 chi2_0 + 0.5 chi2_1``
         for one order (chi-bar-squared with binomial weights for several).
     """
     restricted = _check_fit(restricted, "restricted")
     full = _check_fit(full, "full")
-    if restricted.n != full.n:
-        raise ParameterError(f"`restricted` and `full` must be fits of the same record; got "
-                             f"{restricted.n} and {full.n} samples.")
-    kinds_r = tuple("zarc" if k == "rc" else k for k in restricted.circuit.kinds)
-    if kinds_r != tuple("zarc" if k == "rc" else k for k in full.circuit.kinds):
+    if restricted.data_digest != full.data_digest:
+        raise ParameterError("`restricted` and `full` must be fits of the same record (and weights); "
+                             f"their data digests differ ({restricted.data_digest} and "
+                             f"{full.data_digest}).")
+    kinds_r = tuple("zarc" if k == "rc" else k for k in restricted.model.kinds)
+    if kinds_r != tuple("zarc" if k == "rc" else k for k in full.model.kinds):
         raise ParameterError(f"`restricted` must have the elements of `full` with integer orders; got "
-                             f"{restricted.circuit.kinds} and {full.circuit.kinds}.")
-    free = [nm for nm in full.names if nm.startswith("alpha")]
-    tested = [nm for nm in free if restricted.params.get(nm, 1.0) == 1.0 and
-              (nm in restricted.fixed or nm not in restricted.circuit.names)]
+                             f"{restricted.model.kinds} and {full.model.kinds}.")
+    free = [nm for nm in full.free_names if nm.startswith("alpha")]
+    rpar = restricted.parameters
+    tested = [nm for nm in free if nm not in rpar or (rpar[nm].value == 1.0 and rpar[nm].fixed)]
     k = len(tested)
     if k == 0:
         raise ParameterError("`restricted` holds no order of `full` at 1: nothing to test.")
     if n is None:
-        n = full.n
+        n = full.n_samples
     n = check_scalar(n, "n", lower=1.0)
-    stat = max(n * math.log(restricted.rss / full.rss), 0.0)
+    stat = max(n * math.log(restricted.sse / full.sse), 0.0)
     dist = ("chi2 mixture 0.5*chi2_0 + 0.5*chi2_1" if k == 1 else
             f"chi-bar-squared, binomial weights over {k} orders")
     note = ""
-    if full.rss > restricted.rss:
+    if full.sse > restricted.sse:
         note = "The full fit is worse than the restricted one: its search did not converge to the best."
-    if n < full.n:
-        note = (note + f" n = {n:.4g} effective samples of {full.n}.").strip()
+    if n < full.n_samples:
+        note = (note + f" n = {n:.4g} effective samples of {full.n_samples}.").strip()
     return LRTest(statistic=float(stat), df=k, pvalue=chi_bar_squared_sf(stat, k),
                   distribution=dist, criterion="free-run RSS", n=int(round(n)),
-                  rss_restricted=restricted.rss, rss_full=full.rss, boundary=tuple(tested),
+                  rss_restricted=restricted.sse, rss_full=full.sse, boundary=tuple(tested),
                   note=note)
 
 
-def circuit_order_interval(fit, i, v, soc, name="alpha1", level=0.95, *, n=None, n_grid=9,
+def circuit_order_interval(fit, u, y, name="alpha1", level=0.95, *, n=None, n_grid=9,
                            xtol=1e-3):
     """Profile-likelihood interval of one order of a fitted circuit.
 
     Parameters
     ----------
-    fit : CircuitFit
-    i, v, soc : array_like
-        The record ``fit`` was fitted to.
+    fit : FitResult
+        A :func:`fohw.fit` result of an :class:`fohw.EquivalentCircuit`.
+    u, y : array_like
+        The record ``fit`` was fitted to (``u = [current, soc]``, ``y`` the voltage).
     name : str, optional
         The order (default ``"alpha1"``).
     level : float, optional
         Confidence level (default 0.95): the interval is where
-        ``n log(RSS(alpha) / RSS_hat) <= chi2_1(level)``.
+        ``n log(SSE(alpha) / SSE_hat) <= chi2_1(level)``.
     n : float, optional
-        Samples of the statistic (default ``fit.n``; see :func:`effective_samples`).
+        Samples of the statistic (default ``fit.n_samples``; see :func:`effective_samples`).
     n_grid : int, optional
-        Grid points over the order's bounds (default 9), refitted from the fit's parameters;
-        the ends are then found by root finding between grid points.
+        Grid points over the order's bounds (default 9; the bounds of the fit's parameter),
+        each a refit with the order fixed, started from the fit's parameters (and the
+        circuit's scan); the ends are then found by root finding between grid points.
     xtol : float, optional
         Accuracy of the ends (default 1e-3).
 
@@ -161,33 +169,29 @@ def circuit_order_interval(fit, i, v, soc, name="alpha1", level=0.95, *, n=None,
         With ``grid`` and ``statistic`` of every refit.
     """
     fit = _check_fit(fit, "fit")
-    if name not in fit.names or not name.startswith("alpha"):
-        orders = ", ".join(nm for nm in fit.names if nm.startswith("alpha"))
-        raise ParameterError(f"`name` must be a free order of the fit ({orders}); got {name!r}.")
+    orders = [nm for nm in fit.free_names if fit.parameters[nm].order]
+    if name not in orders:
+        raise ParameterError(f"`name` must be a free order of the fit ({', '.join(orders)}); got {name!r}.")
     level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
                          upper_inclusive=False)
     n_grid = check_int(n_grid, "n_grid", minimum=2)
-    n = fit.n if n is None else check_scalar(n, "n", lower=1.0)
+    n = fit.n_samples if n is None else check_scalar(n, "n", lower=1.0)
     crit = float(scipy.stats.chi2.ppf(level, 1))
-    k = int(name[len("alpha"):])
-    kind = fit.circuit.kinds[k - 1]
-    lo, hi = fit.alpha_bounds
-    if kind == "warburg":
-        lo, hi = 0.05, 0.95
-    estimate = fit.params[name]
-    elements = fit.circuit.kinds
+    lo, hi = fit.parameters[name].bounds
+    estimate = fit.parameters[name].value
+    weight = fit.options.get("sample_weight")
     cache = {}
 
     def refit(value):
         value = float(value)
         if value not in cache:
-            start = fit.circuit.with_values([value if nm == name else x
-                                             for nm, x in zip(fit.circuit.names, fit.circuit.values)])
-            r = fit_circuit(i, v, soc, fit.h, elements, current_map=fit.circuit.c3 is not None,
-                            ocv=fit.circuit.ocv, fixed={**fit.fixed, name: value},
-                            tau_bounds=fit.tau_bounds, alpha_bounds=fit.alpha_bounds, start=start,
-                            sample_weight=fit.sample_weight)
-            cache[value] = max(n * math.log(r.rss / fit.rss), 0.0)
+            params = fit.parameters.replace(name, value=value, fixed=True)
+            model = fit.model.with_parameters(params)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", (ConvergenceWarning, RankDeficiencyWarning))
+                r = fohw_fit(model, u, y, start=model, sample_weight=weight, order_grid=1,
+                             n_starts=1)
+            cache[value] = max(n * math.log(r.sse / fit.sse), 0.0)
         return cache[value]
 
     grid = np.unique(np.concatenate([np.linspace(lo, hi, n_grid), [estimate]]))
@@ -214,7 +218,7 @@ def circuit_order_interval(fit, i, v, soc, name="alpha1", level=0.95, *, n=None,
                            one_sided=one_sided)
 
 
-def impedance_error(circuit, f, z, band=None, *, h=None, capacity=None, ocv_slope=0.0):
+def impedance_error(circuit, f, z, band=None, *, discrete=False, capacity=None, ocv_slope=0.0):
     """Relative error ``|Z_model - Z| / |Z|`` of a circuit's impedance against a measured spectrum.
 
     Parameters
@@ -226,8 +230,8 @@ def impedance_error(circuit, f, z, band=None, *, h=None, capacity=None, ocv_slop
         Measured impedance [ohm].
     band : (float, float), optional
         Keep the frequencies in ``[low, high]`` [Hz]; default all.
-    h : float, optional
-        Use the GL-discretised model's response (see ``EquivalentCircuit.impedance``).
+    discrete : bool, optional
+        Use the GL-discretised model's response at its ``dt`` (see ``EquivalentCircuit.impedance``).
     capacity, ocv_slope : float, optional
         Add the OCV's capacitor (see ``EquivalentCircuit.impedance``).
 
@@ -247,5 +251,5 @@ def impedance_error(circuit, f, z, band=None, *, h=None, capacity=None, ocv_slop
         keep = (f >= band[0]) & (f <= band[1])
         if not keep.any():
             raise ParameterError(f"`band` {band!r} holds none of the frequencies.")
-    model = circuit.impedance(f[keep], h=h, capacity=capacity, ocv_slope=ocv_slope)
+    model = circuit.impedance(f[keep], discrete=discrete, capacity=capacity, ocv_slope=ocv_slope)
     return f[keep], model, np.abs(model - z[keep]) / np.abs(z[keep])

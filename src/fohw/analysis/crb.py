@@ -128,6 +128,14 @@ class CRBResult:
                 f"rms_relative_error={self.rms_relative_error:.4g}, "
                 f"alpha_std={self.alpha_std:.4g}, n_realizations={self.n_realizations})")
 
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        return html_table("CRBResult", ["parameter", "smallest std"], list(self.std.items()),
+                          lines=[self.description,
+                                 f"RMS relative error of theta >= {self.rms_relative_error:.4g}; "
+                                 f"{self.n_realizations} noise realisations"])
+
 
 PARAMETRISATIONS = ("theta", "structured")
 #: The one bound of a model of any other kind: its free parameters, noise on the output.

@@ -1,8 +1,8 @@
 """Bode and Nyquist figures of frequency responses (the frequency view of a fitted model).
 
 :func:`bode_plot` and :func:`nyquist_plot` draw complex responses (from
-:mod:`fohw.model.frequency_response` or any other source) and return ``(fig, axes)``; no pyplot:
-the figure opens no window and saves with the Agg renderer.
+:mod:`fohw.model.frequency_response` or any other source) and return the figure: it opens no
+window, saves with the Agg renderer and shows in a notebook (:mod:`fohw._plotting`).
 """
 
 from __future__ import annotations
@@ -12,15 +12,7 @@ import numpy as np
 __all__ = ["bode_plot", "nyquist_plot"]
 
 
-def _figure(nrows, figsize):
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=figsize)
-    axes = fig.subplots(nrows, 1, sharex=True) if nrows > 1 else fig.subplots()
-    return fig, axes
-
-
-def bode_plot(omega, responses, *, title=None, band=None):
+def bode_plot(omega, responses, *, title=None, band=None, ax=None):
     """Bode diagram (magnitude in dB, phase in degrees) of one or more frequency responses.
 
     Parameters
@@ -33,48 +25,56 @@ def bode_plot(omega, responses, *, title=None, band=None):
         Figure title.
     band : (float, float), optional
         A frequency band to shade (e.g. an Oustaloup approximation band).
+    ax : matplotlib Axes or sequence of two Axes, optional
+        Where to draw: one Axes receives the magnitude only, two receive magnitude and phase
+        (default: a new figure with both).
 
     Returns
     -------
-    fig : matplotlib.figure.Figure
-    axes : ndarray of Axes, shape (2,)
-        Magnitude and phase axes. The figure is not registered with pyplot (never shown).
+    matplotlib.figure.Figure
+        The figure (``fig.axes``: magnitude, phase). A new one is not registered with pyplot:
+        it opens no window, saves with ``fig.savefig`` and shows as the last expression of a
+        notebook cell.
 
     Examples
     --------
     >>> import numpy as np
     >>> from fohw.analysis.frequency import bode_plot
     >>> w = np.logspace(-2, 2, 50)
-    >>> fig, axes = bode_plot(w, {"1/(s+1)": 1 / (1j * w + 1)})
-    >>> len(axes)
-    2
+    >>> fig = bode_plot(w, {"1/(s+1)": 1 / (1j * w + 1)})
+    >>> [a.get_ylabel() for a in fig.axes]
+    ['magnitude [dB]', 'phase [deg]']
     """
+    from .._plotting import axes_for
+
     omega = np.asarray(omega, dtype=np.float64)
     if not isinstance(responses, dict):
         responses = {None: responses}
-    fig, axes = _figure(2, (6.4, 5.6))
+    fig, axes = axes_for(ax, 2, figsize=(6.4, 5.6), sharex=True)
     styles = ["-", "--", ":", "-."]
     for i, (label, g) in enumerate(responses.items()):
         g = np.asarray(g, dtype=complex)
         with np.errstate(divide="ignore"):
             axes[0].semilogx(omega, 20 * np.log10(np.abs(g)), styles[i % 4], label=label)
-        axes[1].semilogx(omega, np.degrees(np.unwrap(np.angle(g))), styles[i % 4], label=label)
+        if len(axes) > 1:
+            axes[1].semilogx(omega, np.degrees(np.unwrap(np.angle(g))), styles[i % 4],
+                             label=label)
     axes[0].set_ylabel("magnitude [dB]")
-    axes[1].set_ylabel("phase [deg]")
-    axes[1].set_xlabel("angular frequency ω [rad / time unit]")
-    for ax in axes:
-        ax.grid(True, which="both", alpha=0.3)
+    axes[-1].set_xlabel("angular frequency ω [rad / time unit]")
+    if len(axes) > 1:
+        axes[1].set_ylabel("phase [deg]")
+    for a in axes:
+        a.grid(True, which="both", alpha=0.3)
         if band is not None:
-            ax.axvspan(band[0], band[1], color="0.9", zorder=0)
+            a.axvspan(band[0], band[1], color="0.9", zorder=0)
     if any(label is not None for label in responses):
         axes[0].legend()
     if title:
         axes[0].set_title(title)
-    fig.tight_layout()
-    return fig, axes
+    return fig
 
 
-def nyquist_plot(responses, *, title=None):
+def nyquist_plot(responses, *, title=None, ax=None):
     """Nyquist diagram (imaginary against real part) of one or more frequency responses.
 
     The mirror image for negative frequencies is drawn thin; the critical point ``-1`` is marked.
@@ -85,24 +85,28 @@ def nyquist_plot(responses, *, title=None):
         Each response on positive frequencies.
     title : str, optional
         Figure title.
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure).
 
     Returns
     -------
-    fig : matplotlib.figure.Figure
-    ax : matplotlib.axes.Axes
+    matplotlib.figure.Figure
+        The figure (``fig.axes[0]``); a new one opens no window and shows in a notebook.
 
     Examples
     --------
     >>> import numpy as np
     >>> from fohw.analysis.frequency import nyquist_plot
     >>> w = np.logspace(-2, 2, 50)
-    >>> fig, ax = nyquist_plot(1 / (np.sqrt(1j * w) + 1))
-    >>> ax.get_xlabel()
+    >>> fig = nyquist_plot(1 / (np.sqrt(1j * w) + 1))
+    >>> fig.axes[0].get_xlabel()
     'real part'
     """
+    from .._plotting import axes_for
+
     if not isinstance(responses, dict):
         responses = {None: responses}
-    fig, ax = _figure(1, (5.6, 5.0))
+    fig, (ax,) = axes_for(ax, 1, figsize=(5.6, 5.0))
     for label, g in responses.items():
         g = np.asarray(g, dtype=complex)
         (line,) = ax.plot(g.real, g.imag, label=label)
@@ -116,5 +120,4 @@ def nyquist_plot(responses, *, title=None):
         ax.legend()
     if title:
         ax.set_title(title)
-    fig.tight_layout()
-    return fig, ax
+    return fig

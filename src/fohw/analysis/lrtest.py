@@ -44,8 +44,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.special
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
@@ -119,6 +118,23 @@ class LRTest:
     note: str = ""
     bootstrap: np.ndarray | None = field(default=None, repr=False)
     hypothesis: str = ""
+
+    def __repr__(self):
+        return (f"LRTest(statistic={self.statistic:.4g}, df={self.df}, pvalue={self.pvalue:.4g}, "
+                f"distribution={self.distribution!r}, criterion={self.criterion!r}, n={self.n})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [("LR statistic", self.statistic), ("degrees of freedom", self.df),
+                ("p-value", self.pvalue), ("reference", self.distribution),
+                ("criterion", f"{self.criterion}, n = {self.n}"),
+                ("RSS restricted / full", f"{self.rss_restricted:.6g} / {self.rss_full:.6g}")]
+        rows += [("on the boundary", ", ".join(self.boundary))] if self.boundary else []
+        rows += [("unidentified under the null", ", ".join(self.unidentified))] \
+            if self.unidentified else []
+        return html_table("LR test of the fractional orders against orders 0", ["", "value"], rows,
+                          notes=[self.note])
 
     def __str__(self):
         null = self.hypothesis or "the fractional orders against orders 0"

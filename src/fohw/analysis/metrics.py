@@ -11,8 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-from scipy import stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._linalg import full_column_rank, rank_tolerance, triangular_factor
 from .._validation import check_array, check_int, check_same_length, check_scalar
@@ -204,7 +203,7 @@ def _check_not_constant(x, name):
 
 
 def _band(n, confidence):
-    return float(stats.norm.ppf(0.5 + confidence / 2) / np.sqrt(n))
+    return float(scipy.stats.norm.ppf(0.5 + confidence / 2) / np.sqrt(n))
 
 
 def whiteness_test(residuals, *, max_lag=25, confidence=0.99, n_init=0, statistic="ljung-box"):
@@ -290,7 +289,7 @@ def whiteness_test(residuals, *, max_lag=25, confidence=0.99, n_init=0, statisti
         q = float(n * (n + 2) * np.sum(corr**2 / (n - lags)))
     else:
         q = float(n * np.sum(corr**2))
-    p = float(stats.chi2.sf(q, max_lag))
+    p = float(scipy.stats.chi2.sf(q, max_lag))
     bound = _band(n, confidence)
     return CorrelationTest(lags=lags, correlation=corr, bound=bound,
                            n_outside=int(np.sum(np.abs(corr) > bound)), statistic=q, p_value=p,
@@ -527,7 +526,7 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
     rank, explained, rss, b = _delayed_input_fit(r_factor, k, n_lags, m, max_lag)
     dof_den = m - k - rank
     q = dof_den * explained / rss if rss > 0 else float("inf")
-    pval = float(stats.f.sf(q / rank, rank, dof_den))
+    pval = float(scipy.stats.f.sf(q / rank, rank, dof_den))
 
     c = scipy.linalg.solve_triangular(r11, r_factor[:k, -1] - r_factor[:k, k:k + n_lags] @ b)
     x = past[:, 0] - past[:, 1:] @ c[1:]                  # e(t) + a_1 e(t-1) + ... + a_p e(t-p)

@@ -118,7 +118,9 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
         Parallel workers through joblib (``-1``: all cores). 1 (default) runs serially. If
         joblib is not installed the run is serial, with a ``RuntimeWarning``.
     progress : bool, optional
-        Print progress to stderr; default: only when stderr is a terminal.
+        A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
+        otherwise): True from the start, False never; default (None) once the work has run
+        for 2 s.
     executor : concurrent.futures.Executor, optional
         Run the records on it instead (a ``ProcessPoolExecutor``, or dask's
         ``Client.get_executor()`` for a cluster); then ``n_jobs`` must stay 1. ``make_data``

@@ -25,8 +25,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..estimators.fit import check_record, data_digest, fit
@@ -229,6 +228,20 @@ class ProfileInterval:
     def upper(self) -> float:
         """The upper end (:attr:`high`)."""
         return self.high
+
+    def __repr__(self):
+        side = f", one-sided: {self.one_sided}" if self.one_sided else ""
+        return (f"ProfileInterval({self.name} = {self.estimate:.4g}, {self.level:.0%} interval "
+                f"[{self.low:.4g}, {self.high:.4g}]{side}; {self.grid.size} refits)")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        return html_table(f"Profile-likelihood interval of {self.name}",
+                          ["order", "estimate", f"{self.level:.0%} low", f"{self.level:.0%} high",
+                           "one-sided"],
+                          [(self.name, self.estimate, self.low, self.high, self.one_sided or "no")],
+                          notes=[f"n log(RSS(nu) / RSS_hat) on {self.grid.size} refits"])
 
 
 def _fixed_value_ok(orders, name, value):

@@ -32,6 +32,7 @@ import io
 import itertools
 import numbers
 import re
+import textwrap
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -360,6 +361,28 @@ class Selection:
     validation: str = ""
     seconds: float = 0.0
 
+    def __repr__(self):
+        n_ok = sum(r["status"] == "ok" for r in self.rows)
+        best = ("nothing selected" if self.best_row is None else
+                f"best {self.best_row['candidate']!r}, {self.score} "
+                f"{_cell(self.best_row.get(SCORES[self.score][0], float('nan')))}")
+        return (f"Selection({len(self.rows)} candidates, {n_ok} scored, {best}; "
+                f"{self.validation}; {self.seconds:.1f} s)")
+
+    def _repr_html_(self, top=20):
+        from .._repr import html_table
+
+        lines = self.to_markdown(top=top).splitlines()
+        header = [c.strip() for c in lines[0].strip("|").split("|")]
+        rows = [[c.strip() for c in line.strip("|").split("|")] for line in lines[2:] if line]
+        more = len(self.rows) - len(rows)
+        best = ("nothing selected" if self.best_row is None else
+                f"best: {self.best_row['candidate']} (refitted on all the data)")
+        return html_table(f"Selection of {len(self.rows)} candidates", header, rows,
+                          lines=[f"{self.validation}; ranked by {self.score}; {self.seconds:.1f} s",
+                                 best],
+                          notes=[f"... {more} more (Selection.to_markdown())" if more > 0 else ""])
+
     @property
     def best_row(self):
         """The winner's row (``None`` if every candidate failed)."""
@@ -438,13 +461,22 @@ class Selection:
         return pd.DataFrame(self.rows)
 
     def plot(self, ax=None):
-        """Held-back fit % of every candidate (failed ones marked), the winner highlighted."""
-        from .._plotting import subplots
+        """Held-back fit % of every candidate (failed ones marked), the winner highlighted.
 
-        if ax is None:
-            fig, ax = subplots(figsize=(8, 0.32 * len(self.rows) + 1.5))
-        else:
-            fig = ax.figure
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (default: a new figure, its height growing with the candidates).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
+        """
+        from .._plotting import axes_for
+
+        fig, (ax,) = axes_for(ax, 1, figsize=(8, 0.32 * len(self.rows) + 1.5))
         rows = self.ranked()[::-1]
         y = np.arange(len(rows))
         fits = np.array([r["fit"] if r["status"] == "ok" else np.nan for r in rows], float)
@@ -457,9 +489,10 @@ class Selection:
                 ax.text(0, yi, f" {r['status']}", va="center", fontsize=7)
         ax.set_yticks(y, [r["candidate"] for r in rows], fontsize=7)
         ax.set_xlabel("free-run fit % on the held-back part")
-        ax.set_title(f"Structure selection ({self.validation})", fontsize=10)
-        fig.tight_layout()
-        return fig, ax
+        # wrapped to the axes' width (about 11 characters an inch at 10 pt): never clipped
+        width = max(30, int(11 * ax.get_position().width * fig.get_figwidth()))
+        ax.set_title(textwrap.fill(f"Structure selection ({self.validation})", width), fontsize=10)
+        return fig
 
 
 def _cell(v):
@@ -612,7 +645,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         default serially. Basis functions must then be picklable (module-level functions, not
         lambdas). The table does not depend on the backend.
     progress : bool, optional
-        A progress bar on stderr; default: when stderr is a terminal.
+        A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
+        otherwise): True from the start, False never; default (None) once the work has run
+        for 2 s.
     envelope : float or None
         Plausibility factor (default 10, :data:`fohw.analysis.validation.ENVELOPE`): a free
         run (on the estimation input or the held-back part) that goes more than ``envelope``

@@ -148,6 +148,8 @@ class Validation:
         The state the free run started from (:func:`fohw.initial_state`): for
         ``initial="estimate"`` the levels (and window) fitted to this record's output, and
         ``initial.n_estimated`` values so fitted.
+    dt : float or None
+        The model's sampling time when it has one other than 1 (:meth:`plot`'s time axis).
     """
 
     y: np.ndarray
@@ -165,6 +167,7 @@ class Validation:
     status: str = "ok"
     notes: tuple = ()
     initial: InitialState | None = None
+    dt: float | None = None
 
     @property
     def fit(self) -> float:
@@ -175,6 +178,26 @@ class Validation:
     def rmse(self) -> float:
         """The free run's RMSE in the data's units (:attr:`rmse_simulation`)."""
         return self.rmse_simulation
+
+    def __repr__(self):
+        free = (f"fit {self.fit_simulation:.1f} %, RMSE {self.rmse_simulation:.4g}"
+                if self.simulated is not None else self.status)
+        return (f"Validation(N={self.y.size}, free run: {free}; one step: fit "
+                f"{self.fit_prediction:.1f} %, RMSE {self.rmse_prediction:.4g}; "
+                f"status={self.status!r})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        ok = self.simulated is not None
+        rows = [("free-run simulation", f"{self.fit_simulation:.1f}" if ok else self.status,
+                 f"{self.rmse_simulation:.4g}" if ok else self.status),
+                ("one-step prediction", f"{self.fit_prediction:.1f}",
+                 f"{self.rmse_prediction:.4g}")]                # as to_markdown() writes them
+        notes = [line for line in self.to_markdown().splitlines()[5:] if line]
+        return html_table(f"Validation on {self.y.size} samples"
+                          + (f" ({self.n_init} start-up samples left out)" if self.n_init else ""),
+                          ["", "fit %", "RMSE"], rows, notes=notes)
 
     def to_markdown(self, unit=""):
         """A two-row table (free run, one step) and the residual tests."""
@@ -204,14 +227,27 @@ class Validation:
         return "\n".join(out) + "\n"
 
     def plot(self, ax=None, *, dt=None):
-        """Measured output, free run and one-step prediction; their errors below."""
-        from .._plotting import subplots
+        """Measured output, free run and one-step prediction; their errors below.
 
-        if ax is None:
-            fig, axes = subplots(2, 1, figsize=(9, 5.5), sharex=True)
-        else:
-            axes = ax
-            fig = axes[0].figure
+        Parameters
+        ----------
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes receives the outputs only; two receive the outputs and the errors
+            (default: a new figure with both).
+        dt : float, optional
+            Sampling time: the horizontal axis is then time in its unit (default: the model's
+            :attr:`dt` when it is not 1), else the sample index.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            A new figure is not registered with pyplot (no window; ``fig.savefig`` writes it)
+            and shows as the last expression of a notebook cell.
+        """
+        from .._plotting import axes_for
+
+        fig, axes = axes_for(ax, 2, figsize=(9, 5.5), sharex=True)
+        dt = self.dt if dt is None else dt
         t = np.arange(self.y.size) * (1.0 if dt is None else dt)
         axes[0].plot(t, self.y, "k", lw=1.2, label="measured")
         if self.simulated is not None:
@@ -222,20 +258,33 @@ class Validation:
         if self.predicted is not None:
             axes[0].plot(t, self.predicted, "C1--", lw=0.9,
                          label=f"one step: fit {self.fit_prediction:.1f} %")
-        axes[0].legend(fontsize=8)
+        # legends above the panels: a record fills its axes, a legend inside would cover it
+        above = dict(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8,
+                     frameon=False, borderaxespad=0.2)
+        axes[0].legend(**above)
         axes[0].set_ylabel("output")
-        if self.simulated is not None:
-            axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
-        if self.predicted is not None:
-            axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
+        if len(axes) > 1:
+            if self.simulated is not None:
+                axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
+            if self.predicted is not None:
+                axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
+            axes[1].set_ylabel("error")
+            axes[1].legend(**above)
         if self.n_init:
             for a in axes:
                 a.axvspan(t[0], t[min(self.n_init, t.size - 1)], color="0.9")
-        axes[1].set_ylabel("error")
-        axes[1].set_xlabel("sample k" if dt is None else "time")
-        axes[1].legend(fontsize=8)
-        fig.tight_layout()
-        return fig, axes
+        axes[-1].set_xlabel("sample k" if dt is None else "time")
+        return fig
+
+
+def _sampling_time(model):
+    """The model's sampling time if it is not 1 (the sample index is then the time), else None."""
+    dt = getattr(model, "dt", None)
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError):
+        return None
+    return dt if np.isfinite(dt) and dt > 0 and dt != 1.0 else None
 
 
 def _one_step(model, u, y):
@@ -356,8 +405,18 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     """
     other = generic_model(model)
     if other is not None:
-        return _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
-                              max_lag=max_lag, confidence=confidence, envelope=envelope)
+        out = _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
+                             max_lag=max_lag, confidence=confidence, envelope=envelope)
+        out.dt = _sampling_time(other)
+        return out
+    out = _compare_lagged(model, u, y, initial=initial, history=history, n_init=n_init,
+                          max_lag=max_lag, confidence=confidence, envelope=envelope)
+    out.dt = _sampling_time(model)
+    return out
+
+
+def _compare_lagged(model, u, y, *, initial, history, n_init, max_lag, confidence, envelope):
+    """:func:`compare` of a result or a :class:`fohw.HammersteinWiener` (the lagged kind)."""
     is_model = isinstance(model, HammersteinWiener)
     if not is_model and not all(callable(getattr(model, name, None))
                                 for name in ("simulate", "predict")):

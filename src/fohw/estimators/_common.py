@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import scipy.optimize
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .. import _linalg
 from ..exceptions import (

@@ -26,6 +26,7 @@ only steps that lower the criterion), so a fit started at a simpler model's esti
 from __future__ import annotations
 
 import hashlib
+import inspect
 import itertools
 import warnings
 
@@ -61,14 +62,33 @@ PENALTY = 1e4
 DATA_RANGE = (1e-150, 1e150)
 
 
-def data_digest(u, y, dt):
-    """A fingerprint of a record (lengths, values and ``dt``) to check two fits used one record."""
+def data_digest(u, y, dt, sample_weight=None):
+    """A fingerprint of a record (lengths, values, ``dt``, weights) to check two fits used one record."""
     h = hashlib.sha1()
-    for a in (np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64)):
+    arrays = [u, y] + ([] if sample_weight is None else [sample_weight])
+    for a in arrays:
+        a = np.ascontiguousarray(a, dtype=np.float64)
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
     h.update(repr(float(dt)).encode())
     return h.hexdigest()[:16]
+
+
+def check_weight(sample_weight, y):
+    """``sample_weight`` checked against ``y`` (non-negative, one per sample, some positive)."""
+    w = check_array(sample_weight, "sample_weight")
+    check_same_length(y, w, "y", "sample_weight")
+    if np.any(w < 0) or not np.any(w > 0):
+        raise ParameterError("`sample_weight` must be non-negative with at least one positive "
+                             f"entry; got values from {w.min()!r} to {w.max()!r}.")
+    return w
+
+
+def _hook(method, u, y, weight):
+    """Call a kind's ``starts``/``linear_start``, with ``sample_weight`` if given and it takes one."""
+    if weight is not None and "sample_weight" in inspect.signature(method).parameters:
+        return method(u, y, sample_weight=weight)
+    return method(u, y)
 
 
 def check_record(model, u, y):
@@ -172,8 +192,8 @@ def _order_grid(model, grid):
             for combo in itertools.product(*axes)]
 
 
-def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=1e-10,
-        exact_jacobian=True):
+def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3, max_nfev=200,
+        tol=1e-10, exact_jacobian=True):
     """Fit any :class:`fohw.Model` to a record by simulation (output) error.
 
     Parameters
@@ -190,6 +210,11 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     start : Model or sequence of Model, optional
         Further start models of the same kind (e.g. a simpler model's estimate: the fit never
         ends above the best start).
+    sample_weight : array_like, shape (N,), optional
+        Non-negative weights of the squared errors (default 1). Zeros hold samples back from
+        the criterion while the simulation still runs through them (a held-back block inside
+        the record). The kind's :meth:`~fohw.Model.starts` and
+        :meth:`~fohw.Model.linear_start` get them when they take a ``sample_weight`` keyword.
     order_grid : int, optional
         Scan points per free order for each start (its own value is always among them); 1 skips
         the scan. At most ``MAX_SCAN`` points in all.
@@ -234,9 +259,13 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     if not names:
         raise ParameterError("every parameter of the model is fixed or tied: nothing to fit. Free "
                              "some with model.with_parameters(parameters) (Parameter(fixed=False)).")
-    if y.size <= len(names):
-        raise DimensionError(f"`y` has {y.size} samples for {len(names)} free parameters "
-                             f"({', '.join(names)}); need more samples than parameters.")
+    weight = None if sample_weight is None else check_weight(sample_weight, y)
+    sw = 1.0 if weight is None else np.sqrt(weight)
+    n_used = y.size if weight is None else int(np.count_nonzero(weight))
+    if n_used <= len(names):
+        raise DimensionError(f"`y` has {n_used} samples{'' if weight is None else ' of positive weight'} "
+                             f"for {len(names)} free parameters ({', '.join(names)}); need more "
+                             "samples than parameters.")
     extra = [] if start is None else [start] if isinstance(start, Model) else list(start)
     for s in extra:
         if type(s) is not type(model) or s.parameters.names != params.names:
@@ -244,7 +273,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
                                  f"`model` ({type(model).__name__}); got {type(s).__name__}.")
     # The user's settings (fixed flags, bounds, ties) hold for every start.
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
-             for m in list(model.starts(u, y)) + extra]
+             for m in list(_hook(model.starts, u, y, weight)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
     penalty = np.full(y.size, PENALTY * y_scale)
     lower, upper = params.free_bounds()
@@ -253,26 +282,43 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     def at(x):
         return model.with_parameters(params.with_free(np.clip(x, lower, upper)))
 
-    def residual(x):
+    # In the local search the solver asks for the Jacobian at (nearly) every point whose residual
+    # it computed; a kind's exact Jacobian comes with its output, so both are computed at once
+    # there and the Jacobian kept for the solver's call at the same x.
+    last = {}
+
+    def residual(x, with_jacobian=False):
         counter["nfev"] += 1
         try:
             with np.errstate(all="ignore"):
-                yhat = np.asarray(at(x).simulate(u), dtype=float)
+                m = at(x)
+                out = m.jacobian(u) if with_jacobian and has_exact else None
+                if out is not None:
+                    yhat = np.asarray(out[0], dtype=float)
+                    last["x"], last["jac"] = np.array(x, dtype=float), out[1]
+                else:
+                    yhat = np.asarray(m.simulate(u), dtype=float)
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
             return penalty
-        return y - yhat
+        return (y - yhat) * sw
 
     has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
+    t_matrix = params.tie_matrix()
 
     def jacobian(x):
         m = at(x)
         try:
             with np.errstate(all="ignore"):
-                jac = free_jacobian(m, u, exact=has_exact)[1]
+                if "x" in last and np.array_equal(last["x"], x):
+                    jac = np.asarray(last["jac"], dtype=float) @ t_matrix
+                else:
+                    jac = free_jacobian(m, u, exact=has_exact)[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return np.zeros((y.size, len(names)))
+        if weight is not None:
+            jac = jac * sw[:, None]
         return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
@@ -282,7 +328,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
             candidates.append(m)
             try:
                 with np.errstate(all="ignore"):
-                    solved = m.linear_start(u, y)
+                    solved = _hook(m.linear_start, u, y, weight)
             except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
                 solved = None
             if solved is not None:
@@ -303,10 +349,11 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
     for sse0, x0 in table[:n_starts]:
         if not np.isfinite(sse0):
             continue
-        x, status, ls = bounded_least_squares(residual, np.array(x0), jac=jacobian, lower=lower,
-                                              upper=upper, ftol=tol, xtol=tol, gtol=tol,
-                                              max_nfev=max_nfev)
-        r = residual(x)
+        x, status, ls = bounded_least_squares(lambda x: residual(x, True), np.array(x0),
+                                              jac=jacobian, lower=lower, upper=upper, ftol=tol,
+                                              xtol=tol, gtol=tol, max_nfev=max_nfev)
+        # The solver's last residual is at ls.x; x differs only where it was put on a bound.
+        r = ls.fun if np.array_equal(x, ls.x) else residual(x)
         sse = float(r @ r) if r is not penalty else np.inf
         if best is None or sse < best[0]:
             best = (sse, x, status, ls, sse0)
@@ -322,8 +369,10 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
     yhat, jac, how_cov = free_jacobian(fitted, u, exact=has_exact)
+    if weight is not None:                  # the criterion's Jacobian and residual
+        jac = jac * sw[:, None]
     if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
-            not stationary(jac, y - yhat, x, lower, upper):
+            not stationary(jac, (y - yhat) * sw, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
@@ -345,7 +394,7 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
             messages.append(note[0].upper() + note[1:])
             covariance = None
         else:
-            covariance = sse / (y.size - len(names)) * inverse
+            covariance = sse / (n_used - len(names)) * inverse
     message = " ".join(messages)
     if status == Status.RANK_DEFICIENT:
         warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
@@ -354,8 +403,9 @@ def fit(model, u, y, *, start=None, order_grid=5, n_starts=3, max_nfev=200, tol=
         warnings.warn(f"fohw.fit({type(model).__name__}): {' '.join(messages[1:])}",
                       ConvergenceWarning, stacklevel=2)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
-                     status=status, sse=sse, n_samples=y.size, message=message,
+                     status=status, sse=sse, n_samples=n_used, message=message,
                      nfev=counter["nfev"], jacobian=how_cov, starts=starts, residuals=y - yhat,
-                     data_digest=data_digest(u, y, model.dt),
+                     data_digest=data_digest(u, y, model.dt, weight),
                      options=dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev,
-                                  tol=tol, exact_jacobian=exact_jacobian))
+                                  tol=tol, exact_jacobian=exact_jacobian,
+                                  sample_weight=None if weight is None else weight.tolist()))

@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
 
+from .._parallel import heartbeat
 from .._types import ArrayLike, PairLike
 from ..exceptions import ParameterError
 from ..model.basis import BasisLike
@@ -43,7 +44,7 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
              output_map: OutputMapLike = None,
              options: Mapping[str, Any] | MethodOptions | None = None,
              executor: Executor | None = None, nk: int | Sequence[int] = 1,
-             inputs: Sequence[str] | None = None,
+             inputs: Sequence[str] | None = None, progress: bool | None = None,
              **method_options: Any) -> IdentificationResult:
     """Identify a fractional-order Hammerstein–Wiener model from input–output data.
 
@@ -146,6 +147,11 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
         Where ``method="output_error"`` runs its local searches (its option ``n_starts``): a
         :class:`~concurrent.futures.ProcessPoolExecutor` or dask's ``Client.get_executor()``;
         default (None) serially. The result is the same. Other methods refuse one.
+    progress : bool, optional
+        The elapsed time on stderr while the fit runs (a tqdm bar if tqdm is installed, else a
+        line every 10 s) and its duration at the end: True from the start, False never; default
+        (None) once the fit has run for 2 s (never inside ``select_structure``'s or
+        ``identify_many``'s own progress, nor in a worker process).
     **method_options
         The same options as keywords (``innovation_length=3``). A name the method does not have
         raises :class:`fohw.ParameterError` saying which methods have it.
@@ -203,7 +209,10 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     elif method_options:
         options = method_options
     opts = declared.options.build(method, options, others=OPTIONS)
-    return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
-                      orders=orders, offset=offset, operating_point=operating_point, past=past,
-                      dt=dt, alpha_bounds=alpha_bounds, output_map=output_map,
-                      executor=executor, nk=nk, inputs=inputs)
+    if progress is not None and not isinstance(progress, bool):
+        raise ParameterError(f"`progress` must be True, False or None; got {progress!r}.")
+    with heartbeat(f"identify ({method})", progress):
+        return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
+                          orders=orders, offset=offset, operating_point=operating_point,
+                          past=past, dt=dt, alpha_bounds=alpha_bounds, output_map=output_map,
+                          executor=executor, nk=nk, inputs=inputs)

@@ -13,7 +13,7 @@ reported by the columns it makes dependent. Used by :mod:`fohw.estimators.varpro
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .. import _linalg
 from ._common import rms_scale, working_scale

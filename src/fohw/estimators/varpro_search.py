@@ -14,8 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
-import scipy.optimize
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from ..exceptions import EstimationDivergedError
 from ..results import Status

@@ -17,13 +17,14 @@ rebuild them; :func:`register_model` registers one explicitly (e.g. defined with
 from __future__ import annotations
 
 import abc
+import copy
 import inspect
 
 import numpy as np
 
 from .._validation import check_array
 from ..exceptions import DimensionError, ParameterError
-from .parameters import Parameters
+from .parameters import Parameters, bounds_overridden
 
 __all__ = ["Model", "register_model", "model_class", "registered_kinds"]
 
@@ -91,35 +92,48 @@ _SETTINGS = "_fohw_parameter_settings"
 
 def _overlay_settings(fget):
     def parameters(self):
-        own = fget(self)
         settings = getattr(self, _SETTINGS, None)
         if settings is None:
-            return own
+            return fget(self)
+        with bounds_overridden():       # the settings' bounds hold, not the kind's defaults
+            own = fget(self)
+        # the values are the kind's own; the bounds the settings' (which may have just changed)
         return settings.with_values({n: p.value for n, p in own.items() if p.tie is None
-                                     and settings[n].tie is None})
+                                     and settings[n].tie is None}, check_bounds=False)
     parameters.__wrapped__ = fget
     return parameters
 
 
 def _keep_settings(method):
     def with_parameters(self, values):
-        new = method(self, values)
         if isinstance(values, Parameters):
-            # in the kind's own order (the Jacobian's columns follow it)
-            settings = new.parameters.merged(values)
+            # The new settings, in the kind's own order (the Jacobian's columns follow it), are
+            # in force while the kind builds the copy, so values inside widened bounds pass.
+            fget = getattr(type(self).parameters.fget, "__wrapped__", None)
+            with bounds_overridden():
+                own = fget(self) if fget is not None else self.parameters
+            settings = own.merged(values)
+            probe = copy.copy(self)
+            _attach(probe, settings)
+            new = method(probe, values)
         else:
             settings = getattr(self, _SETTINGS, None)
+            new = method(self, values)
         if settings is not None and new is not self:
-            try:
-                object.__setattr__(new, _SETTINGS, settings)
-            except AttributeError:
-                raise ParameterError(f"{type(new).__name__} keeps no attributes (__slots__); fixed "
-                                     "flags, bounds and ties given through fohw.Parameters cannot "
-                                     "be kept. Declare them in the kind's `parameters`.") from None
+            _attach(new, settings)
         return new
     with_parameters.__wrapped__ = method
     with_parameters.__doc__ = method.__doc__
     return with_parameters
+
+
+def _attach(model, settings):
+    try:
+        object.__setattr__(model, _SETTINGS, settings)
+    except AttributeError:
+        raise ParameterError(f"{type(model).__name__} keeps no attributes (__slots__); fixed "
+                             "flags, bounds and ties given through fohw.Parameters cannot be "
+                             "kept. Declare them in the kind's `parameters`.") from None
 
 
 class Model(abc.ABC):

@@ -301,7 +301,7 @@ def _check_callables(funcs: Sequence[Callable], name: str) -> None:
 
 
 class InputBases:
-    """One :class:`Basis` per input of a model with several inputs (issue 24).
+    """One :class:`Basis` per input of a model with several inputs.
 
     It acts as the input basis of the whole model: :meth:`evaluate` of a ``(N, m)`` input
     stacks the basis signals of every input, ``f_{1,1}(u_1), …, f_{1,n_1}(u_1), f_{2,1}(u_2),

@@ -18,29 +18,37 @@ and ``x_e`` the voltage of each element:
   integrator, unbounded at DC).
 
 Each element is the Grünwald–Letnikov discretisation of its fractional differential equation at
-the step ``h``, with the current sample on both sides (implicit, as ``fohw.FractionalTF``):
-``(tau/h)^alpha Δ^alpha x[k] + x[k] = R i[k]`` for the ZARC (for ``alpha = 1`` this is the
+the step ``dt``, with the current sample on both sides (implicit, as ``fohw.FractionalTF``):
+``(tau/dt)^alpha Δ^alpha x[k] + x[k] = R i[k]`` for the ZARC (for ``alpha = 1`` this is the
 backward Euler step of the RC element, which :class:`RC` uses), and
-``x[k] = sigma h^alpha Δ^-alpha i[k]`` for the Warburg element. The elements start at rest: the
+``x[k] = sigma dt^alpha Δ^-alpha i[k]`` for the Warburg element. The elements start at rest: the
 current before ``t = 0`` is zero (the stated assumption; the cell's known initial state of
 charge enters through ``soc``).
+
+:class:`EquivalentCircuit` is a model kind (:class:`fohw.Model`): its input has two columns,
+``u = [i, soc]``, its step is ``dt``, and :func:`fohw.fit` fits it, starting from the circuit's
+own scan of the time constants and orders (:meth:`EquivalentCircuit.starts`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
-import scipy.signal
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
-from .._validation import check_array, check_same_length, check_scalar
+from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ParameterError
+from .base import Model
 from .frequency_response import gl_operator_response, operator_response
 from .gl import gl_weights_derivative, gl_weights_unchecked
-from .series_division import causal_product, series_divide
+from .kernels import causal_product, series_divide
+from .parameters import Parameter, Parameters
 
-__all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "ELEMENT_KINDS"]
+__all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS"]
 
 
 def _omega(f):
@@ -65,13 +73,13 @@ class RC:
 
     Notes
     -----
-    ``tau (x[k] - x[k-1]) / h + x[k] = R i[k]``, ``x[-1] = 0``: the GL discretisation of
+    ``tau (x[k] - x[k-1]) / dt + x[k] = R i[k]``, ``x[-1] = 0``: the GL discretisation of
     :class:`ZARC` at ``alpha = 1`` (the nested integer limit used by the likelihood-ratio test).
 
     Examples
     --------
     >>> from fohw.model.circuit import RC
-    >>> RC(R=0.01, tau=1.0).response([1.0, 1.0, 0.0], h=1.0)
+    >>> RC(R=0.01, tau=1.0).response([1.0, 1.0, 0.0], dt=1.0)
     array([0.005  , 0.0075 , 0.00375])
     """
 
@@ -95,32 +103,32 @@ class RC:
         """The order, 1."""
         return 1.0
 
-    def impedance(self, f, h=None):
+    def impedance(self, f, dt=None):
         """Impedance at frequencies ``f`` [Hz]: ``R / (1 + tau s)``, ``s = j 2 pi f``.
 
-        With ``h``, the discretised element's response: ``s`` replaced by ``(1 - e^{-s h}) / h``.
+        With ``dt``, the discretised element's response: ``s`` replaced by ``(1 - e^{-s dt}) / dt``.
         """
-        return ZARC(self.R, self.tau, 1.0).impedance(f, h)
+        return ZARC(self.R, self.tau, 1.0).impedance(f, dt)
 
-    def unit_response(self, i, h):
+    def unit_response(self, i, dt):
         """``x / R``: the response of ``1 / (1 + tau s)`` to ``i``."""
-        r = self.tau / h
+        r = self.tau / dt
         return scipy.signal.lfilter([1.0 / (1.0 + r)], [1.0, -r / (1.0 + r)], i)
 
-    def response(self, i, h):
-        """Element voltage for the current ``i`` at the step ``h`` (at rest before ``k = 0``)."""
+    def response(self, i, dt):
+        """Element voltage for the current ``i`` at the step ``dt`` (at rest before ``k = 0``)."""
         i = _check_signal(i, "i")
-        h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
-        return self.R * self.unit_response(i, h)
+        dt = check_scalar(dt, "dt", lower=0.0, lower_inclusive=False)
+        return self.R * self.unit_response(i, dt)
 
-    def derivatives(self, i, h):
+    def derivatives(self, i, dt):
         """``x`` and ``{name: d x / d name}`` for each parameter (exact)."""
-        w = self.unit_response(i, h)
+        w = self.unit_response(i, dt)
         x = self.R * w
-        # C x = R i with C = (1 + r) - r q^-1, r = tau/h: dC/dtau = (1 - q^-1)/h, so
-        # dx/dtau = -C^-1 (Delta x) / h.
+        # C x = R i with C = (1 + r) - r q^-1, r = tau/dt: dC/dtau = (1 - q^-1)/dt, so
+        # dx/dtau = -C^-1 (Delta x) / dt.
         dx = np.diff(x, prepend=0.0)
-        dtau = -self.unit_response(dx, h) / h
+        dtau = -self.unit_response(dx, dt) / dt
         return x, {"R": w, "tau": dtau}
 
 
@@ -139,14 +147,14 @@ class ZARC:
 
     Notes
     -----
-    ``(tau/h)^alpha sum_{j=0}^{k} beta_j(alpha) x[k-j] + x[k] = R i[k]`` (``beta`` the GL weights,
+    ``(tau/dt)^alpha sum_{j=0}^{k} beta_j(alpha) x[k-j] + x[k] = R i[k]`` (``beta`` the GL weights,
     paper Eq. 3), solved for all ``k`` at once by power-series division
-    (:func:`fohw.model.series_division.series_divide`, ``O(N log^2 N)``).
+    (:func:`fohw.model.kernels.series_divide`, ``O(N log^2 N)``).
 
     Examples
     --------
     >>> from fohw.model.circuit import ZARC
-    >>> ZARC(R=0.01, tau=1.0, alpha=1.0).response([1.0, 1.0, 0.0], h=1.0)
+    >>> ZARC(R=0.01, tau=1.0, alpha=1.0).response([1.0, 1.0, 0.0], dt=1.0)
     array([0.005  , 0.0075 , 0.00375])
     >>> z = ZARC(R=0.01, tau=100.0, alpha=0.5).impedance([1 / (200 * 3.141592653589793)])
     >>> round(float(abs(z[0])) * 1e3, 4)   # tau omega = 1: |R / (1 + (1 + j) / sqrt(2))|
@@ -158,6 +166,8 @@ class ZARC:
     alpha: float
     kind = "zarc"
     names = ("R", "tau", "alpha")
+    #: Bounds of the order in a fit (the circuit's ``alpha`` parameters): 1 is the RC element.
+    order_bounds = (0.05, 1.0)
 
     def __post_init__(self):
         object.__setattr__(self, "R", check_scalar(self.R, "R", lower=0.0))
@@ -171,52 +181,52 @@ class ZARC:
         """The parameters in the order of :attr:`names`."""
         return (self.R, self.tau, self.alpha)
 
-    def impedance(self, f, h=None):
+    def impedance(self, f, dt=None):
         """Impedance at frequencies ``f`` [Hz]: ``R / (1 + (tau s)^alpha)``, ``s = j 2 pi f``.
 
-        With ``h``, the GL-discretised element's response: ``s^alpha`` replaced by
-        ``((1 - e^{-s h}) / h)^alpha``.
+        With ``dt``, the GL-discretised element's response: ``s^alpha`` replaced by
+        ``((1 - e^{-s dt}) / dt)^alpha``.
         """
         omega = _omega(f)
         scale = self.tau ** self.alpha
-        if h is None:
+        if dt is None:
             op = operator_response([scale], [self.alpha], omega)
         else:
-            op = gl_operator_response([scale], [self.alpha], omega, h)
+            op = gl_operator_response([scale], [self.alpha], omega, dt)
         return self.R / (1.0 + op)
 
-    def _weights(self, n, h):
-        r = (self.tau / h) ** self.alpha
+    def _weights(self, n, dt):
+        r = (self.tau / dt) ** self.alpha
         beta = gl_weights_unchecked(self.alpha, n)
         c = r * beta
         c[0] += 1.0
         return r, beta, c
 
-    def unit_response(self, i, h):
+    def unit_response(self, i, dt):
         """``x / R``: the response of ``1 / (1 + (tau s)^alpha)`` to ``i``."""
-        _, _, c = self._weights(i.shape[0], h)
+        _, _, c = self._weights(i.shape[0], dt)
         return series_divide(i, c)
 
-    def response(self, i, h):
-        """Element voltage for the current ``i`` at the step ``h`` (at rest before ``k = 0``)."""
+    def response(self, i, dt):
+        """Element voltage for the current ``i`` at the step ``dt`` (at rest before ``k = 0``)."""
         i = _check_signal(i, "i")
-        h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
-        return self.R * self.unit_response(i, h)
+        dt = check_scalar(dt, "dt", lower=0.0, lower_inclusive=False)
+        return self.R * self.unit_response(i, dt)
 
-    def derivatives(self, i, h):
+    def derivatives(self, i, dt):
         """``x`` and ``{name: d x / d name}`` for each parameter (exact series derivatives).
 
         From ``C x = R i``: ``dx/dp = -C^{-1} (dC/dp * x)`` with ``dC/dtau = (alpha/tau) r beta``
-        and ``dC/dalpha = r (log(tau/h) beta + dbeta/dalpha)``, ``r = (tau/h)^alpha``.
+        and ``dC/dalpha = r (log(tau/dt) beta + dbeta/dalpha)``, ``r = (tau/dt)^alpha``.
         """
         n = i.shape[0]
-        r, beta, c = self._weights(n, h)
+        r, beta, c = self._weights(n, dt)
         w = series_divide(i, c)
         x = self.R * w
         bx = causal_product(beta, x, n)
         dtau = -(self.alpha / self.tau) * r * series_divide(bx, c)
         dbeta = gl_weights_derivative(self.alpha, n)
-        dc_x = math.log(self.tau / h) * bx + causal_product(dbeta, x, n)
+        dc_x = math.log(self.tau / dt) * bx + causal_product(dbeta, x, n)
         dalpha = -r * series_divide(dc_x, c)
         return x, {"R": w, "tau": dtau, "alpha": dalpha}
 
@@ -235,14 +245,14 @@ class Warburg:
 
     Notes
     -----
-    ``x[k] = sigma h^alpha sum_{j=0}^{k} beta_j(-alpha) i[k-j]``: the GL fractional sum, an
+    ``x[k] = sigma dt^alpha sum_{j=0}^{k} beta_j(-alpha) i[k-j]``: the GL fractional sum, an
     ``O(N log N)`` causal convolution. It has no DC limit: a constant current makes ``x`` grow
     like ``t^alpha``.
 
     Examples
     --------
     >>> from fohw.model.circuit import Warburg
-    >>> Warburg(sigma=1.0, alpha=0.5).response([1.0, 0.0, 0.0], h=1.0)
+    >>> Warburg(sigma=1.0, alpha=0.5).response([1.0, 0.0, 0.0], dt=1.0)
     array([1.   , 0.5  , 0.375])
     """
 
@@ -250,6 +260,8 @@ class Warburg:
     alpha: float
     kind = "warburg"
     names = ("sigma", "alpha")
+    #: Bounds of the order in a fit: below 1 (order 1 is a capacitor, the ``b soc`` term).
+    order_bounds = (0.05, 0.95)
 
     def __post_init__(self):
         object.__setattr__(self, "sigma", check_scalar(self.sigma, "sigma", lower=0.0))
@@ -262,58 +274,166 @@ class Warburg:
         """The parameters in the order of :attr:`names`."""
         return (self.sigma, self.alpha)
 
-    def impedance(self, f, h=None):
-        """Impedance at frequencies ``f`` [Hz]: ``sigma s^-alpha`` (GL-discretised with ``h``)."""
+    def impedance(self, f, dt=None):
+        """Impedance at frequencies ``f`` [Hz]: ``sigma s^-alpha`` (GL-discretised with ``dt``)."""
         omega = _omega(f)
-        if h is None:
+        if dt is None:
             return operator_response([self.sigma], [-self.alpha], omega)
-        return gl_operator_response([self.sigma], [-self.alpha], omega, h)
+        return gl_operator_response([self.sigma], [-self.alpha], omega, dt)
 
-    def unit_response(self, i, h):
-        """``x / sigma``: the GL fractional sum of ``i`` of order ``alpha`` at the step ``h``."""
+    def unit_response(self, i, dt):
+        """``x / sigma``: the GL fractional sum of ``i`` of order ``alpha`` at the step ``dt``."""
         n = i.shape[0]
-        return h ** self.alpha * causal_product(gl_weights_unchecked(-self.alpha, n), i, n)
+        return dt ** self.alpha * causal_product(gl_weights_unchecked(-self.alpha, n), i, n)
 
-    def response(self, i, h):
-        """Element voltage for the current ``i`` at the step ``h`` (at rest before ``k = 0``)."""
+    def response(self, i, dt):
+        """Element voltage for the current ``i`` at the step ``dt`` (at rest before ``k = 0``)."""
         i = _check_signal(i, "i")
-        h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
-        return self.sigma * self.unit_response(i, h)
+        dt = check_scalar(dt, "dt", lower=0.0, lower_inclusive=False)
+        return self.sigma * self.unit_response(i, dt)
 
-    def derivatives(self, i, h):
+    def derivatives(self, i, dt):
         """``x`` and ``{name: d x / d name}`` for each parameter (exact)."""
         n = i.shape[0]
-        w = self.unit_response(i, h)
-        # d/dalpha [h^alpha beta(-alpha)] = h^alpha (log(h) beta(-alpha) - beta'(-alpha)).
+        w = self.unit_response(i, dt)
+        # d/dalpha [dt^alpha beta(-alpha)] = dt^alpha (log(dt) beta(-alpha) - beta'(-alpha)).
         dbeta = gl_weights_derivative(-self.alpha, n)
-        dw = math.log(h) * w - h ** self.alpha * causal_product(dbeta, i, n)
+        dw = math.log(dt) * w - dt ** self.alpha * causal_product(dbeta, i, n)
         return self.sigma * w, {"sigma": w, "alpha": self.sigma * dw}
 
 
 #: Element classes by kind.
 ELEMENT_KINDS = {"rc": RC, "zarc": ZARC, "warburg": Warburg}
 
+#: Scan starts :meth:`EquivalentCircuit.starts` returns (the best grid points, distinct).
+SCAN_STARTS = 5
 
-@dataclass(frozen=True)
-class EquivalentCircuit:
-    """A fractional equivalent circuit: ``v = OCV(soc) + a + b soc + R0 i + c3 i^3 + sum_e x_e``.
+
+class OCVTable:
+    """A tabulated open-circuit voltage ``OCV(soc)``: linear interpolation between points.
+
+    The form of the OCV map that a model file can hold (a Python function cannot be written to
+    JSON). A state of charge outside the table is refused, never extrapolated.
 
     Parameters
     ----------
-    elements : sequence of RC, ZARC or Warburg
-        The dynamic elements, in series.
-    r0 : float
-        Series resistance ``R0`` [ohm], ``>= 0``.
+    soc : array_like, shape (m,)
+        States of charge, strictly increasing, ``m >= 2``.
+    volts : array_like, shape (m,)
+        The open-circuit voltage [V] at each.
+
+    Examples
+    --------
+    >>> from fohw.model.circuit import OCVTable
+    >>> ocv = OCVTable([0.0, 0.5, 1.0], [3.0, 3.7, 4.2])
+    >>> ocv([0.25, 0.75])
+    array([3.35, 3.95])
+    """
+
+    __slots__ = ("soc", "volts")
+
+    def __init__(self, soc, volts):
+        soc = check_array(soc, "soc", min_length=2)
+        volts = check_array(volts, "volts", min_length=2)
+        check_same_length(soc, volts, "soc", "volts")
+        if np.any(np.diff(soc) <= 0):
+            k = int(np.flatnonzero(np.diff(soc) <= 0)[0])
+            raise ParameterError(f"`soc` of an OCVTable must increase strictly; got {float(soc[k])!r} "
+                                 f"then {float(soc[k + 1])!r} at points {k} and {k + 1}.")
+        soc.setflags(write=False)
+        volts.setflags(write=False)
+        self.soc, self.volts = soc, volts
+
+    def __call__(self, soc):
+        """The open-circuit voltage [V] at ``soc`` (linear interpolation; outside the table: raises)."""
+        s = np.asarray(soc, dtype=np.float64)
+        if not np.all(np.isfinite(s)) or np.any((s < self.soc[0]) | (s > self.soc[-1])):
+            raise ParameterError(f"the OCV table covers soc in [{self.soc[0]:g}, {self.soc[-1]:g}]; "
+                                 f"got values from {float(np.nanmin(s))!r} to {float(np.nanmax(s))!r}.")
+        return np.interp(s, self.soc, self.volts)
+
+    def to_dict(self) -> dict:
+        """``{"soc": [...], "volts": [...]}`` (JSON-ready)."""
+        return {"soc": self.soc.tolist(), "volts": self.volts.tolist()}
+
+    @classmethod
+    def from_dict(cls, d) -> OCVTable:
+        """Inverse of :meth:`to_dict`."""
+        if not isinstance(d, dict) or set(d) != {"soc", "volts"}:
+            raise ParameterError(f"an OCV table is a mapping with 'soc' and 'volts'; got {d!r}.")
+        return cls(d["soc"], d["volts"])
+
+    def __eq__(self, other):
+        if not isinstance(other, OCVTable):
+            return NotImplemented
+        return np.array_equal(self.soc, other.soc) and np.array_equal(self.volts, other.volts)
+
+    __hash__ = None
+
+    def __repr__(self):
+        return (f"OCVTable({self.soc.size} points, soc {self.soc[0]:g} to {self.soc[-1]:g}, "
+                f"{self.volts.min():.4g} to {self.volts.max():.4g} V)")
+
+
+def _placeholder(kind, tau):
+    if kind == "rc":
+        return RC(0.0, tau)
+    if kind == "zarc":
+        return ZARC(0.0, tau, 0.5)
+    return Warburg(0.0, 0.5)
+
+
+def _element(kind, R, tau, alpha):
+    if kind == "rc":
+        return RC(R, tau)
+    if kind == "zarc":
+        return ZARC(R, tau, alpha)
+    return Warburg(R, alpha)
+
+
+@dataclass(frozen=True, eq=False)
+class EquivalentCircuit(Model):
+    """A fractional equivalent circuit: ``v = OCV(soc) + a + b soc + R0 i + c3 i^3 + sum_e x_e``.
+
+    A :class:`fohw.Model`: its input ``u`` has two columns, the current ``i`` [A] and the state
+    of charge ``soc`` (``u[:, 0]``, ``u[:, 1]``), its output is the terminal voltage [V], and
+    :func:`fohw.fit` fits it by simulation error.
+
+    Parameters
+    ----------
+    elements : sequence of RC, ZARC, Warburg or {"rc", "zarc", "warburg"}
+        The dynamic elements, in series. A kind's name stands for an element with placeholder
+        values (resistance 0; a structure to fit).
+    r0 : float, optional
+        Series resistance ``R0`` [ohm], ``>= 0`` (default 0).
     a, b : float, optional
         Correction ``a + b soc`` of the open-circuit voltage [V] (default 0).
     c3 : float or None, optional
         Coefficient of the static current map ``c3 i^3`` [V/A^3]; ``None`` (default): no map.
-    ocv : callable or None, optional
-        The known open-circuit voltage ``OCV(soc)`` [V], vectorised; ``None``: zero (then ``v``
-        is the overpotential ``a + b soc + ...``).
+    ocv : OCVTable, callable or None, optional
+        The known open-circuit voltage ``OCV(soc)`` [V]: an :class:`OCVTable` (which model files
+        can hold), any vectorised callable (which they cannot), or ``None``: zero (then ``v`` is
+        the overpotential ``a + b soc + ...``).
+    dt : float, optional
+        Sampling time [s] (default 1).
+    tau_bounds : (float, float), optional
+        Bounds of every time constant in a fit [s]; default ``(dt, inf)`` (a time constant
+        below the step is not resolved: it merges with ``R0``). The scan of
+        :meth:`starts` covers ``tau_bounds``, up to ``N dt / 10`` when the upper bound is
+        infinite.
+    n_tau, n_alpha : int, optional
+        The scan's grid (:meth:`starts`): log-spaced time constants and orders per element
+        (default 8 and 5).
 
     Notes
     -----
+    The parameters (:attr:`parameters`, in this order): ``a, b, R0``, ``c3`` with the current
+    map, then each element's with its 1-based index (``R1, tau1`` of an RC; ``R1, tau1,
+    alpha1`` of a ZARC; ``sigma1, alpha1`` of a Warburg element). Resistances are ``>= 0``,
+    time constants inside ``tau_bounds``, orders inside their element's ``order_bounds``
+    (ZARC ``[0.05, 1]``, Warburg ``[0.05, 0.95]``), the rest unbounded; change any of them,
+    or fix one, with ``circuit.with_parameters(circuit.parameters.replace(name, ...))``.
+
     The simulation is the sum of independent terms, each exact for its discretisation (see
     the module's docstring): the elements start at rest at ``k = 0``; the state of charge, the
     circuit's only slow state, is the known signal ``soc`` (coulomb counting from the known
@@ -325,86 +445,124 @@ class EquivalentCircuit:
     >>> import numpy as np
     >>> from fohw.model.circuit import EquivalentCircuit, ZARC
     >>> cell = EquivalentCircuit([ZARC(0.01, 50.0, 0.5)], r0=0.015, a=3.7)
-    >>> cell.names
+    >>> cell.parameters.names
     ('a', 'b', 'R0', 'R1', 'tau1', 'alpha1')
-    >>> v = cell.simulate(-np.ones(4), soc=np.full(4, 0.5), h=1.0)
+    >>> v = cell.simulate(np.column_stack([-np.ones(4), np.full(4, 0.5)]))
     >>> bool(np.all(np.diff(v) < 0)), round(float(v[0]), 4)   # 3.7 - 0.015 - 0.01/(1 + 50**0.5)
     (True, 3.6838)
     """
 
     elements: tuple
-    r0: float
+    r0: float = 0.0
     a: float = 0.0
     b: float = 0.0
     c3: float | None = None
-    ocv: object = field(default=None, repr=False, compare=False)
+    ocv: object = field(default=None, repr=False)
+    _: KW_ONLY
+    dt: float = 1.0
+    tau_bounds: tuple | None = None
+    n_tau: int = 8
+    n_alpha: int = 5
 
     def __post_init__(self):
-        elements = tuple(self.elements)
-        for k, e in enumerate(elements):
-            if not isinstance(e, (RC, ZARC, Warburg)):
-                raise ParameterError(f"`elements[{k}]` must be an RC, ZARC or Warburg element; "
-                                     f"got {e!r}.")
-        object.__setattr__(self, "elements", elements)
+        dt = check_scalar(self.dt, "dt", lower=0.0, lower_inclusive=False)
+        object.__setattr__(self, "dt", dt)
+        if self.tau_bounds is not None:
+            try:
+                lo, hi = (float(x) for x in self.tau_bounds)
+            except (TypeError, ValueError):
+                raise ParameterError(f"`tau_bounds` must be a pair (low, high); got "
+                                     f"{self.tau_bounds!r}.") from None
+            if not (0.0 < lo < hi) or math.isnan(hi):
+                raise ParameterError(f"`tau_bounds` must be increasing with 0 < low; got "
+                                     f"{self.tau_bounds!r}.")
+            object.__setattr__(self, "tau_bounds", (lo, hi))
+        object.__setattr__(self, "n_tau", check_int(self.n_tau, "n_tau", minimum=1))
+        object.__setattr__(self, "n_alpha", check_int(self.n_alpha, "n_alpha", minimum=1))
+        if isinstance(self.elements, (str, RC, ZARC, Warburg)):
+            raise ParameterError(f"`elements` must be a sequence of elements; got {self.elements!r} "
+                                 "(write [element] for one).")
+        elements = []
+        lo, hi = self.tau_range
+        for k, e in enumerate(self.elements):
+            if isinstance(e, str) and e in ELEMENT_KINDS:
+                e = _placeholder(e, math.sqrt(lo * hi) if math.isfinite(hi) else lo)
+            elif not isinstance(e, (RC, ZARC, Warburg)):
+                raise ParameterError(f"`elements[{k}]` must be an RC, ZARC or Warburg element or "
+                                     f"one of {', '.join(ELEMENT_KINDS)}; got {e!r}.")
+            elements.append(e)
+        object.__setattr__(self, "elements", tuple(elements))
         object.__setattr__(self, "r0", check_scalar(self.r0, "r0", lower=0.0))
         object.__setattr__(self, "a", check_scalar(self.a, "a"))
         object.__setattr__(self, "b", check_scalar(self.b, "b"))
         if self.c3 is not None:
             object.__setattr__(self, "c3", check_scalar(self.c3, "c3"))
+        if isinstance(self.ocv, dict):
+            object.__setattr__(self, "ocv", OCVTable.from_dict(self.ocv))
         if self.ocv is not None and not callable(self.ocv):
-            raise ParameterError(f"`ocv` must be callable (soc -> volts) or None; got {self.ocv!r}.")
+            raise ParameterError(f"`ocv` must be an OCVTable, a callable (soc -> volts) or None; "
+                                 f"got {self.ocv!r}.")
+
+    # --- structure ---------------------------------------------------------------------------
+    @property
+    def n_inputs(self) -> int:
+        """Two input columns: current and state of charge."""
+        return 2
+
+    @property
+    def tau_range(self):
+        """``(low, high)``: the default bounds of every time constant (``tau_bounds`` or ``(dt, inf)``)."""
+        return self.tau_bounds if self.tau_bounds is not None else (self.dt, math.inf)
 
     @property
     def kinds(self):
         """The elements' kinds, e.g. ``("rc", "zarc")``."""
         return tuple(e.kind for e in self.elements)
 
-    @property
-    def names(self):
-        """Parameter names: ``a, b, R0, [c3,]`` then each element's with its 1-based index."""
+    def _names(self):
         out = ["a", "b", "R0"] + (["c3"] if self.c3 is not None else [])
         for k, e in enumerate(self.elements, start=1):
             out += [f"{n}{k}" for n in e.names]
         return tuple(out)
 
+    # --- the Model protocol ---------------------------------------------------------------------
     @property
-    def values(self):
-        """Parameter values in the order of :attr:`names`."""
-        out = [self.a, self.b, self.r0] + ([self.c3] if self.c3 is not None else [])
-        for e in self.elements:
-            out += list(e.values)
-        return np.array(out)
-
-    @property
-    def n_params(self):
-        """Number of parameters."""
-        return len(self.names)
-
-    def with_values(self, values):
-        """The same structure with the parameter vector ``values`` (order of :attr:`names`)."""
-        values = [float(x) for x in np.asarray(values, dtype=np.float64).ravel()]
-        if len(values) != self.n_params:
-            raise ParameterError(f"`values` must have {self.n_params} entries ({', '.join(self.names)}); "
-                                 f"got {len(values)}.")
-        a, b, r0 = values[:3]
-        pos = 3
-        c3 = None
+    def parameters(self) -> Parameters:
+        """``a, b, R0, [c3,]`` then each element's parameters, with their bounds (see Notes)."""
+        out = [Parameter("a", self.a), Parameter("b", self.b),
+               Parameter("R0", self.r0, bounds=(0.0, math.inf))]
         if self.c3 is not None:
-            c3 = values[3]
-            pos = 4
-        elements = []
-        for e in self.elements:
-            m = len(e.names)
-            elements.append(type(e)(*values[pos:pos + m]))
-            pos += m
-        return EquivalentCircuit(elements, r0=r0, a=a, b=b, c3=c3, ocv=self.ocv)
+            out.append(Parameter("c3", self.c3))
+        for k, e in enumerate(self.elements, start=1):
+            if e.kind == "warburg":
+                out.append(Parameter(f"sigma{k}", e.sigma, bounds=(0.0, math.inf)))
+            else:
+                out += [Parameter(f"R{k}", e.R, bounds=(0.0, math.inf)),
+                        Parameter(f"tau{k}", e.tau, bounds=self.tau_range)]
+            if e.kind != "rc":
+                out.append(Parameter(f"alpha{k}", e.alpha, bounds=e.order_bounds, order=True))
+        return Parameters(out)
 
-    def _checked(self, i, soc, h):
-        i = _check_signal(i, "i")
-        soc = _check_signal(soc, "soc")
-        check_same_length(i, soc, "i", "soc")
-        h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
-        return i, soc, h
+    def with_parameters(self, values) -> EquivalentCircuit:
+        """The same structure with new parameter values (a mapping ``name -> float``, or Parameters)."""
+        if isinstance(values, Parameters) and values.names == self._names():
+            v = values.valuesdict()         # checked by its own Parameter objects (fohw.fit)
+        else:
+            v = self.parameters.with_values(values).valuesdict()
+        elements = []
+        for k, e in enumerate(self.elements, start=1):
+            if e.kind == "warburg":
+                elements.append(Warburg(v[f"sigma{k}"], v[f"alpha{k}"]))
+            elif e.kind == "zarc":
+                elements.append(ZARC(v[f"R{k}"], v[f"tau{k}"], v[f"alpha{k}"]))
+            else:
+                elements.append(RC(v[f"R{k}"], v[f"tau{k}"]))
+        return dataclasses.replace(self, elements=elements, r0=v["R0"], a=v["a"], b=v["b"],
+                                   c3=v["c3"] if self.c3 is not None else None)
+
+    def _signals(self, u):
+        u = self.check_input(u)
+        return np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1])
 
     def static_part(self, i, soc):
         """``OCV(soc) + a + b soc + R0 i + c3 i^3``: the terms without memory."""
@@ -415,53 +573,170 @@ class EquivalentCircuit:
             v = v + self.c3 * i ** 3
         return v
 
-    def simulate(self, i, soc, h):
-        """Terminal voltage for the current ``i`` and state of charge ``soc`` at the step ``h``.
+    def simulate(self, u, *, initial=None):
+        """Terminal voltage [V] for ``u = [current, state of charge]`` (elements at rest at k = 0).
 
         Parameters
         ----------
-        i, soc : array_like, shape (N,)
-            Current [A] and state of charge (the record's coulomb count).
-        h : float
-            Sampling time [s].
+        u : array_like, shape (N, 2)
+            Current [A] (``u[:, 0]``) and state of charge (``u[:, 1]``, the record's coulomb count).
+        initial : None or "rest", optional
+            The elements start at rest (the only state the circuit takes: nothing is known
+            about the cell before the record except its state of charge, which is in ``u``).
 
         Returns
         -------
         ndarray, shape (N,)
         """
-        i, soc, h = self._checked(i, soc, h)
+        _check_rest(initial)
+        i, soc = self._signals(u)
         v = self.static_part(i, soc)
         for e in self.elements:
-            v = v + e.response(i, h)
+            v = v + e.response(i, self.dt)
         return v
 
-    def jacobian(self, i, soc, h):
-        """The simulated voltage and its exact derivatives with respect to :attr:`values`.
+    def jacobian(self, u):
+        """The simulated voltage and its exact derivatives by every parameter (:attr:`parameters` order).
 
         Returns
         -------
         v : ndarray, shape (N,)
-        jac : ndarray, shape (N, n_params)
+        jac : ndarray, shape (N, n_parameters)
         """
-        i, soc, h = self._checked(i, soc, h)
+        i, soc = self._signals(u)
         v = self.static_part(i, soc)
         cols = [np.ones_like(i), soc, i] + ([i ** 3] if self.c3 is not None else [])
         for e in self.elements:
-            x, d = e.derivatives(i, h)
+            x, d = e.derivatives(i, self.dt)
             v = v + x
             cols += [d[n] for n in e.names]
         return v, np.column_stack(cols)
 
-    def impedance(self, f, h=None, *, capacity=None, ocv_slope=0.0):
+    def starts(self, u, y, *, sample_weight=None):
+        """Start circuits from a scan of the time constants and orders (linear parameters solved).
+
+        For every combination of the elements' time constants (``n_tau`` log-spaced in their
+        bounds) and orders (``n_alpha`` in their bounds, from 0.2 up), the parameters that enter
+        linearly (``a, b, R0, c3`` and the resistances) are solved by linear least squares from
+        one Gram matrix of all the grid's unit responses; combinations with a negative
+        resistance are dropped (unless every one has one: then those, clipped to 0), same-kind
+        elements keep increasing time constants (orders for Warburg elements), and fixed
+        parameters keep their values. ``sample_weight`` (from :func:`fohw.fit`) weights the
+        squares. The best ``SCAN_STARTS`` are returned (:func:`fohw.fit` refines its
+        ``n_starts`` best). Without the scan, local searches of RC + ZARC mixtures were seen to
+        end at ``alpha -> 1`` or ``alpha -> 0``. A record whose current is zero at every sample
+        is refused.
+        """
+        i, soc = self._signals(u)
+        y = check_array(y, "y")
+        if not np.any(i):
+            raise ParameterError("the current `u[:, 0]` is zero at every sample: the record has no "
+                                 "excitation, so no resistance or time constant of the circuit can "
+                                 "be identified from it.")
+        sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
+                                                                                 "sample_weight"))
+        params = self.parameters
+        fixed = {n: p.value for n, p in params.items() if p.fixed}
+        ocv_v = 0.0 if self.ocv is None else np.asarray(self.ocv(soc), dtype=np.float64)
+        grids = []
+        for k, kind in enumerate(self.kinds, start=1):
+            if kind == "warburg":
+                taus = [None]
+            else:
+                lo, hi = params[f"tau{k}"].bounds
+                if not math.isfinite(hi):
+                    hi = max(i.size * self.dt / 10.0, lo)
+                taus = np.geomspace(lo, hi, self.n_tau) if self.n_tau > 1 else \
+                    np.array([math.sqrt(lo * hi)])
+            if kind == "rc":
+                alphas = [1.0]
+            else:
+                lo, hi = params[f"alpha{k}"].bounds
+                if self.n_alpha > 1:
+                    alphas = np.linspace(max(lo, 0.2), hi, self.n_alpha)
+                else:
+                    alphas = np.array([hi if kind == "zarc" else 0.5 * (lo + hi)])
+            g = [(t, a) for t in taus for a in alphas]
+            if f"tau{k}" in fixed:
+                g = [(fixed[f"tau{k}"], a) for a in sorted({a for _, a in g})]
+            if f"alpha{k}" in fixed:
+                g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
+            grids.append(g)
+        found = _scan(self.kinds, self.c3 is not None, i, soc, y - ocv_v, self.dt, fixed, grids,
+                      SCAN_STARTS, sw)
+        tied = {n for n, p in params.items() if p.tie is not None}
+        out = []
+        for combo, coef in found:
+            values = {n: x for n, x in coef.items()}
+            for e, (kind, (tau, alpha)) in enumerate(zip(self.kinds, combo), start=1):
+                r = f"sigma{e}" if kind == "warburg" else f"R{e}"
+                values[r] = max(coef[r], 0.0)
+                if kind != "warburg":
+                    values[f"tau{e}"] = tau
+                if kind != "rc":
+                    values[f"alpha{e}"] = alpha
+            values["R0"] = max(values["R0"], 0.0)
+            out.append(self.with_parameters({n: x for n, x in values.items() if n not in tied}))
+        return out
+
+    def check_fitted(self, u, y):
+        """A sentence when every resistance ended at 0 (the voltage does not answer the current)."""
+        rs = [self.r0] + [e.sigma if e.kind == "warburg" else e.R for e in self.elements]
+        if any(r > 0 for r in rs):
+            return None
+        return ("Every resistance of the fitted circuit is 0: its voltage does not answer the "
+                "current as a cell's does (a charge current, u[:, 0] > 0, raises it). Check the "
+                "sign convention and the units of the current.")
+
+    def config(self) -> dict:
+        """The structure and settings: element kinds, current map, OCV table, ``dt``, scan grid.
+
+        Raises
+        ------
+        ParameterError
+            When the OCV map is a Python callable: it cannot be written to a file. Give an
+            :class:`OCVTable` (``fohw.datasets.battery_cell().ocv_table()`` for the shipped cell).
+        """
+        if self.ocv is not None and not isinstance(self.ocv, OCVTable):
+            raise ParameterError(
+                f"this EquivalentCircuit's `ocv` is a Python callable ({self.ocv!r}), which cannot "
+                "be written to a file; build the circuit with a tabulated OCV, "
+                "ocv=fohw.OCVTable(soc, volts) (for the shipped cell: "
+                "fohw.datasets.battery_cell().ocv_table()).")
+        return {"elements": list(self.kinds), "current_map": self.c3 is not None,
+                "ocv": None if self.ocv is None else self.ocv.to_dict(), "dt": self.dt,
+                "tau_bounds": None if self.tau_bounds is None else list(self.tau_bounds),
+                "n_tau": self.n_tau, "n_alpha": self.n_alpha}
+
+    @classmethod
+    def from_config(cls, config) -> EquivalentCircuit:
+        """A circuit of :meth:`config`'s structure with placeholder values."""
+        config = dict(config)
+        current_map = config.pop("current_map", False)
+        elements = config.pop("elements")
+        return cls(elements, c3=0.0 if current_map else None, **config)
+
+    def __eq__(self, other):
+        if type(other) is not type(self):
+            return NotImplemented
+        same_ocv = self.ocv is other.ocv or (isinstance(self.ocv, OCVTable) and self.ocv == other.ocv)
+        return (same_ocv and self.kinds == other.kinds and self.dt == other.dt
+                and self.tau_bounds == other.tau_bounds and (self.n_tau, self.n_alpha) ==
+                (other.n_tau, other.n_alpha) and self.parameters == other.parameters)
+
+    __hash__ = None
+
+    # --- frequency domain ------------------------------------------------------------------------
+    def impedance(self, f, *, discrete=False, capacity=None, ocv_slope=0.0):
         """Impedance ``R0 + sum_e Z_e`` at frequencies ``f`` [Hz] (about zero current).
 
         Parameters
         ----------
         f : array_like
             Frequencies [Hz].
-        h : float, optional
-            Give the step to get the discretised model's response (GL symbol in place of ``s``);
-            default: the continuous circuit.
+        discrete : bool, optional
+            True: the response of the model discretised at its step ``dt`` (the GL symbol in
+            place of ``s``); default False: the continuous circuit.
         capacity : float, optional
             The cell's capacity [Ah]. Given, the open-circuit voltage's own impedance is added:
             ``soc`` integrates the current, so ``OCV(soc) + b soc`` acts as a capacitor
@@ -474,22 +749,97 @@ class EquivalentCircuit:
         -------
         ndarray of complex, shape of ``f``
         """
-        if h is not None:
-            h = check_scalar(h, "h", lower=0.0, lower_inclusive=False)
+        dt = self.dt if discrete else None
         z = np.full(np.shape(f), self.r0, dtype=np.complex128)
         for e in self.elements:
-            z = z + e.impedance(f, h)
+            z = z + e.impedance(f, dt)
         if capacity is not None:
             capacity = check_scalar(capacity, "capacity", lower=0.0, lower_inclusive=False)
             slope = check_scalar(ocv_slope, "ocv_slope") + self.b
-            if h is None:
+            if dt is None:
                 integrator = 1.0 / (1j * _omega(f))
-            else:       # the coulomb count sums the current before the sample: h z^-1 / (1 - z^-1)
-                zinv = np.exp(-1j * _omega(f) * h)
-                integrator = h * zinv / (1.0 - zinv)
+            else:       # the coulomb count sums the current before the sample: dt z^-1 / (1 - z^-1)
+                zinv = np.exp(-1j * _omega(f) * dt)
+                integrator = dt * zinv / (1.0 - zinv)
             z = z + slope / (3600.0 * capacity) * integrator
         return z
 
     def __str__(self):
-        parts = [f"{n} = {v:.6g}" for n, v in zip(self.names, self.values)]
+        parts = [f"{n} = {v:.6g}" for n, v in self.parameters.valuesdict().items()]
         return f"EquivalentCircuit({'+'.join(self.kinds) or 'R0 only'}: {', '.join(parts)})"
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [(n, p.value, f"[{p.bounds[0]:g}, {p.bounds[1]:g}]")
+                for n, p in self.parameters.items()]
+        return html_table(f"EquivalentCircuit ({'+'.join(self.kinds) or 'R0 only'})",
+                          ["parameter", "value", "bounds"], rows,
+                          lines=[f"dt = {self.dt:g} s; OCV map: "
+                                 + ("given" if self.ocv is not None else "none")])
+
+
+def _check_rest(initial):
+    if initial is not None and not (isinstance(initial, str) and initial == "rest"):
+        raise ParameterError(f"an EquivalentCircuit starts at rest (`initial` None or 'rest'); got "
+                             f"{initial!r}. Its slow state, the state of charge, is the input "
+                             "column u[:, 1].")
+
+
+def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
+    """Best grid points by linear least squares of the linear parameters: ``[(combo, coef)]``."""
+    base = [np.ones_like(i), soc, i] + ([i ** 3] if cubic else [])
+    base_names = ["a", "b", "R0"] + (["c3"] if cubic else [])
+    responses = {}
+    for kind, g in zip(kinds, grids):
+        for tau, alpha in g:
+            if (kind, tau, alpha) not in responses:
+                e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
+                responses[(kind, tau, alpha)] = e.unit_response(i, dt)
+    keys = list(responses)
+    cols = np.column_stack(base + [responses[k] for k in keys]) * sw[:, None]
+    y = y * sw
+    scale = np.sqrt(np.sum(cols ** 2, axis=0))
+    scale[scale == 0] = 1.0
+    cols = cols / scale
+    gram = cols.T @ cols
+    rhs = cols.T @ y
+    yy = float(y @ y)
+    nb = len(base)
+    index = {k: nb + j for j, k in enumerate(keys)}
+    names = base_names + [f"R{e + 1}" if kinds[e] != "warburg" else f"sigma{e + 1}"
+                          for e in range(len(kinds))]
+    found, negative = [], []
+    # Same-kind elements are interchangeable: their time constants (Warburg: orders) increase,
+    # unless the user holds one of a pair.
+    pairs = [(p, q, 1 if kinds[p] == "warburg" else 0) for p in range(len(kinds))
+             for q in range(p + 1, len(kinds)) if kinds[p] == kinds[q]
+             and not any(f"{'alpha' if kinds[p] == 'warburg' else 'tau'}{e + 1}" in fixed
+                         for e in (p, q))]
+    for combo in itertools.product(*grids):
+        if any(combo[p][j] >= combo[q][j] for p, q, j in pairs):
+            continue
+        idx = list(range(nb)) + [index[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
+        free = [j for j, n in zip(idx, names) if n not in fixed]
+        fix = [(j, fixed[n]) for j, n in zip(idx, names) if n in fixed]
+        r = rhs[free] - sum((gram[free, j] * v * scale[j] for j, v in fix), np.zeros(len(free)))
+        sub = gram[np.ix_(free, free)]
+        try:
+            c = np.linalg.solve(sub, r)
+        except np.linalg.LinAlgError:       # e.g. two elements held at one time constant
+            c = np.linalg.lstsq(sub, r, rcond=None)[0]
+        coef = dict(zip([n for n in names if n not in fixed], c / scale[free]))
+        bad = coef.get("R0", 0.0) < 0 or any(coef[n] < 0 for n in coef if n[0] in "Rs" and n != "R0")
+        if bad and found:
+            continue
+        full = np.zeros(len(idx))
+        for p, (j, n) in enumerate(zip(idx, names)):
+            full[p] = fixed[n] * scale[j] if n in fixed else coef[n] * scale[j]
+        gsub = gram[np.ix_(idx, idx)]
+        rss = yy - 2 * float(full @ rhs[idx]) + float(full @ gsub @ full)
+        (negative if bad else found).append(
+            (rss, tuple(combo), {**{n: fixed[n] for n in names if n in fixed}, **coef}))
+    # Without a point of non-negative resistances (e.g. an order held where the record does not
+    # want it), the best points with their negative resistances clipped to 0 are the starts.
+    found = sorted(found or negative, key=lambda t: t[0])
+    return [(combo, coef) for _, combo, coef in found[:keep]]

@@ -19,16 +19,16 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .base import Model
 from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
 from .frequency_response import gl_operator_response, operator_response
 from .gl import gl_weights, gl_weights_derivative
+from .kernels import causal_product, series_divide, series_reciprocal
 from .orders import ORDER_RANGE
 from .parameters import Parameter, Parameters
-from .series_division import causal_product, series_divide, series_reciprocal
 
 __all__ = ["FractionalTF", "operator_weights", "delay_samples", "NUM_ORDER_RANGE"]
 
@@ -228,7 +228,7 @@ class FractionalTF(Model):
     Simulation: the GL discretisation of ``sum_i a_i D^{alpha_i} y = sum_j b_j D^{beta_j} u`` with
     the current sample on both sides, ``sum_k c[k] y[n-k] = sum_k d[k] u[n-k]`` where ``c`` and
     ``d`` are the combined weights :func:`operator_weights`. The recursion is solved as a power
-    series quotient (:func:`fohw.model.series_division.series_divide`), ``O(N log^2 N)``. The
+    series quotient (:func:`fohw.model.kernels.series_divide`), ``O(N log^2 N)``. The
     method is first order in ``dt`` (measured in ``docs/transfer_functions.md``). Sample
     alignment: see the module docstring.
 
@@ -298,6 +298,16 @@ class FractionalTF(Model):
             return "[" + ", ".join(repr(float(v)) for v in x) + "]"
         return (f"FractionalTF({fmt(self._num)}, {fmt(self._num_orders)}, {fmt(self._den)}, "
                 f"{fmt(self._den_orders)}, dt={self._dt!r}, delay={self._delay!r})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = ([("numerator", c, o) for c, o in zip(self._num, self._num_orders)]
+                + [("denominator", c, o) for c, o in zip(self._den, self._den_orders)])
+        extra = ", ".join(f"{k} = {v:g}" for k, v in (("dt", self._dt), ("delay", self._delay))
+                          if v)
+        return html_table("FractionalTF", ["", "coefficient", "order of s"], rows,
+                          lines=[f"G(s) = {self}", extra])
 
     def __str__(self):
         num = _poly_text(self._num, self._num_orders)
@@ -977,8 +987,8 @@ class FractionalTF(Model):
                                 np.concatenate([o1, o2]), dt, 0.0)
 
     # ------------------------------------------------------------------ figures and export
-    def bode(self, omega=None, *, others=None, title=None):
-        """Bode diagram; returns ``(fig, axes)`` without showing it.
+    def bode(self, omega=None, *, others=None, title=None, ax=None):
+        """Bode diagram; returns the figure (a notebook shows it, pyplot never sees it).
 
         Parameters
         ----------
@@ -988,17 +998,19 @@ class FractionalTF(Model):
             Further models drawn on the same axes (e.g. an estimate beside the truth).
         title : str, optional
             Figure title.
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
 
         Returns
         -------
-        fig, axes
+        matplotlib.figure.Figure
             See :func:`fohw.analysis.frequency.bode_plot`.
 
         Examples
         --------
         >>> import fohw
-        >>> fig, axes = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
-        >>> axes[0].get_ylabel()
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
+        >>> fig.axes[0].get_ylabel()
         'magnitude [dB]'
         """
         from ..analysis.frequency import bode_plot
@@ -1007,10 +1019,10 @@ class FractionalTF(Model):
         curves = {str(self): self.frequency_response(omega)}
         for label, model in (others or {}).items():
             curves[label] = model.frequency_response(omega)
-        return bode_plot(omega, curves, title=title)
+        return bode_plot(omega, curves, title=title, ax=ax)
 
-    def nyquist(self, omega=None, *, title=None):
-        """Nyquist diagram; returns ``(fig, ax)`` without showing it.
+    def nyquist(self, omega=None, *, title=None, ax=None):
+        """Nyquist diagram; returns the figure (a notebook shows it, pyplot never sees it).
 
         Parameters
         ----------
@@ -1018,21 +1030,23 @@ class FractionalTF(Model):
             Positive frequencies (default :meth:`default_frequencies`).
         title : str, optional
             Figure title.
+        ax : matplotlib Axes, optional
+            Where to draw (default: a new figure).
 
         Returns
         -------
-        fig, ax
+        matplotlib.figure.Figure
             See :func:`fohw.analysis.frequency.nyquist_plot`.
 
         Examples
         --------
         >>> import fohw
-        >>> fig, ax = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
         """
         from ..analysis.frequency import nyquist_plot
 
         omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
-        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title)
+        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title, ax=ax)
 
     def oustaloup(self, band=(1e-3, 1e3), order=5, method="oustaloup"):
         """Integer-order approximation in a frequency band (FOMCON ``oustapp``).

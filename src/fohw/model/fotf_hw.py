@@ -43,6 +43,7 @@ from .base import Model
 from .basis import Basis, as_basis
 from .fotf import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights
 from .gl import gl_weights, gl_weights_derivative
+from .kernels import causal_product, series_divide, series_reciprocal
 from .output_map import (
     CustomMap,
     PiecewiseLinear,
@@ -53,7 +54,6 @@ from .output_map import (
     output_map_from_dict,
 )
 from .parameters import ORDER_RANGE, Parameter, Parameters
-from .series_division import causal_product, series_divide, series_reciprocal
 
 __all__ = ["FractionalHW", "tf_sensitivities"]
 
@@ -339,6 +339,13 @@ class FractionalHW(Model):
         if self._dt is None:
             raise ParameterError("`dt` is needed: pass dt=... to FractionalHW(...) or to its G.")
         return self._dt
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = [(f"p{j}", n, v) for j, (n, v) in enumerate(zip(self.f_basis.names, self.p), 1)]
+        return html_table("FractionalHW", ["parameter", "basis", "value"], rows,
+                          lines=[str(self), f"G(s) = {self.G}", str(self.output_map)])
 
     def input_signal(self, u):
         """``w = fbar(u) = sum_j p_j f_j(u)``."""

@@ -16,18 +16,14 @@ import math
 import os
 
 import numpy as np
-import scipy.fft
 
 from .._types import ArrayLike
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError
+from .kernels import causal_convolve
 
 __all__ = ["gl_weights", "gl_weights_unchecked", "gl_weights_derivative", "gl_difference",
            "past_transient", "sampling_scale", "check_length"]
-
-# Below these sizes the direct O(N * L) sum beats the FFT (see benchmarks/bench_gl.py).
-_DIRECT_MAX_MEMORY = 48
-_DIRECT_MAX_LENGTH = 160
 
 
 def _memory_bytes():
@@ -209,84 +205,6 @@ def past_transient(nu, lag, n, h=1.0, *, derivative=False):
         return dout
     return out if h == 1.0 else out * sampling_scale(h, nu)
 
-def _use_direct(n, m):
-    return m <= _DIRECT_MAX_MEMORY or n <= _DIRECT_MAX_LENGTH
-
-
-def _direct(x, weights):
-    """``out[..., t] = sum_j weights[j] x[..., t - j]`` by shifted sums (short memories)."""
-    out = weights[0] * x
-    for j in range(1, weights.shape[0]):
-        out[..., j:] += weights[j] * x[..., :-j]
-    return out
-
-
-class CausalConvolution:
-    """The one GL convolution kernel: ``D[..., t] = sum_{j=0}^{t} w[j] x[..., t - j]``.
-
-    A *linear* (zero-padded, never circular) convolution of fixed signals ``x`` (along the last
-    axis, zero before ``t = 0``) with any number of weight vectors, cut to the length ``N`` of
-    ``x``. Long signals are transformed once (real FFT of size at least ``N + L - 1``) and each
-    weight vector then costs one forward and one inverse transform; short signals and short
-    memories use shifted sums. :meth:`at` evaluates a few consecutive samples only, by sums of
-    products that stay out of the (multithreaded) BLAS path, for recursions that rebuild the
-    latest samples at every step.
-
-    Parameters
-    ----------
-    x : ndarray, shape (..., N)
-        Signals, float64. Not copied; do not modify them while the object is in use.
-    memory : int, optional
-        Longest weight vector that will be used (default ``N``: full memory).
-    """
-
-    def __init__(self, x, memory=None):
-        self.x = x
-        self.n = x.shape[-1]
-        self.memory = self.n if memory is None else min(int(memory), self.n)
-        self.direct = _use_direct(self.n, self.memory)
-        self._spectrum = None
-
-    def nfft(self):
-        """The FFT size of the transformed signals (at least ``N + memory - 1``)."""
-        return scipy.fft.next_fast_len(self.n + self.memory - 1, real=True)
-
-    def __call__(self, weights, *, weights_spectrum=None):
-        """Convolve with ``weights`` (at most ``memory`` of them); shape of ``x``."""
-        if self.direct:
-            return _direct(self.x, weights)
-        nfft = self.nfft()
-        if self._spectrum is None:
-            self._spectrum = scipy.fft.rfft(self.x, n=nfft, axis=-1)
-        if weights_spectrum is None:
-            weights_spectrum = scipy.fft.rfft(weights, n=nfft)
-        return scipy.fft.irfft(self._spectrum * weights_spectrum, n=nfft, axis=-1)[..., :self.n]
-
-    def at(self, weights, t_lo, t_hi):
-        """Samples ``t_lo..t_hi`` of the convolution (:func:`convolution_at`)."""
-        return convolution_at(self.x, weights, t_lo, t_hi)
-
-
-def convolution_at(x, weights, t_lo, t_hi):
-    """Samples ``t_lo..t_hi`` (inclusive) of :class:`CausalConvolution` of ``x`` and ``weights``.
-
-    ``x`` needs samples ``0..t_hi`` along its last axis and ``weights`` at least ``t_hi + 1``
-    entries; samples with ``t < 0`` are zero. Each sample is one sum of products over the whole
-    past (``np.einsum``, never BLAS), so a recursion that rebuilds its latest samples at every
-    step runs at the same speed whatever the machine's BLAS threading.
-    """
-    out = np.zeros(x.shape[:-1] + (t_hi - t_lo + 1,))
-    w_rev = np.ascontiguousarray(weights[:t_hi + 1][::-1])   # contiguous: SIMD sums
-    for t in range(max(t_lo, 0), t_hi + 1):
-        out[..., t - t_lo] = np.einsum("...j,j->...", x[..., :t + 1], w_rev[t_hi - t:])
-    return out
-
-
-def causal_convolve(x, weights):
-    """``sum_{j=0}^{t} weights[j] x[..., t - j]`` along the last axis, cut to ``x.shape[-1]``."""
-    return CausalConvolution(x, memory=weights.shape[0])(weights)
-
-
 def gl_difference(x: ArrayLike, alpha: float, *, axis: int = -1, memory: int | None = None,
                   h: float = 1.0) -> np.ndarray:
     """Grünwald–Letnikov fractional difference of a signal (or a batch of signals).
@@ -325,7 +243,7 @@ def gl_difference(x: ArrayLike, alpha: float, *, axis: int = -1, memory: int | N
     Eq. (4) of the paper (Eq. (5) for ``h = 1``). The sum is a linear convolution computed by
     a real FFT zero-padded to at least ``N + L - 1`` points, so no sample wraps around; short
     signals (``N <= 160``) and short memories (``L <= 48``) use the direct sum instead
-    (:class:`CausalConvolution`, the one kernel every part of fohw uses). The result agrees
+    (:class:`fohw.model.kernels.CausalConvolution`, the one kernel every part of fohw uses). The result agrees
     with the direct sum to about ``1e-12 * max|x|`` at ``N = 10**6``.
 
     Examples

@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_int, check_scalar
 from ..exceptions import ParameterError

@@ -135,6 +135,23 @@ class LinearBlock:
         self.g_slope = float(g_slope)
         self.f_slope = float(f_slope)
 
+    def __repr__(self):
+        def terms(c, t):
+            return "[" + ", ".join(f"{x:.6g} (lag {i}, order {nu:g})" for x, (i, nu) in zip(c, t)) + "]"
+        return (f"LinearBlock(a={terms(self.a, self.a_terms)}, b={terms(self.b, self.b_terms)}, "
+                f"dt={self.dt:g}, g_slope={self.g_slope:.6g}, f_slope={self.f_slope:.6g})")
+
+    def _repr_html_(self):
+        from .._repr import html_table
+
+        rows = ([("a (output)", i, nu, c) for c, (i, nu) in zip(self.a, self.a_terms)]
+                + [("b (input)", i, nu, c) for c, (i, nu) in zip(self.b, self.b_terms)])
+        return html_table("LinearBlock H(z) = f' B(z) / (1 - g' A(z))",
+                          ["term", "lag", "order", "coefficient"], rows,
+                          lines=[f"f' = {self.f_slope:.6g}, g' = {self.g_slope:.6g}, "
+                                 f"dt = {self.dt:g}", f"static gain H(1) = {self.static_gain:.6g}",
+                                 f"stability: {self.stability()}"], digits=6)
+
     @classmethod
     def from_model(cls, model):
         """The linear block of a :class:`fohw.HammersteinWiener` (linearised at its operating point).

@@ -15,6 +15,8 @@ outside its range widens that order's own bound to its value.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import numbers
 from collections.abc import Iterable, Mapping
@@ -24,7 +26,24 @@ import numpy as np
 from ..exceptions import ParameterError
 from .orders import ORDER_RANGE
 
-__all__ = ["Parameter", "Parameters", "ORDER_RANGE"]
+__all__ = ["Parameter", "Parameters", "ORDER_RANGE", "bounds_overridden"]
+
+_OVERRIDDEN = contextvars.ContextVar("fohw_bounds_overridden", default=False)
+
+
+@contextlib.contextmanager
+def bounds_overridden():
+    """Within it, a :class:`Parameter` may be built with a value outside its bounds.
+
+    For :class:`fohw.Model`: a kind builds its parameters with its default bounds, and the
+    settings a user gave (wider bounds) replace them right after; the value is checked against
+    those.
+    """
+    token = _OVERRIDDEN.set(True)
+    try:
+        yield
+    finally:
+        _OVERRIDDEN.reset(token)
 
 
 def _number(value, what):
@@ -105,7 +124,7 @@ class Parameter:
             tie = (source, factor)
             if fixed:
                 raise ParameterError(f"parameter {name!r} is tied to {source!r}; it cannot also be fixed.")
-        elif not lo <= value <= hi:
+        elif not lo <= value <= hi and not _OVERRIDDEN.get():
             raise ParameterError(f"the value of parameter {name!r} ({value!r}) is outside its bounds "
                                  f"[{lo:g}, {hi:g}].")
         self.name, self.value, self.bounds = name, value, (lo, hi)
@@ -173,6 +192,17 @@ class Parameter:
         if self.order:
             extra += ", order=True"
         return f"Parameter({self.name!r}, {self.value!r}{extra})"
+
+
+def _placed(par, value):
+    """``par`` at ``value`` without the bound check (a tied value, or an unchecked read)."""
+    if not math.isfinite(value):
+        raise ParameterError(f"the value of parameter {par.name!r} must be finite; got {value!r}.")
+    out = Parameter.__new__(Parameter)
+    for slot in Parameter.__slots__:
+        setattr(out, slot, getattr(par, slot))
+    out.value = float(value)
+    return out
 
 
 class Parameters(Mapping):
@@ -276,11 +306,13 @@ class Parameters(Mapping):
         return t
 
     # New sets
-    def with_values(self, values) -> Parameters:
+    def with_values(self, values, *, check_bounds=True) -> Parameters:
         """A copy with new values (a mapping ``name -> float``; ties re-applied).
 
         Only the values change: bounds, fixed flags and ties stay. A value outside its bounds
-        is refused. Tied parameters follow their source; giving one a value is refused.
+        is refused (unless ``check_bounds=False``: a model's own values read against settings
+        that are being changed). Tied parameters follow their source; giving one a value is
+        refused.
         """
         if isinstance(values, Parameters):
             values = values.valuesdict()
@@ -292,7 +324,8 @@ class Parameters(Mapping):
         new = {}
         for name, par in self._items.items():
             if name in values and par.tie is None:
-                new[name] = par.replace(value=_number(values[name], f"the value of {name!r}"))
+                value = _number(values[name], f"the value of {name!r}")
+                new[name] = par.replace(value=value) if check_bounds else _placed(par, value)
             else:
                 new[name] = par
         for name, par in self._items.items():
@@ -300,7 +333,7 @@ class Parameters(Mapping):
                 if name in values and float(values[name]) != par.tie[1] * new[par.tie[0]].value:
                     raise ParameterError(f"parameter {name!r} is tied to {par.tie[0]!r} "
                                          f"({par.tie[1]:g} times it); it takes no value of its own.")
-                new[name] = par.replace(value=par.tie[1] * new[par.tie[0]].value)
+                new[name] = _placed(par, par.tie[1] * new[par.tie[0]].value)
         return Parameters(new.values())
 
     def with_free(self, x) -> Parameters:

@@ -16,20 +16,19 @@ estimated, and the offset adds a column of ones.
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
+import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._types import ArrayLike, PairLike
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
 from .basis import BasisLike
 from .gl import (
-    CausalConvolution,
-    convolution_at,
     gl_weights,
     gl_weights_derivative,
     past_transient,
     sampling_scale,
 )
+from .kernels import CausalConvolution, convolution_at
 from .orders import ORDER_RANGE, OrdersLike
 from .structure import Structure
 
@@ -58,7 +57,7 @@ class WindowKernel:
 
         ``signals[:, t]`` holds the basis signals at time ``t``, for at least ``t = 0..k-1``;
         each weight vector has at least ``k`` entries. The GL sums are evaluated by
-        :func:`fohw.model.gl.convolution_at` (the whole past, no FFT).
+        :func:`fohw.model.kernels.convolution_at` (the whole past, no FFT).
         """
         n_rows = min(innovation_length, k + 1)
         if k == 0:

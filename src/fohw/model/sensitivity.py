@@ -31,8 +31,8 @@ import numpy as np
 from .._validation import check_array, check_inputs
 from ..exceptions import DimensionError
 from . import _compiled
-from ._online import HalfMerge, divide_and_conquer
 from .gl import gl_weights
+from .kernels import HalfMerge, divide_and_conquer
 from .regressors import RegressorBuilder
 from .simulation import simulate_predictor
 from .structure import Structure
@@ -157,11 +157,11 @@ def _feedback_problem(structure, linear, params, u):
 def _solve_feedback(E, lags, betas, coefs, *, kernel="auto", leaf_size=None):
     """``S[k] = E[k] + sum_t (beta_t * (c_t S))[k - lag_t]`` for all ``k`` (lags >= 1).
 
-    Divide and conquer over time with the simulator's skeleton (:mod:`fohw.model._online`):
+    Divide and conquer over time with the simulator's skeleton (:mod:`fohw.model.kernels`):
     ``D[t]`` gathers ``beta_t * z_t`` with ``z_t = c_t S``; a leaf finishes its samples one by
     one (a matrix-vector product per term and sample for the leaf's own past), and once the
     first half of ``[lo, hi)`` is finished its ``z`` enters ``D`` on the second half by FFT
-    (:class:`~fohw.model._online.HalfMerge`: the spectra of the weights once per FFT size, and
+    (:class:`~fohw.model.kernels.HalfMerge`: the spectra of the weights once per FFT size, and
     terms given the same weights array share them).
 
     ``kernel`` chooses the leaf: ``"auto"`` the compiled one (:mod:`fohw.model._compiled`, when

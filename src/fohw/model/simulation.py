@@ -6,7 +6,7 @@ predictor, any theta) or a :class:`fohw.Structure` with parameter values, throug
 * :func:`forcing`: everything in ``y[k]`` that does not feed back (noise, offset, the input
   branch by FFT, the transients of past levels);
 * :func:`recursion`: the output feedback, sample by sample in leaves (pure Python, or compiled by
-  :mod:`fohw.model._compiled`) joined by FFT merges (:mod:`fohw.model._online`), ``O(N log^2 N)``;
+  :mod:`fohw.model._compiled`) joined by FFT merges (:mod:`fohw.model.kernels`), ``O(N log^2 N)``;
 * :func:`free_run`: the two in deviation coordinates, with a measured history and the divergence
   test (:data:`FAST_SIMULATION_THRESHOLD`, :data:`LEAF_SIZE`, :data:`LEAF_SIZE_COMPILED`).
 
@@ -32,9 +32,9 @@ from .._validation import (
 )
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
-from ._online import HalfMerge, divide_and_conquer
 from .base import Model
-from .gl import causal_convolve, gl_weights, gl_weights_unchecked, past_transient
+from .gl import gl_weights, gl_weights_unchecked, past_transient
+from .kernels import HalfMerge, causal_convolve, divide_and_conquer
 from .structure import Structure
 
 __all__ = ["simulate", "generic_model", "simulate_predictor", "equation_noise", "free_run",
@@ -404,7 +404,7 @@ def recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_fi
     accumulator of ``Delta^nu z_r`` (:func:`accumulators`); order-0 accumulators have no memory
     (``z_r`` itself).
 
-    O(N log^2 N) by divide and conquer over time (:mod:`fohw.model._online`): once the first
+    O(N log^2 N) by divide and conquer over time (:mod:`fohw.model.kernels`): once the first
     half of ``[lo, hi)`` is finished, its contribution to the accumulators on the second half
     is added by FFT (one transform per signal and one inverse per accumulator, the weights'
     spectra computed once per level). Leaves run the recursion sample by sample, one dot

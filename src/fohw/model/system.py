@@ -284,9 +284,13 @@ class HammersteinWiener(Model):
     __hash__ = None
 
     def _repr_html_(self):
-        import html
+        from .._repr import html_table
 
-        return f"<pre>{html.escape(repr(self))}</pre>"
+        rows = [(name, ", ".join(f"{v:.6g}" for v in getattr(self, name))) for name in "abpq"]
+        rows += [(name, v) for name, v in self.orders.items()]
+        return html_table("HammersteinWiener", ["block", "values"], rows,
+                          lines=[f"f_basis = {self.f_basis!r}, g_basis = {self.g_basis!r}",
+                                 f"orders: {self.structure.orders!r}"])
 
     # --- the Model protocol ---------------------------------------------------------------
     def _names(self):

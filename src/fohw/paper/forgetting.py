@@ -335,7 +335,7 @@ def plot_forgetting_map(summary):
     finite = np.concatenate([g[np.isfinite(g)] for g in grids])
     norm = LogNorm(vmin=min(finite.min(), 0.01), vmax=max(finite.max(), 1.0))
     fig, axes = subplots(1, len(schedules), figsize=(3.3 * len(schedules) + 2.2, 4.6),
-                         squeeze=False)
+                         squeeze=False, layout=None)       # placed by hand, colour bar included
     axes = axes[0]
     fig.subplots_adjust(left=0.13, right=0.86, wspace=0.08, top=0.86, bottom=0.1)
     for ax, s, grid in zip(axes, schedules, grids):
@@ -355,7 +355,7 @@ def plot_forgetting_map(summary):
                  label=f"median delta at k = {kmax}")
     fig.suptitle("Hybrid MIGD + MI-LM with r(k) = lambda r(k-1) + ||Phi||^2 (lambda: not in "
                  "the paper)", fontsize=10)
-    return fig, axes
+    return fig
 
 
 def plot_forgetting_best(summary, curves, *, curve_step=50):
@@ -421,8 +421,7 @@ def plot_forgetting_best(summary, curves, *, curve_step=50):
             ax_a.legend(fontsize=7, loc="lower right")
     fig.suptitle("At each schedule's best forgetting factor (not in the paper) against Table 2 "
                  "as printed", fontsize=10)
-    fig.tight_layout()
-    return fig, axes
+    return fig
 
 
 def main(argv=None, description=None):
@@ -465,9 +464,9 @@ def main(argv=None, description=None):
                "converged", "seconds", "error"]
     (outdir / "forgetting_map.csv").write_text(csv_text(
         [dict(r, error=r["error"].replace(",", ";").replace("\n", " ")) for r in rows], columns))
-    fig, _ = plot_forgetting_map(summary)
+    fig = plot_forgetting_map(summary)
     save_figure(fig, outdir / "forgetting_map.png", dpi=120)
-    fig, _ = plot_forgetting_best(summary, curves, curve_step=step)
+    fig = plot_forgetting_best(summary, curves, curve_step=step)
     save_figure(fig, outdir / "forgetting_best.png", dpi=120)
     print(text)
     for name in ("forgetting_map.md", "forgetting_map.csv", "forgetting_map.png",

@@ -109,8 +109,11 @@ def show(value):
     return "diverged" if np.isnan(value) else f"{value:.1f}"
 
 
+#: Legends beside the axes: the records fill them, a legend inside would cover the data.
+BESIDE = dict(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+
+
 def save(fig, outdir, name):
-    fig.tight_layout()
     save_figure(fig, outdir / name, dpi=120)
 
 
@@ -155,7 +158,7 @@ def plot_figures_7_to_9(outdir, y, hybrid, pred5, pred_vp):
     ax.set_xlabel("sample k")
     ax.set_ylabel("arm acceleration")
     ax.set_title("Fig. 8: measured and estimated output (one-step-ahead)")
-    ax.legend(fontsize=8)
+    ax.legend(**BESIDE)
     save(fig, outdir, "figure_8.png")
     fig, ax = subplots(figsize=(9, 3.5))
     ax.plot(k, y - pred5, "C1", lw=0.8, label="hybrid P = 5")
@@ -166,7 +169,7 @@ def plot_figures_7_to_9(outdir, y, hybrid, pred5, pred_vp):
     ax.set_xlabel("sample k")
     ax.set_ylabel("one-step error")
     ax.set_title("Fig. 9: estimation error (dotted: the paper's range [-0.1, 0.1])")
-    ax.legend(fontsize=8)
+    ax.legend(**BESIDE)
     save(fig, outdir, "figure_9.png")
 
 
@@ -366,14 +369,14 @@ def plot_simulation(outdir, u, y, lin_final, frac_final):
     axes[0].plot(kk, frac_final.simulate(u)[second], "C0--", lw=0.9,
                  label="fractional HW, output_error")
     axes[0].set_ylabel("y")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(**BESIDE)
     axes[0].set_title("Free-run simulation on the held-back second half")
     axes[1].plot(kk, y[second] - lin_final.simulate(u)[second], "C2", lw=0.8, label="linear OE")
     axes[1].plot(kk, y[second] - frac_final.simulate(u)[second], "C0", lw=0.8,
                  label="fractional HW")
     axes[1].set_xlabel("sample k")
     axes[1].set_ylabel("simulation error")
-    axes[1].legend(fontsize=8)
+    axes[1].legend(**BESIDE)
     save(fig, outdir, "robot_arm_simulation.png")
 
 
