@@ -88,7 +88,8 @@ def run(tasks, jobs):
         for t in tasks:
             rows += fit(t)
         return rows
-    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs) as pool:
+    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs,
+                                                initializer=fohw.end_with_parent) as pool:
         for out in pool.map(fit, tasks):
             rows += out
     return rows
@@ -126,9 +127,12 @@ def main(argv=None):
                     help="seeds of parts 2-3 at N = 1e3, 1e4, 1e5")
     ap.add_argument("--output-sizes", type=int, nargs="+", default=(1000, 3000, 10000))
     ap.add_argument("--output-seeds", type=int, nargs="+", default=(40, 20, 8))
-    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                    help="worker processes, at most the processors (default 2)")
     ap.add_argument("--parts", default="123")
     args = ap.parse_args(argv)
+    if not 1 <= args.jobs <= (os.cpu_count() or 1):
+        ap.error(f"--jobs must be from 1 to {os.cpu_count() or 1} (the processors); got {args.jobs}.")
     t_start = time.perf_counter()
     if args.fast:
         n_main, seeds_main = 1000, 3

@@ -23,6 +23,7 @@ cascaded_tanks.png (validation record against the simulations) to --outdir.
 """
 
 import argparse
+import os
 import sys
 import time
 import warnings
@@ -80,7 +81,7 @@ def validate(candidate, est, val):
     with warnings.catch_warnings():      # rank and convergence notes are in the table's rows
         warnings.simplefilter("ignore")
         res = fohw.identify(est.u, est.y, **COMMON, **candidate)
-        v = res.validate(val.u, val.y)
+        v = fohw.compare(res, val.u, val.y)
     row = dict(result=res, rmse=v.rmse_simulation, fit=v.fit_simulation, ysim=v.simulated)
     if v.diverged:
         return dict(row, status=v.diverged.split(":")[0])
@@ -143,8 +144,8 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1,
                     help="worker processes for the structure selection (default 1: serial)")
     args = ap.parse_args(argv)
-    if args.jobs < 1:
-        ap.error(f"--jobs must be >= 1; got {args.jobs}.")
+    if not 1 <= args.jobs <= (os.cpu_count() or 1):
+        ap.error(f"--jobs must be from 1 to {os.cpu_count() or 1} (the processors); got {args.jobs}.")
     t0 = time.perf_counter()
     bench = fohw.datasets.cascaded_tanks()
     est, val = bench.estimation, bench.validation
@@ -152,7 +153,7 @@ def main(argv=None):
 
     # 1. Structure on the estimation record only.
     cands = grid(args.fast)
-    pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
+    pool = ProcessPoolExecutor(args.jobs, initializer=fohw.end_with_parent) if args.jobs > 1 else None
     try:
         sel = fohw.select_structure(est, candidates=cands, validation=HELD_BACK, refit=False,
                                     executor=pool, **COMMON)

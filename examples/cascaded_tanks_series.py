@@ -21,6 +21,7 @@ Writes cascaded_tanks_series.md, cascaded_tanks_series.csv and cascaded_tanks_se
 """
 
 import argparse
+import os
 import sys
 import time
 import warnings
@@ -73,7 +74,7 @@ def validate(row, est, val):
     with warnings.catch_warnings():          # convergence notes: in the selection's rows
         warnings.simplefilter("ignore")
         res = fohw.identify(est.u, est.y, **COMMON, **cand)
-        v = res.validate(val.u, val.y)
+        v = fohw.compare(res, val.u, val.y)
     return dict(result=res, candidate=cand, held_back=row["fit"], rmse=v.rmse_simulation,
                 fit=v.fit_simulation, ysim=v.simulated,
                 rmse_est=rmse(est.y, res.simulate(est.u)), diverged=v.diverged)
@@ -94,15 +95,15 @@ def main(argv=None):
     ap.add_argument("--fast", action="store_true", help="two candidates only (a smoke run)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     args = ap.parse_args(argv)
-    if args.jobs < 1:
-        ap.error(f"--jobs must be >= 1; got {args.jobs}.")
+    if not 1 <= args.jobs <= (os.cpu_count() or 1):
+        ap.error(f"--jobs must be from 1 to {os.cpu_count() or 1} (the processors); got {args.jobs}.")
     t0 = time.perf_counter()
     bench = fohw.datasets.cascaded_tanks()
     est, val = bench.estimation, bench.validation
     args.outdir.mkdir(parents=True, exist_ok=True)
 
     cands = grid(args.fast)
-    pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
+    pool = ProcessPoolExecutor(args.jobs, initializer=fohw.end_with_parent) if args.jobs > 1 else None
     try:
         sel = fohw.select_structure(est, candidates=cands, validation=HELD_BACK, refit=False,
                                     executor=pool, **COMMON)

@@ -10,6 +10,7 @@ table_2_monte_carlo.png.
 """
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -29,7 +30,8 @@ def main(argv=None):
     ap.add_argument("--outdir", type=Path, default=Path("results"))
     ap.add_argument("--fast", action="store_true", help="3 seeds, N = 2000")
     ap.add_argument("--seeds", type=int, default=10, help="number of seeds (0, 1, ...)")
-    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
+    ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                    help="worker processes, at most the processors (default 2)")
     args = ap.parse_args(argv)
     n_seeds, n = (3, 2000) if args.fast else (args.seeds, 10_000)
     checkpoints = tuple(k for k in (2000, 5000, 10000) if k <= n)

@@ -27,6 +27,10 @@ M = fohw.datasets.paper_model
 _U2 = np.column_stack([U, U[::-1]])
 _PAPER16 = fohw.datasets.paper_example(16, random_state=0)
 _TF = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0], dt=0.1)
+_PAPER100 = fohw.datasets.paper_example(100, random_state=0)
+_U2_100 = np.column_stack([_PAPER100.u, np.random.default_rng(5).uniform(-1, 1, 100)])
+_G34 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0])
+_CIRC34 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015)
 
 
 def _bad_file(tmp, text, name="bad.dat"):
@@ -64,6 +68,49 @@ def _result_file(tmp, **change):
         else:
             d[key] = value
     path.write_text(json.dumps(d))       # json writes NaN as NaN, as a hand edit might
+    return str(path)
+
+
+def _link(tmp, target, name="l.json"):
+    (tmp / name).symlink_to(target)
+    return str(tmp / name)
+
+
+def _shipped_as(tmp, how):
+    """battery_cell() with its shipped file replaced by a folder, a link or a long file."""
+    from unittest import mock
+
+    (tmp / "data").mkdir()
+    path = tmp / "data" / fohw.datasets.BATTERY_FILENAME
+    if how == "folder":
+        path.mkdir()
+    elif how == "long":
+        with open(path, "wb") as fh:
+            fh.truncate(64 * 2**20 + 1)                 # sparse: no disk used
+    else:
+        path.symlink_to(how)
+    with mock.patch("importlib.resources.files", lambda package: tmp):
+        return fohw.datasets.battery_cell()
+
+
+def _two_inputs():
+    """A fit of the paper's output to its input beside a second one (inputs named 'a', 'b')."""
+    return fohw.identify(_U2_100, _PAPER100.y, na=2, nb=2, f_basis=1, g_basis=3, inputs=("a", "b"))
+
+
+def _two_input_file(tmp, **change):
+    """The saved _two_inputs() with fields replaced (``theta=x`` scales theta by x)."""
+    import json
+
+    path = tmp / "two.json"
+    fohw.save_result(_two_inputs(), path)
+    d = json.loads(path.read_text())
+    for key, value in change.items():
+        if key == "theta":
+            d["theta"]["data"] = [v * value for v in d["theta"]["data"]]
+        else:
+            d[key] = value
+    path.write_text(json.dumps(d))
     return str(path)
 
 
@@ -552,12 +599,12 @@ API = [
      lambda t: _result().simulate(U, initial=3), fohw.ParameterError,
      "`initial` must be one of ('rest', 'fitted', 'estimate'), ('estimate', n), a measured "
      "history (u_hist, y_hist) or an InitialState; got 3"),
-    ("compare", "both `initial` and `history`",
-     lambda t: fohw.compare(_result(), U, Y, initial="rest", history=(U, Y)),
-     fohw.ParameterError, "not both; got both `initial` ('rest') and `history`"),
-    ("simulate", "`initial` with a HammersteinWiener (it carries its own levels)",
+    ("compare", "`history=`, an older spelling that is gone",
+     lambda t: fohw.compare(_result(), U, Y, history=(U, Y)),
+     TypeError, "unexpected keyword argument 'history'"),
+    ("simulate", "a named initial state with a HammersteinWiener (it carries its own levels)",
      lambda t: fohw.simulate(M(), U, initial="rest"), fohw.ParameterError,
-     "`initial` is for an identification result; got it with a HammersteinWiener"),
+     "belong to an identification result"),
     # issue 24 (outmap)
     ("identify", "output_map: saturation limits out of order",
      lambda t: fohw.identify(U, U, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
@@ -585,7 +632,7 @@ API = [
      fohw.ParameterError, "entirely at one limit"),
     ("simulate", "output_map without an inverse and a measured history",
      lambda t: fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, output_map=3),
-                             U, params=[0.5, 1.0, 0.4, 0.0, 0.0], history=(U, U)),
+                             U, params=[0.5, 1.0, 0.4, 0.0, 0.0], initial=(U, U)),
      fohw.ParameterError, "has no inverse"),
     ("PolynomialMap", "monotone with an even degree",
      lambda t: fohw.PolynomialMap(4, monotone=True), fohw.ParameterError,
@@ -694,6 +741,149 @@ API = [
     ("BatteryCell.ocv", "a state of charge above 1",
      lambda t: fohw.datasets.battery_cell().ocv(1.2), fohw.ParameterError,
      "`soc` must be in [0, 1]"),
+    # issue 34 (io): transfer functions #1-6, circuits #21 and the rest of their class
+    ("FractionalTF", "issue 34 #1: a denominator order of 1e6 (was OverflowError in simulate)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1e6, 0.0]), fohw.ParameterError,
+     "`den_orders` must lie in [0, 20]; got 1000000.0 at index 0"),
+    ("FractionalTF", "issue 34 #1: a numerator order of -25",
+     lambda t: fohw.FractionalTF([1.0], [-25.0], [1.0, 1.0], [0.5, 0.0]), fohw.ParameterError,
+     "`num_orders` must lie in [-20, 20]; got -25.0 at index 0"),
+    ("FractionalTF.frequency_response", "issue 34 #2: a string (the error did not name omega)",
+     lambda t: _G34.frequency_response(["a"]), fohw.ParameterError,
+     "`omega` must be an array of real numbers; got an array of strings"),
+    ("FractionalTF.frequency_response", "issue 34 #3: omega = 0 at a pole at s = 0 (was inf+nanj)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0], [0.5]).frequency_response([0.0, 1.0]),
+     fohw.ParameterError, "`omega` = 0.0 (index 0): G has a pole at s = 0 (dcgain = inf, G ~ s^-0.5"),
+    ("FractionalTF.frequency_response", "issue 34 #4: a NaN frequency (was returned as NaN)",
+     lambda t: _G34.frequency_response([np.nan, 1.0]), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("FractionalTF.discrete_frequency_response", "issue 34 #4: an infinite frequency",
+     lambda t: _G34.discrete_frequency_response([np.inf], dt=0.1), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("FractionalTF.oustaloup", "issue 34 #5: a band of 600 decades (its response was nan+nanj)",
+     lambda t: _G34.oustaloup(band=(1e-300, 1e300)), fohw.ParameterError,
+     "`band` = (1e-300, 1e+300) spans 600 decades: with order N = 5 the approximation cannot be "
+     "represented in double precision"),
+    ("FractionalTF.oustaloup", "issue 34 #5: a band of 60 decades (finite coefficients, response not)",
+     lambda t: _G34.oustaloup(band=(1e-30, 1e30)), fohw.ParameterError,
+     "(its response in the band is not finite)"),
+    ("FractionalTF.oustaloup", "issue 34 #5: order = 10**6 (np.poly of 2e6 roots, a hang)",
+     lambda t: _G34.oustaloup(order=10**6), fohw.ParameterError,
+     "`order` must be an integer from 1 to 100; got 1000000"),
+    ("OustaloupApproximation.frequency_response", "issue 34 #4: a NaN frequency",
+     lambda t: _G34.oustaloup().frequency_response([np.nan]), fohw.ParameterError,
+     "`omega` must contain only finite values"),
+    ("OustaloupApproximation.errors", "issue 34 #5: points_per_decade = 10**9 (a hang)",
+     lambda t: _G34.oustaloup().errors(points_per_decade=10**9), fohw.ParameterError,
+     "`points_per_decade` must be at most 10000"),
+    ("FractionalTF.simulate", "issue 34 #6: an unstable improper model with a delay (was 1e51, "
+     "unchecked)",
+     lambda t: fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3)
+     .simulate(np.random.default_rng(1).standard_normal(200), dt=0.1),
+     fohw.SimulationDivergedError, "diverged at sample k = 39"),
+    ("FractionalTF.is_stable", "issue 34 #6 (fuzz): a coefficient of 1e-143 (was a RuntimeWarning "
+     "or OverflowError)",
+     lambda t: fohw.FractionalTF([1.0], [0.0], [1.0, 1.26e-143], [0.4140625, 0.0]).is_stable(),
+     fohw.ParameterError, "the argument principle needs the frequencies 10**-360.3"),
+    ("FractionalTF.default_frequencies", "issue 34 #5: n = 10**9 (a grid without a cap)",
+     lambda t: _G34.default_frequencies(10**9), fohw.ParameterError, "`n` must be at most 1000000"),
+    ("model.frequency_response.gl_operator_response", "issue 34 #4: a NaN frequency (the kernel)",
+     lambda t: fohw.model.frequency_response.gl_operator_response([1.0], [0.5], [np.nan], 0.1),
+     fohw.ParameterError, "`omega` must contain only finite values"),
+    ("FractionalHW.frequency_response", "issue 34 #4: a NaN frequency",
+     lambda t: fohw.FractionalHW(_G34).frequency_response([1.0, np.nan]), fohw.ParameterError,
+     "`omega` must contain only finite values; got np.float64(nan) at index 1"),
+    ("LinearBlock.frequency_response", "issue 34 #3: omega = 0 of an integrator (was inf+nanj)",
+     lambda t: fohw.model.hw_frequency.LinearBlock([1.0], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)
+     .frequency_response([0.0, 1.0]), fohw.ParameterError,
+     "`omega` = 0.0: the block's response is infinite there"),
+    ("EquivalentCircuit.impedance", "issue 34 #21: a NaN frequency (was NaN with a RuntimeWarning)",
+     lambda t: _CIRC34.impedance(np.array([np.nan, 1.0])), fohw.ParameterError,
+     "`f` must contain only finite values"),
+    ("EquivalentCircuit.impedance", "issue 34 #21: f = 0 with capacity= (was inf with a RuntimeWarning)",
+     lambda t: _CIRC34.impedance([0.0, 1.0], capacity=5.0), fohw.ParameterError,
+     "`f` = 0.0 (index 0): the impedance of the open-circuit voltage (capacity=) is infinite"),
+    ("identify", "issue 34 #14: a fixed dead zone entirely above the data (was fitted, converged)",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.DeadZone(100.0, 200.0)),
+     fohw.ParameterError, "`output_map` deadzone(lower=100, upper=200) lies entirely above the "
+     "measured output"),
+    ("identify", "issue 34 #14: a dead zone with one fixed end below the data",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.DeadZone(None, -50.0)),
+     fohw.ParameterError, "lies entirely below the measured output"),
+    ("identify", "issue 34 #14: fixed piecewise-linear breakpoints all above the data",
+     lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
+                             output_map=fohw.PiecewiseLinear([10.0, 20.0, 30.0])),
+     fohw.ParameterError, "has every breakpoint above the measured output"),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file replaced by a folder (was "
+     "IsADirectoryError)", lambda t: _shipped_as(t, "folder"), fohw.DataFileError,
+     "is a directory, not a data file. The installed fohw is damaged; reinstall it."),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file a link to /dev/zero (the checksum "
+     "read forever)", lambda t: _shipped_as(t, "/dev/zero"), fohw.DataFileError,
+     "(a symbolic link to '/dev/zero') is a character device, not a regular file"),
+    ("datasets.battery_cell", "issue 34 #25: the shipped file longer than 64 MiB (read whole)",
+     lambda t: _shipped_as(t, "long"), fohw.DataFileError,
+     "longer than 67108864 bytes (read so far), so not the published file"),
+    ("datasets.load_daisy", "issue 34 #25: a link to /dev/zero (was 'not found')",
+     lambda t: fohw.datasets.load_daisy(_link(t, "/dev/zero")), fohw.DataFileError,
+     "is a character device, not a regular file"),
+    ("read_record", "issue 34 #25: a FIFO (the read never ended)",
+     lambda t: fohw.read_record(os.mkfifo(t / "f.dat") or t / "f.dat"), fohw.DataFileError,
+     "is a FIFO, not a regular file; fohw reads a data file only from a regular file"),
+    ("load_result", "issue 34 #25: a link to /dev/zero (the read never ended)",
+     lambda t: fohw.load_result(_link(t, "/dev/zero")), fohw.DataFileError,
+     "is a character device, not a regular file; fohw reads a fohw JSON file only"),
+    ("identify", "issue 34 #26: u of shape (50, 0) (was IndexError)",
+     lambda t: fohw.identify(np.empty((50, 0)), U, **S), fohw.DimensionError,
+     "`u` has no columns (shape (50x0)): give one column per input"),
+    ("compare", "issue 34 #26: u of shape (100, 0) for a 2-input fit",
+     lambda t: fohw.compare(_two_inputs(), np.empty((100, 0)), _PAPER100.y), fohw.DimensionError,
+     "`u` has no columns (shape (100x0))"),
+    ("IdentificationResult.simulate", "issue 34 #27: a DataFrame whose columns are not the fit's "
+     "inputs (matched by position)",
+     lambda t: _two_inputs().simulate(pytest.importorskip("pandas").DataFrame(
+         _U2_100, columns=["x", "a"])), fohw.DimensionError,
+     "`u` is a DataFrame with the columns ['x', 'a'], but the model's inputs are ['a', 'b']"),
+    ("IdentificationResult.simulate", "issue 34 #28: initial={'u': ..., 'y': ...} (its keys were read "
+     "as data)",
+     lambda t: _result().simulate(U, initial={"u": U[:10], "y": U[:10]}), fohw.ParameterError,
+     "`initial` must be the pair (u_hist, y_hist); got a dict with the keys ['u', 'y']"),
+    ("simulate", "issue 34 #28: history={'u': ..., 'y': ...}",
+     lambda t: fohw.simulate(M(), U, history={"u": U[:10], "y": U[:10]}), fohw.ParameterError,
+     "`history` must be the pair (u_past, y_past) of measured records; got a dict"),
+    ("identify", "issue 34 #28: operating_point={'u': 0, 'y': 0}",
+     lambda t: fohw.identify(U, U**3, na=1, nb=1, f_basis=1, g_basis=1,
+                             operating_point={"u": 0.0, "y": 0.0}), fohw.ParameterError,
+     "`operating_point` must be the pair (u0, y0); got a dict with the keys ['u', 'y']"),
+    ("HammersteinWiener", "issue 34 #28: past={0.1: 'a', 0.2: 'b'} (its keys were read as levels)",
+     lambda t: fohw.HammersteinWiener([0.1], [1.0], [1.0], [1.0], 0.5, past={0.1: "a", 0.2: "b"}),
+     fohw.ParameterError, "`past` must be the pair of numbers (a, b); got a dict"),
+    ("FractionalTF.oustaloup", "issue 34 #28: band={1e-2: ..., 1e2: ...} (its keys were read as the band)",
+     lambda t: _G34.oustaloup(band={1e-2: "low", 1e2: "high"}), fohw.ParameterError,
+     "`band` must be the pair (omega_b, omega_h); got a dict"),
+    ("lr_test", "issue 34 #29: an output map on one side only (LR with df 3, p from 1 order)",
+     lambda t: fohw.lr_test(_lr_fit(0, method="output_error"),
+                            _lr_fit("commensurate", method="output_error", output_map="saturation")),
+     fohw.ParameterError, "`restricted` (output map none) and `full` (output map saturation(lower=free, "
+     "upper=free)) differ beyond their orders"),
+    ("load_result", "issue 34 #30: 3 input levels in a 2-input result (the error named input_range)",
+     lambda t: fohw.load_result(_two_input_file(t, operating_point=[[0.0, 0.0, 0.0], 0.0])),
+     fohw.DataFileError, "field 'operating_point' gives 3 input levels but field 'input_range' "
+     "gives 2 inputs"),
+    ("IdentificationResult.simulate", "issue 34 #31: a result file with theta x 1e300 (was 'sqrt or "
+     "log of a negative value')",
+     lambda t: fohw.load_result(_two_input_file(t, theta=1e300)).simulate(_U2_100),
+     fohw.SimulationDivergedError, "the output basis g overflowed at sample k = 1"),
+    ("monte_carlo", "issue 34 #33: n_jobs=1000 (more workers than processors)",
+     lambda t: fohw.monte_carlo({"v": {"method": "varpro"}}, seeds=range(1), n_jobs=1000),
+     fohw.ParameterError, "`n_jobs` must be from 1 to"),
+    ("end_with_parent", "issue 34 #34: poll = 0 seconds",
+     lambda t: fohw.end_with_parent(poll=0), fohw.ParameterError,
+     "`poll` must be a number of seconds in (0, 60]; got 0"),
+    ("Warburg.impedance", "issue 34 #21: f = 0 (was inf+nanj)",
+     lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
+     "the impedance of a Warburg element is infinite there"),
 ]
 
 CLI = [
@@ -833,6 +1023,17 @@ CLI = [
     ("fohw identify", "--nk 0,-1",
      lambda t: ["identify", "x.dat", "--na", "1", "--nb", "1", "--nk", "0,-1"],
      "argument --nk: expected an integer >= 0 (or one per input); got -1"),
+    # issue 34 (io)
+    ("fohw simulate", "issue 34 #32: one column for a two-input result (was '`u` must be 2-D')",
+     lambda t: ["simulate", "--model", _two_input_file(t), "--input", _bad_file(t, "1\n2\n"),
+                "--column", "0"],
+     "--column gives 1 column(s), but "),
+    ("fohw select", "issue 34 #33: --jobs 1000 (56.6 s for two candidates, 0.5 s with --jobs 1)",
+     lambda t: ["select", "x.dat", "--na", "1", "--jobs", "1000"],
+     "--jobs must be from 1 to"),
+    ("fohw identify", "issue 34 #25: the data file a FIFO (the read never ended)",
+     lambda t: ["identify", os.mkfifo(t / "f.dat") or str(t / "f.dat"), "--na", "1", "--nb", "1"],
+     "is a FIFO, not a regular file"),
 ]
 
 

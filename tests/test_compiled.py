@@ -89,7 +89,7 @@ def test_compiled_leaf_general_theta_and_history(small_leaves, monkeypatch):
     # A measured history (the first outputs are fixed, not computed).
     model = STRUCTURES["past"]()
     hist = (rng.uniform(-1, 1, 300), rng.uniform(-1, 1, 300))
-    compiled, pure = both(lambda: fohw.simulate(model, u, history=hist), monkeypatch)
+    compiled, pure = both(lambda: fohw.simulate(model, u, initial=hist), monkeypatch)
     np.testing.assert_array_equal(compiled, pure)
 
 

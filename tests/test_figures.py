@@ -79,7 +79,7 @@ def test_every_plot_returns_a_figure_a_notebook_displays(runs):
     data = fohw.datasets.paper_example(200, random_state=0)
     res = fohw.identify(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
-    figs = [res.plot(), res.bode(), res.validate(data.u, data.y).plot(), G.bode(), G.nyquist(),
+    figs = [res.plot(), res.bode(), fohw.compare(res, data.u, data.y).plot(), G.bode(), G.nyquist(),
             plot_figure_3(runs), plot_figure_4(runs)]
     for fig in figs:
         assert isinstance(fig, matplotlib.figure.Figure)

@@ -37,7 +37,7 @@ def test_simulation_continues_from_a_measured_history(name):
     u_hist = rng.uniform(-1, 1, 40) + model.operating_point[0]
     y_hist = rng.uniform(-1, 1, 40) + model.operating_point[1]
     u = rng.uniform(-1, 1, 50) + model.operating_point[0]
-    got = fohw.simulate(model, u, history=(u_hist, y_hist))
+    got = fohw.simulate(model, u, initial=(u_hist, y_hist))
     want = reference.simulate_general(model, u, np.zeros(50), history=(u_hist, y_hist))
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
 

@@ -30,7 +30,7 @@ assert "scipy.fft" in sys.modules
 d = fohw.datasets.paper_example(300, random_state=0)
 res = fohw.identify(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
 assert "scipy.optimize" in sys.modules and "matplotlib" not in sys.modules
-res.validate(d.u, d.y).plot()
+fohw.compare(res, d.u, d.y).plot()
 assert "matplotlib" in sys.modules and "matplotlib.pyplot" not in sys.modules
 print(fohw.__version__)
 """

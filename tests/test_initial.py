@@ -140,17 +140,18 @@ def test_a_past_estimate_fit_asks_which_state():
     d = fohw.datasets.paper_example(300, random_state=0)
     est = fohw.identify(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3, past="estimate")
     for call in (lambda: est.simulate(d.u), lambda: fohw.compare(est, d.u, d.y),
-                 lambda: fohw.simulate(est, d.u), lambda: est.validate(d.u, d.y)):
+                 lambda: fohw.simulate(est, d.u), lambda: fohw.compare(est, d.u, d.y)):
         with pytest.raises(fohw.ParameterError, match="initial='fitted'.*initial='rest'"):
             call()
     np.testing.assert_array_equal(fohw.simulate(est, d.u, initial="fitted"),
                                   est.simulate(d.u, initial="fitted"))
-    with pytest.raises(fohw.ParameterError, match="`initial` is for an identification result"):
+    with pytest.raises(fohw.ParameterError, match="belong to an identification result"):
         fohw.simulate(est.model, d.u, initial="rest")
-    # a measured history is an explicit choice (the fit's levels precede it, as before)
-    hist = est.simulate(d.u[200:], history=(d.u[:200], d.y[:200]))
-    np.testing.assert_array_equal(hist, est.simulate(d.u[200:],
-                                                     initial=(d.u[:200], d.y[:200])))
+    # a measured history is an explicit choice, the same through fohw.simulate
+    hist = est.simulate(d.u[200:], initial=(d.u[:200], d.y[:200]))
+    np.testing.assert_array_equal(hist, fohw.simulate(est, d.u[200:],
+                                                      initial=(d.u[:200], d.y[:200])))
+    assert not np.array_equal(hist, est.simulate(d.u[200:], initial="fitted"))
 
 
 def test_the_state_compare_used_reproduces_its_free_run(cut_record):

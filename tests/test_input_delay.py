@@ -116,7 +116,7 @@ def test_past_levels_and_history_with_a_delay_follow_the_reference(nk):
     np.testing.assert_allclose(fohw.simulate(model, u, noise=v),
                                reference.simulate_general(model, u, v), rtol=0, atol=1e-12)
     hist = (rng.uniform(-1, 1, 30) + 0.5, rng.uniform(-1, 1, 30) + 1.0)
-    np.testing.assert_allclose(fohw.simulate(model, u, history=hist),
+    np.testing.assert_allclose(fohw.simulate(model, u, initial=hist),
                                reference.simulate_general(model, u, np.zeros(70), history=hist),
                                rtol=0, atol=1e-12)
     # and the information matrix with estimated past levels reproduces the record

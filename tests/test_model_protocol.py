@@ -164,7 +164,7 @@ def test_compare(case):
     assert v.whiteness is not None
     if not _lagged(case.true):              # an output-error model: no other one-step predictor
         assert math.isnan(v.fit_prediction) and "| one-step" not in v.to_markdown()
-        with pytest.raises(fohw.ParameterError, match="history"):
+        with pytest.raises(TypeError, match="history"):
             fohw.compare(case.true, case.u, case.y, history=(case.u[:5], case.y[:5]))
 
 

@@ -279,11 +279,11 @@ def test_history_goes_through_the_inverse_of_the_map():
     z = fohw.simulate(s.inner, u, params=truth[:3])
     assert np.all((z[:k] > -0.8) & (z[:k] < 0.9)) and np.any(z[k:] > 0.9)
     y = fohw.simulate(s, u, params=truth)
-    cont = fohw.simulate(s, u[k:], params=truth, history=(u[:k], y[:k]))
+    cont = fohw.simulate(s, u[k:], params=truth, initial=(u[:k], y[:k]))
     np.testing.assert_allclose(cont, y[k:], atol=1e-12)
     with pytest.raises(fohw.ParameterError, match="has no inverse"):
         fohw.simulate(fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, output_map=3),
-                      u[k:], params=[0.5, 1.0, 0.4, 0.0, 0.0], history=(u[:k], y[:k]))
+                      u[k:], params=[0.5, 1.0, 0.4, 0.0, 0.0], initial=(u[:k], y[:k]))
 
 
 def test_as_output_map_spellings():

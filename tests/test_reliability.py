@@ -19,6 +19,7 @@ from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
 import pytest
+import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -538,3 +539,180 @@ def test_the_atomic_writer_names_the_file_not_its_temporary(tmp_path, monkeypatc
         files.write_text("x", tmp_path / "y.txt")
     assert info.value.filename == str(tmp_path / "y.txt") and ".tmp" not in str(info.value)
     assert os.listdir(tmp_path) == []
+
+
+# issue 34 (io)
+@pytest.mark.parametrize("model", [
+    fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3),   # unstable
+    fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], delay=0.2),
+    fohw.FractionalTF([1.0, 0.5], [0.0, -0.5], [2.0, 1.0], [0.6, 0.0]),
+], ids=["unstable improper, delay", "stable, delay", "Warburg numerator"])
+@pytest.mark.parametrize("zeros", [1, 5, 17, 64])
+def test_a_transfer_function_output_shifts_exactly_with_prepended_zeros(model, zeros):
+    """Issue 34 #6: zero initial conditions make G time-invariant: prepending zeros to u shifts y
+    by as many samples, bit for bit, and y is exactly 0 until the (delayed) input arrives. The
+    FFT solve left ~1e-13 there, and the unstable model amplified it until prepending 1 to 64
+    zeros changed the output 1.5 to 1e15 times."""
+    u = np.random.default_rng(1).standard_normal(200)
+    u[:3] = 0.0
+    y = model.simulate(u, dt=0.1, divergence_threshold=np.inf)
+    shifted = model.simulate(np.r_[np.zeros(zeros), u], dt=0.1, divergence_threshold=np.inf)
+    assert np.array_equal(shifted[zeros:], y)
+    first = 3 + round(model.delay / 0.1)
+    assert np.all(shifted[:zeros + first] == 0.0) and y[first] != 0.0
+
+
+def test_a_diverging_transfer_function_is_refused_at_a_stated_bound():
+    """Issue 34 #6: an unstable model's output is refused once it grows 1e8 times past the output
+    scale of a bounded response (as fohw.simulate does); np.inf lifts the bound; a stable slow
+    model and an integrator on a long record are not refused."""
+    G = fohw.FractionalTF([1.0, 2.0], [1.7, 0.3], [1.0, -3.0], [0.4, 0.0], delay=0.3)
+    u = np.random.default_rng(1).standard_normal(200)
+    with pytest.raises(fohw.SimulationDivergedError) as info:
+        G.simulate(u, dt=0.1)
+    assert info.value.cause == "transfer_function" and "divergence_threshold=np.inf" in str(info.value)
+    assert np.max(np.abs(G.simulate(u, dt=0.1, divergence_threshold=np.inf))) > 1e50
+    step = np.r_[0.0, np.ones(9999)]
+    slow = fohw.FractionalTF([1.0], [0.0], [1e4, 1.0], [1.0, 0.0])         # tau = 1e4, dt = 1e-3
+    assert slow.simulate(step, dt=1e-3)[-1] > 0.0
+    integrator = fohw.FractionalTF([1.0], [0.0], [1.0], [1.0])
+    np.testing.assert_allclose(integrator.simulate(step, dt=0.01)[-1], 9999 * 0.01, rtol=1e-12)
+    growing = fohw.FractionalTF([1.0], [0.0], [1.0, -1.0], [1.0, 0.0])        # 1 / (s - 1)
+    t = np.arange(0.0, 30.0, 0.01)
+    with pytest.raises(fohw.SimulationDivergedError):
+        growing.step(t)
+    # backward Euler multiplies by 1 / (1 - dt) >= e^dt per step: past the exact e^t - 1
+    assert growing.step(t, divergence_threshold=np.inf)[-1] > np.exp(29.99) - 1.0
+
+
+def test_dataframe_columns_are_matched_by_the_names_the_result_keeps():
+    """Issue 34 #27: a fit on columns ['a', 'b'] given a frame with ['b', 'a'] matched them by
+    position (fit -7.9 points, no word); now by name, everywhere a result meets an input: the
+    same numbers as the array in the fit's order."""
+    pd = pytest.importorskip("pandas")
+    d = fohw.datasets.paper_example(400, random_state=0)
+    u2 = np.column_stack([d.u, np.random.default_rng(5).uniform(-1, 1, 400)])
+    r = fohw.identify(pd.DataFrame(u2, columns=["a", "b"]), d.y, **S)
+    swapped = pd.DataFrame(u2[:, ::-1], columns=["b", "a"])
+    assert r.structure.inputs == ("a", "b")
+    assert fohw.compare(r, swapped, d.y).fit == fohw.compare(r, u2, d.y).fit
+    np.testing.assert_array_equal(r.simulate(swapped), r.simulate(u2))
+    np.testing.assert_array_equal(fohw.simulate(r, swapped), fohw.simulate(r, u2))
+    unnamed = fohw.identify(u2, d.y, **S)                       # inputs u1, u2: by position
+    np.testing.assert_array_equal(unnamed.simulate(pd.DataFrame(u2, columns=["x", "y"])),
+                                  unnamed.simulate(u2))
+
+
+def test_a_two_input_result_from_the_command_line_is_simulated_by_it(tmp_path):
+    """Issue 34 #32: `fohw identify two.csv --columns u1,u2,y --save two.json` could not be
+    simulated by `fohw simulate` ('`u` must be 2-D' with one --column, '--column needs 1 entry'
+    with two), and --plot failed after the run ('the result has no model to simulate')."""
+    d = fohw.datasets.paper_example(400, random_state=0)
+    u2 = np.column_stack([d.u, np.random.default_rng(5).uniform(-1, 1, 400)])
+    data, inp = tmp_path / "two.csv", tmp_path / "inp.csv"
+    data.write_text("u1,u2,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for (a, b), c in
+                                          zip(u2.tolist(), d.y.tolist())))
+    inp.write_text("u2,u1\n" + "".join(f"{b!r},{a!r}\n" for a, b in u2[:60].tolist()))
+    status, _, err = run_cli(["identify", data, "--columns", "u1,u2,y", "--na", 2, "--nb", 2,
+                              "--f-basis", 2, "--g-basis", 3, "--save", tmp_path / "two.json",
+                              "--plot", tmp_path / "two.png", "-q"])
+    assert status == 0 and err == "" and (tmp_path / "two.png").stat().st_size > 0
+    expected = fohw.load_result(tmp_path / "two.json").simulate(u2[:60])
+    for column in ([], ["--column", "u1,u2"], ["--column", "u2,u1"], ["--column", "1,0"]):
+        status, out, err = run_cli(["simulate", "--model", tmp_path / "two.json", "--input", inp,
+                                    *column, "-q"])
+        assert status == 0 and err == "", (column, err)
+        np.testing.assert_array_equal(np.array(out.split(), dtype=float), expected)
+
+
+def _proc_stat(pid):
+    """``(state, parent pid)`` of a process from /proc, or None once it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return fields[0], int(fields[1])
+
+
+def _children(pid):
+    """The process ids whose parent is ``pid`` (from /proc)."""
+    return [int(e) for e in os.listdir("/proc")
+            if e.isdigit() and (st := _proc_stat(e)) is not None and st[1] == pid]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_workers_end_when_select_is_killed(tmp_path):
+    """Issue 34 #34: SIGKILL of `fohw select --jobs 2` left both workers alive 120 s later.
+    The pool's initializer (fohw.end_with_parent) ends them: gone within 5 s."""
+    d = fohw.datasets.paper_example(3000, random_state=0)
+    data = tmp_path / "d.dat"
+    np.savetxt(data, np.c_[d.u, d.y])
+    child = subprocess.Popen([sys.executable, "-m", "fohw", "select", str(data), "--na", "1,2,3",
+                              "--f-basis", "1,2,3", "--g-basis", "1,2,3", "--method",
+                              "output_error", "--jobs", "2", "-q"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while len(workers := _children(child.pid)) < 2:
+        assert time.monotonic() < deadline and child.poll() is None, "no workers started"
+        time.sleep(0.05)
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    deadline = time.monotonic() + 5
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.1)
+        alive = [w for w in workers if (st := _proc_stat(w)) is not None and st[0] != "Z"]
+    for w in alive:                                   # do not leave them running
+        os.kill(w, signal.SIGKILL)
+    assert not alive, f"workers {alive} outlived their killed parent"
+
+
+@settings(max_examples=60, deadline=None)
+@given(den_order=st.floats(0.1, 2.0), num_order=st.floats(-0.9, 2.5), a0=st.floats(-3.0, 3.0),
+       b1=st.floats(-2.0, 2.0), delay=st.integers(0, 5), zeros=st.integers(1, 40),
+       n=st.integers(1, 300), seed=st.integers(0, 2**32 - 1))
+def test_fuzz_transfer_function_simulation_is_shift_invariant_and_linear(
+        den_order, num_order, a0, b1, delay, zeros, n, seed):
+    """Issue 34 #6, the fuzz target: for any G in the ordinary domain, prepending zeros shifts
+    the output bit for bit (or moves the divergence refusal by as many samples), and a stable
+    proper G is linear to rounding (1e-9 of the output's size)."""
+    G = fohw.FractionalTF([1.0, b1], [num_order, 0.0], [1.0, a0], [den_order, 0.0], delay=0.1 * delay)
+    rng = np.random.default_rng(seed)
+    u, v = rng.standard_normal(n), rng.standard_normal(n)
+    padded = np.r_[np.zeros(zeros), u]
+    try:
+        y = G.simulate(u, dt=0.1)
+    except fohw.SimulationDivergedError as err:
+        with pytest.raises(fohw.SimulationDivergedError) as again:
+            G.simulate(padded, dt=0.1)
+        assert again.value.sample == err.sample + zeros and again.value.value == err.value
+        return
+    shifted = G.simulate(padded, dt=0.1)
+    assert np.array_equal(shifted[zeros:], y) and not np.any(shifted[:zeros])
+    try:
+        stable = G.is_stable()
+    except fohw.ParameterError as err:            # coefficients beyond the argument principle
+        assert "beyond double precision" in str(err)
+        return
+    if stable and num_order <= den_order:
+        both = G.simulate(u + 2.0 * v, dt=0.1)
+        scale = max(np.abs(y).max(), np.abs(both).max(), 1e-300)
+        np.testing.assert_allclose(both, y + 2.0 * G.simulate(v, dt=0.1), rtol=0, atol=1e-9 * scale)
+
+
+def test_an_expanded_integer_polynomial_simulates_to_its_conditioning():
+    """Found with issue 34 #6: 1/(s + 1)^5 written as one polynomial simulated at dt = 0.01 by the
+    FFT divide and conquer ended 10.96 away from its step response (of size 1) after 2000
+    samples. Integer orders give polynomial weights; the recursion itself is now run, and
+    agrees with five backward-Euler sections in cascade (the same discretisation, well
+    conditioned) to the expanded form's own conditioning, eps * sum|c| / |sum c|."""
+    h, n = 0.01, 2000
+    G = fohw.FractionalTF([1.0], [0.0], np.poly(-np.ones(5)), np.arange(5.0, -1.0, -1.0))
+    u = np.r_[0.0, np.ones(n - 1)]
+    x = u.copy()
+    for _ in range(5):                                      # (1 + (1 - q^-1)/h)^-1, five times
+        x = scipy.signal.lfilter([h / (1 + h)], [1.0, -1.0 / (1 + h)], x)
+    c = (1.0 / h + 1.0) ** 5 * np.poly(np.full(5, 1.0 / (1.0 + h)))     # the weights of (s+1)^5
+    bound = 10 * np.finfo(float).eps * np.sum(np.abs(c)) / abs(np.sum(c))
+    np.testing.assert_allclose(G.simulate(u, dt=h), x, rtol=0, atol=bound)

@@ -226,8 +226,8 @@ def test_dask_executor_gives_the_same_table_on_the_tanks():
     assert [r["status"] for r in parallel.rows] == ["ok", "ok"]
     # the winner's validation RMSE on the benchmark's validation record, in volts
     val = fohw.datasets.cascaded_tanks().validation
-    v = parallel.best.validate(val.u, val.y)
-    assert v.rmse_simulation == serial.best.validate(val.u, val.y).rmse_simulation
+    v = fohw.compare(parallel.best, val.u, val.y)
+    assert v.rmse_simulation == fohw.compare(serial.best, val.u, val.y).rmse_simulation
     # sanity: not better than the best published result (0.18 V, a grey-box model), and far
     # better than a constant (the validation output's standard deviation, 2.1 V)
     assert 0.18 < v.rmse_simulation < 1.0

@@ -20,7 +20,7 @@ def fitted():
 def test_numbers_are_the_simulation_and_prediction_they_name(fitted):
     data, res = fitted
     u, y = data.u[800:], data.y[800:]
-    v = res.validate(u, y, n_init=5)
+    v = fohw.compare(res, u, y, n_init=5)
     ysim, yhat = res.simulate(u), res.predict(u, y)
     np.testing.assert_array_equal(v.simulated, ysim)
     np.testing.assert_array_equal(v.predicted, yhat)
@@ -37,9 +37,9 @@ def test_numbers_are_the_simulation_and_prediction_they_name(fitted):
 
 def test_history_continues_the_free_run(fitted):
     data, res = fitted
-    v = fohw.compare(res, data.u[800:], data.y[800:], history=(data.u[:800], data.y[:800]))
+    v = fohw.compare(res, data.u[800:], data.y[800:], initial=(data.u[:800], data.y[:800]))
     np.testing.assert_array_equal(v.simulated, res.simulate(data.u[800:],
-                                                            history=(data.u[:800], data.y[:800])))
+                                                            initial=(data.u[:800], data.y[:800])))
 
 
 def test_a_diverging_free_run_is_reported_not_raised(fitted):
@@ -51,7 +51,7 @@ def test_a_diverging_free_run_is_reported_not_raised(fitted):
         except fohw.SimulationDivergedError as exc:
             ysim_error = exc
     assert ysim_error is not None          # the y^3 feedback escapes at 8x the input
-    v = res.validate(8 * data.u[800:], 8 * data.y[800:])
+    v = fohw.compare(res, 8 * data.u[800:], 8 * data.y[800:])
     assert v.simulated is None and np.isnan(v.fit_simulation)
     assert "diverged at sample" in v.diverged and not v.in_range
     assert "diverged" in v.to_markdown()
@@ -62,9 +62,9 @@ def test_a_diverging_free_run_is_reported_not_raised(fitted):
 def test_bad_input_names_the_argument(fitted):
     data, res = fitted
     with pytest.raises(fohw.DimensionError, match="`u` and `y` must have the same length"):
-        res.validate(data.u[:10], data.y[:11])
+        fohw.compare(res, data.u[:10], data.y[:11])
     with pytest.raises(fohw.ParameterError, match="`n_init`"):
-        res.validate(data.u[:10], data.y[:10], n_init=20)
+        fohw.compare(res, data.u[:10], data.y[:10], n_init=20)
 
 
 def test_cli_plot_shows_the_free_run(tmp_path):
@@ -95,7 +95,7 @@ def test_constant_input_still_gives_the_fit(fitted):
     # fit % of both predictions is still there (they are the ones of a direct computation).
     data, res = fitted
     u = np.full(400, 0.3)
-    v = res.validate(u, data.y[800:])
+    v = fohw.compare(res, u, data.y[800:])
     assert v.fit_simulation == fit_percent(data.y[800:], res.simulate(u))
     assert v.fit_prediction == fit_percent(data.y[800:], res.predict(u, data.y[800:]))
     assert v.cross_correlation is None and v.whiteness is not None
@@ -106,7 +106,7 @@ def test_constant_input_still_gives_the_fit(fitted):
 def test_one_sample_names_the_record_length(fitted):
     _, res = fitted
     with pytest.raises(fohw.DimensionError, match="the record has 1 sample"):
-        res.validate([0.1], [0.2])
+        fohw.compare(res, [0.1], [0.2])
 
 
 def test_a_free_run_outside_the_envelope_is_implausible_not_scored():

@@ -9,6 +9,7 @@ matrix, and the paper's estimators.
 # _startup first ("_" sorts first): for the `fohw` command only, Ctrl-C while importing is one
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
+from ._parallel import end_with_parent
 from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test
@@ -169,4 +170,5 @@ __all__ = [
     "RC",
     "ZARC",
     "Warburg",
+    "end_with_parent",
 ]

@@ -14,14 +14,116 @@ run cancels its tasks. Each case gets a message that says what happened.
 
 from __future__ import annotations
 
+import numbers
 import os
 import sys
+import threading
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
 from .exceptions import ParameterError
 
-__all__ = ["run_tasks", "progress_bar", "heartbeat", "TaskError"]
+__all__ = ["run_tasks", "progress_bar", "heartbeat", "TaskError", "end_with_parent", "process_pool",
+           "max_jobs", "check_jobs"]
+
+#: How often (seconds) a worker's watchdog looks whether its parent process is still there.
+PARENT_POLL = 0.5
+
+
+def end_with_parent(parent=None, poll=PARENT_POLL):
+    """Initializer of a worker process: end it when its parent process dies.
+
+    ``ProcessPoolExecutor(initializer=fohw.end_with_parent)``. Without it a pool's workers
+    outlive a parent killed by SIGKILL (measured: both workers of ``fohw select --jobs 2`` alive
+    120 s after the kill), since nothing tells them. On Linux the kernel sends the worker
+    SIGTERM when the parent's thread that started it ends (``prctl(PR_SET_PDEATHSIG)``); on
+    every system a daemon thread looks every ``poll`` seconds whether the parent is still the
+    worker's parent and ends the worker (``os._exit``) when it is not.
+
+    Parameters
+    ----------
+    parent : int, optional
+        The process id of the pool's creator (:func:`process_pool` passes it); default: this
+        process's parent when the initializer runs. The worker also ends when its immediate
+        parent (the creator, or a fork server) is gone.
+    poll : float, optional
+        Seconds between two looks of the watchdog thread (default 0.5).
+
+    Examples
+    --------
+    >>> from concurrent.futures import ProcessPoolExecutor
+    >>> import fohw
+    >>> with ProcessPoolExecutor(2, initializer=fohw.end_with_parent) as pool:   # doctest: +SKIP
+    ...     rows = fohw.monte_carlo({"varpro": {"method": "varpro"}}, executor=pool)
+    """
+    if isinstance(poll, bool) or not isinstance(poll, numbers.Real) or not 0.0 < poll <= 60.0:
+        raise ParameterError(f"`poll` must be a number of seconds in (0, 60]; got {poll!r}.")
+    creator = os.getppid() if parent is None else int(parent)
+    parent = os.getppid()                   # the creator, or a fork server that ends with it
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            import signal
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGTERM), 0, 0, 0)          # PR_SET_PDEATHSIG = 1
+        except (OSError, AttributeError):                        # pragma: no cover - no libc
+            pass
+    def orphaned():
+        if os.getppid() != parent:
+            return True
+        try:
+            os.kill(creator, 0)
+        except ProcessLookupError:
+            return True
+        except OSError:                     # it exists, owned by another user
+            pass
+        return False
+
+    if orphaned():                          # the parent died before the signal was armed
+        os._exit(1)
+
+    def watch():
+        pause = threading.Event()
+        while not pause.wait(poll):
+            if orphaned():
+                os._exit(1)
+
+    threading.Thread(target=watch, name="fohw-end-with-parent", daemon=True).start()
+
+
+def process_pool(max_workers):
+    """A ``ProcessPoolExecutor`` whose workers end when this process dies (:func:`end_with_parent`)."""
+    return ProcessPoolExecutor(max_workers, initializer=end_with_parent, initargs=(os.getpid(),))
+
+
+def max_jobs():
+    """The processors this process may use (its CPU affinity; ``os.cpu_count()`` elsewhere)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:                  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def check_jobs(jobs, name="n_jobs", *, negative=False):
+    """``jobs`` worker processes as an int from 1 to :func:`max_jobs`, or a ParameterError.
+
+    ``negative=True`` also allows joblib's ``-1`` (every processor) down to ``-max_jobs()``.
+    More workers than processors only add start-up time (measured: ``fohw select --jobs 1000``
+    took 56.6 s for two candidates, 0.5 s with ``--jobs 1``).
+    """
+    limit = max_jobs()
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral):
+        raise ParameterError(f"`{name}` must be an integer; got {jobs!r}.")
+    jobs = int(jobs)
+    if negative and -limit <= jobs <= -1:
+        return jobs
+    if not 1 <= jobs <= limit:
+        also = f" (or -1 to -{limit}, counted from the processors)" if negative else ""
+        raise ParameterError(f"`{name}` must be from 1 to {limit}, the processors this process may "
+                             f"use{also}; got {jobs}. More worker processes than processors only "
+                             "add start-up time.")
+    return jobs
 
 #: A task lost with its broken process pool, before its rerun.
 _LOST = object()
@@ -386,7 +488,7 @@ def _run_isolated(fn, tasks, indices, out, bar):
         while queue or running:
             while queue and len(running) < workers:
                 i = queue.pop(0)
-                pool = ProcessPoolExecutor(1)
+                pool = process_pool(1)
                 try:
                     running[pool.submit(fn, *tasks[i])] = (i, pool)
                 except Exception as exc:       # noqa: BLE001 - reported as the task's error

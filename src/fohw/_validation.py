@@ -6,6 +6,7 @@ Errors name the argument and echo what arrived; nothing is silently fixed.
 from __future__ import annotations
 
 import numbers
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -107,6 +108,20 @@ def check_array(x, name: str, *, ndim: int | None = 1, min_length: int = 1) -> n
     return arr
 
 
+def unpack_pair(value, name: str, form: str):
+    """``value`` unpacked as a pair; a dict (read by its keys) or anything else is refused."""
+    if isinstance(value, Mapping):
+        raise ParameterError(f"`{name}` must be the pair {form}; got a {type(value).__name__} with the "
+                             f"keys {list(value)!r} (a pair is read by position, and a dict read so "
+                             f"gives its keys, not its values). Pass {form}, e.g. "
+                             f"({', '.join(f'd[{k!r}]' for k in value)}).")
+    try:
+        first, second = value
+    except (TypeError, ValueError):
+        raise ParameterError(f"`{name}` must be the pair {form}; got {type(value).__name__}.") from None
+    return first, second
+
+
 def check_same_length(x: np.ndarray, y: np.ndarray, xname: str, yname: str) -> None:
     """Raise if two signals differ in length (samples along the first axis)."""
     if x.shape[0] != y.shape[0]:
@@ -114,8 +129,19 @@ def check_same_length(x: np.ndarray, y: np.ndarray, xname: str, yname: str) -> N
                              f"{x.shape[0]} and {y.shape[0]}.")
 
 
-def check_inputs(u, n_inputs: int, name: str = "u") -> np.ndarray:
-    """The input record: 1-D for one input (as :func:`check_array`), ``(N, m)`` for ``m > 1``."""
+def check_inputs(u, n_inputs: int, name: str = "u", names=()) -> np.ndarray:
+    """The input record: 1-D for one input (as :func:`check_array`), ``(N, m)`` for ``m > 1``.
+
+    ``names``: the model's input names (``Structure.inputs``). A pandas DataFrame's columns are
+    then matched by those names, whatever their order; a frame whose columns are other names is
+    refused, unless the model's names are the defaults ``u1, u2, …`` (it was fitted to an array
+    without names: the columns are taken in order).
+    """
+    if n_inputs > 1 and names:
+        u = _columns_by_name(u, tuple(names), name)
+    if np.ndim(u) == 2 and np.shape(u)[1] == 0:
+        raise DimensionError(f"`{name}` has no columns (shape ({_shape_text(np.asarray(u))})): give "
+                             "one column per input.")
     if n_inputs == 1:
         if np.ndim(u) == 2 and np.shape(u)[1] == 1:            # one column: the one input
             return check_array(np.asarray(u)[:, 0], name)
@@ -125,6 +151,23 @@ def check_inputs(u, n_inputs: int, name: str = "u") -> np.ndarray:
         raise DimensionError(f"`{name}` must have {n_inputs} columns (one per input); got shape "
                              f"({_shape_text(arr)}).")
     return arr
+
+
+def _columns_by_name(u, names, name):
+    """``u``'s columns in the order of ``names`` when ``u`` is a DataFrame; ``u`` otherwise."""
+    if not type(u).__module__.startswith("pandas") or np.ndim(u) != 2:
+        return u
+    columns = [str(c) for c in u.columns]
+    if columns == list(names):
+        return u
+    if sorted(columns) == sorted(names) and len(set(columns)) == len(columns):
+        return np.asarray(u)[:, [columns.index(n) for n in names]]
+    if names == tuple(f"u{i}" for i in range(1, len(names) + 1)):
+        return u                            # the model knows no names: the columns in order
+    raise DimensionError(f"`{name}` is a DataFrame with the columns {columns}, but the model's inputs "
+                         f"are {list(names)} (the names kept from its fit); fohw matches columns by "
+                         f"name. Select and rename them (e.g. {name}[{list(names)}]), or pass an "
+                         "array whose columns are in the model's order.")
 
 
 def check_alpha(alpha, name: str = "alpha", *, lower: float = 0.0, upper: float = 2.0,
@@ -201,6 +244,8 @@ def input_in_range(u, u_range, tolerance=RANGE_TOLERANCE) -> bool:
 
 def check_pair(value, name):
     """``value`` as a pair of finite floats (``past``, ``operating_point``), or a ParameterError."""
+    if isinstance(value, Mapping):
+        unpack_pair(value, name, "of numbers (a, b)")
     try:
         a, b = value
     except (TypeError, ValueError):

@@ -6,16 +6,19 @@
   from a comma-, semicolon- or whitespace-separated file (the sampling time a ``Ts`` column
   gives is the default ``--dt``); prints a summary and the free-run fit on the record (or,
   with ``--json``, both as JSON).
-* ``fohw select DATA [--columns U,Y] --na 1,2 [--nb ...] [--nk 0,1] --f-basis 1,2 --g-basis 1
+* ``fohw select DATA [--columns U,Y or U1,U2,Y] --na 1,2 [--nb ...] [--nk 0,1] --f-basis 1,2 --g-basis 1
   [--orders 0,commensurate,mixed] [--method output_error] [--validation 0.25] [--offset]
   [--output-map none,saturation] [--operating-point mean] [--dt 4] [--jobs 2] [--csv F]
   [--plot F] [--save F]`` — choose a structure by free-run simulation on a held-back part
-  (:func:`fohw.select_structure`).
+  (:func:`fohw.select_structure`); ``--jobs`` at most the processors, and the workers end
+  when ``fohw`` does.
 * ``fohw simulate --model MODEL.json --input DATA [--column 0] [--noise-std S --seed N]
   [--initial rest|fitted] [--output FILE]`` — simulate a saved model (``fohw.save_model``), or
   the result of ``fohw identify --save`` (``result.simulate``: the fitted predictor), for an
   input, from the initial state ``--initial`` (needed for a result fitted with
-  ``past="estimate"``); a model or fit of any other kind (``fohw.save_model``,
+  ``past="estimate"``). A result with several inputs (``identify --columns u1,u2,y``) takes one
+  ``--column`` per input (``--column u1,u2``, matched by the names it keeps; by default the
+  columns of those names); a model or fit of any other kind (``fohw.save_model``,
   ``fohw.save_result``) is simulated by its own ``simulate``, with one ``--column`` per input.
 * ``fohw compare --model MODEL.json --data DATA [--columns U,Y] [--initial rest|fitted|estimate]
   [--n-init N] [--json] [--plot FILE]`` — score a saved model or result on a record, as
@@ -143,14 +146,17 @@ def _data_path(path):
     return path
 
 
-def _pick_columns(data, names, spec, count, path, flag="--columns"):
+def _pick_columns(data, names, spec, count, path, flag="--columns", what="input and output"):
     """Column indices from ``--columns`` ("0,1" or header names), ``count`` of them."""
     if data.shape[1] < count:
+        needs = ("the input and the output" if count == 2 and what == "input and output" else
+                 "the inputs and the output" if what == "input and output" else
+                 "one per input" if count > 1 else "the input")
         raise UsageError(f"{path} has {data.shape[1]} signal column(s); this command needs "
-                         f"{count} (the input and the output).")
+                         f"{count} ({needs}).")
     if spec is None:
         lower = [n.lower() for n in names] if names else []
-        if count == 2 and "u" in lower and "y" in lower:
+        if count == 2 and what == "input and output" and "u" in lower and "y" in lower:
             idx = [lower.index("u"), lower.index("y")]
         elif data.shape[1] == count:
             idx = list(range(count))
@@ -484,9 +490,11 @@ def _add_simulate_parser(sub):
                      "simulated, as result.simulate does) or fohw.save_result; a model of any "
                      "kind")
     sim.add_argument("--input", required=True, help="data file with the input column(s)")
-    sim.add_argument("--column", default="0", help="input column number or name (default 0); "
-                     "a model with several inputs takes one per input, e.g. --column i,soc "
-                     "for a circuit")
+    sim.add_argument("--column", default=None,
+                     help="input column number or name (default 0); a result or model with "
+                     "several inputs takes one per input, e.g. 'u1,u2', or 'i,soc' for a circuit "
+                     "(default: the columns named as its inputs, or the file's columns if it "
+                     "has one per input)")
     sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
     sim.add_argument("--noise-std", type=float, default=0.0,
                      help="white Gaussian noise: in the equation for the lagged kind, on the "
@@ -567,10 +575,8 @@ def _decimal(args):
     return "," if args.decimal_comma else "."
 
 
-def _identify(args):
-    _check_file_out(args.save, "--save", [args.data])
-    _check_plot_out(args.plot, "--plot", [args.data])
-    data, names, file_dt = read_table(args.data, _decimal(args))
+def _input_output(args, data, names):
+    """``(u, y)`` from ``--columns`` (several inputs, then the output); ``args.inputs`` names them."""
     count = max(2, len(args.columns.split(","))) if args.columns else 2
     *inputs, y = _pick_columns(data, names, args.columns, count, args.data)
     u, args.inputs = inputs[0], None
@@ -581,6 +587,14 @@ def _identify(args):
         given = [p.strip() for p in args.columns.split(",")][:-1]
         if names is not None and all(p in names for p in given):
             args.inputs = tuple(given)
+    return u, y
+
+
+def _identify(args):
+    _check_file_out(args.save, "--save", [args.data])
+    _check_plot_out(args.plot, "--plot", [args.data])
+    data, names, file_dt = read_table(args.data, _decimal(args))
+    u, y = _input_output(args, data, names)
     options = _method_options(args)
     res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
     _print_warnings(caught)
@@ -622,7 +636,7 @@ def _fit_and_check(args, u, y, options, dt):
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
-        if res.model is not None:
+        if res.model is not None or res.structure.n_inputs > 1:      # several: result.simulate
             try:
                 check = compare(res, u, y, initial="fitted")      # its own estimation record
             except FohwError as exc:        # e.g. a constant output: no fit index
@@ -707,7 +721,7 @@ def _fit_text(check):
 def _select(args):
     _check_select_args(args)
     data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    u, y = _input_output(args, data, names)
     candidates = _candidates(args)
     sel, caught = _run_selection(args, u, y, candidates, _dt(args.dt, file_dt))
     from .exceptions import NothingSelectedWarning
@@ -737,8 +751,11 @@ def _select(args):
 
 def _check_select_args(args):
     """``--jobs``, ``--top`` and the output files, before the run."""
-    if args.jobs < 1:
-        raise UsageError(f"--jobs must be >= 1; got {args.jobs}.")
+    from ._parallel import max_jobs
+
+    if not 1 <= args.jobs <= max_jobs():
+        raise UsageError(f"--jobs must be from 1 to {max_jobs()}, the processors this process may "
+                         f"use (more worker processes only add start-up time); got {args.jobs}.")
     if args.top < 1:
         raise UsageError(f"--top must be >= 1; got {args.top}.")
     _check_file_out(args.save, "--save", [args.data])
@@ -768,14 +785,15 @@ def _run_selection(args, u, y, candidates, dt):
     """Fit the candidates (in ``--jobs`` processes): ``(selection, caught warnings)``."""
     import time
     import warnings
-    from concurrent.futures import ProcessPoolExecutor
 
+    from ._parallel import process_pool
     from .analysis.selection import select_structure
 
     start = time.perf_counter()
     _stage(args, f"fitting {len(candidates)} candidate{'s' * (len(candidates) != 1)} "
            f"({args.method}) on {u.shape[0]} samples ...")
-    pool = ProcessPoolExecutor(args.jobs) if args.jobs > 1 else None
+    workers = min(args.jobs, len(candidates))
+    pool = process_pool(workers) if workers > 1 else None
     try:
         with warnings.catch_warnings(record=True) as caught:
             for category in _fohw_warnings():
@@ -783,7 +801,8 @@ def _run_selection(args, u, y, candidates, dt):
             sel = select_structure(u, y, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
                                    operating_point=args.operating_point, dt=dt,
-                                   executor=pool, progress=_bars(args))
+                                   executor=pool, progress=_bars(args),
+                                   **({"inputs": args.inputs} if args.inputs else {}))
     finally:
         if pool is not None:
             pool.shutdown()
@@ -820,6 +839,41 @@ def _load_model_or_result(path):
     return "model", model_from_dict(d, path=os.fspath(path))
 
 
+def _model_input(args, loaded, data, names):
+    """The input columns of ``--column`` for the loaded model: one, or one per input.
+
+    A result with several inputs takes as many columns, matched by the names it keeps when
+    they are header names of the file (``--column`` may list them in any order); by default the
+    columns of those names, else the file's columns in order when it has exactly that many.
+    """
+    import numpy as np
+
+    from .model.simulation import generic_model
+
+    other = generic_model(loaded)
+    if other is not None:                   # a model (or fit) of another kind: its input columns
+        inputs, n = (), other.n_inputs
+    else:
+        inputs = loaded.structure.inputs if hasattr(loaded, "structure") else ()
+        n = max(1, len(inputs))
+    spec = args.column
+    if spec is None:
+        spec = "0" if n == 1 else (",".join(inputs) if names and all(i in names for i in inputs)
+                                   else None)
+    given = [p.strip() for p in spec.split(",")] if spec is not None else None
+    if given is not None and len(given) != n and n > 1:
+        raise UsageError(f"--column gives {len(given)} column(s), but {args.model} has {n} inputs "
+                         f"({', '.join(inputs)}): give one column per input, e.g. --column "
+                         f"{','.join(inputs)}.")
+    if given is not None and len(given) != n:
+        raise UsageError(f"--column gives {len(given)} column(s), but {args.model} has {n} "
+                         f"input(s): give {'one column' if n == 1 else 'one column per input'}.")
+    if given is not None and n > 1 and sorted(given) == sorted(inputs):
+        spec = ",".join(inputs)         # by the result's names, whatever the order given
+    columns = _pick_columns(data, names, spec, n, args.input, flag="--column", what="input")
+    return columns[0] if n == 1 else np.column_stack(columns)
+
+
 def _simulate(args):
     import time
     import warnings
@@ -833,16 +887,10 @@ def _simulate(args):
     kind, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.input, _decimal(args))
     other = generic_model(loaded)
-    if other is not None:                     # a model (or fit) of any kind but the lagged one
-        if args.initial is not None:
-            raise UsageError(f"--initial is for the lagged HammersteinWiener kind; "
-                             f"{args.model} holds a {type(other).__name__}, simulated from "
-                             "its own initial state.")
-        columns = _pick_columns(data, names, args.column, other.n_inputs, args.input,
-                                flag="--column")
-        u = columns[0] if len(columns) == 1 else np.column_stack(columns)
-    else:
-        (u,) = _pick_columns(data, names, args.column, 1, args.input, flag="--column")
+    if other is not None and args.initial is not None:   # a model (or fit) of another kind
+        raise UsageError(f"--initial is for the lagged HammersteinWiener kind; {args.model} "
+                         f"holds a {type(other).__name__}, simulated from its own initial state.")
+    u = _model_input(args, loaded, data, names)
     if other is None and kind == "result" and args.initial is None \
             and loaded.structure.past == "estimate":
         raise UsageError(f"{args.model} was fitted with past='estimate': its levels (u_past, "

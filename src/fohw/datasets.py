@@ -14,6 +14,7 @@ import numpy as np
 
 from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
+from .io.files import check_input_file
 from .io.text import parse_number
 from .model.simulation import simulate
 from .model.system import HammersteinWiener
@@ -171,9 +172,7 @@ def _parse_daisy(path, *, n_columns=None):
     Stricter than :func:`fohw.io.text.read_table` (the loader of general CSV and text
     records): no header, no empty fields, every line the same number of columns.
     """
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"data file not found: {path!r}")
+    path = check_input_file(path, "a data file")
     rows = []
     with open(path, "rb") as fh:
         for lineno, raw in enumerate(fh, start=1):
@@ -261,19 +260,43 @@ def shipped_file(name):
 
 
 
-def _sha256(path):
+#: The checksum reads at most this many bytes (the largest shipped file has 0.9 MB): a file
+#: that is longer, or never ends, is not the published one.
+MAX_DATA_BYTES = 64 * 2**20
+
+
+def _sha256(path, advice):
+    """sha256 of a regular file of at most MAX_DATA_BYTES; ``advice`` ends each error."""
     import hashlib
 
+    try:
+        check_input_file(path, "a data file")
+    except DataFileError as err:
+        raise DataFileError(f"{err} {advice}") from None
+    digest, size = hashlib.sha256(), 0
     with open(path, "rb") as fh:
-        return hashlib.sha256(fh.read()).hexdigest()
+        while chunk := fh.read(1 << 20):
+            size += len(chunk)
+            if size > MAX_DATA_BYTES:
+                raise DataFileError(f"{path}: longer than {MAX_DATA_BYTES} bytes (read so far), so "
+                                    f"not the published file (a file that never ends?). {advice}")
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _data_folder():
+    from importlib import resources
+
+    return resources.files("fohw") / "data"
 
 
 def _packaged(filename, sha256):
     """Path of a data file shipped in ``fohw/data``, its checksum verified."""
-    from importlib import resources
-
-    path = str(resources.files("fohw") / "data" / filename)
-    digest = _sha256(path)
+    path = str(_data_folder() / filename)
+    advice = "The installed fohw is damaged; reinstall it."
+    if not os.path.lexists(path):
+        raise DataFileError(f"{path}: the data file shipped with fohw is missing. {advice}")
+    digest = _sha256(path, advice)
     if digest != sha256:
         raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}: "
                             "the installed fohw is damaged; reinstall it.")
@@ -285,10 +308,13 @@ def _given(path, filename, sha256, what, verify):
     path = os.fspath(path)
     if os.path.isdir(path):
         path = os.path.join(path, filename)
-    if not os.path.isfile(path):
+    if not os.path.exists(path):
         raise FileNotFoundError(f"{what} not found at {path!r}; call the loader without a path "
                                 "to use the copy shipped with fohw.")
-    if verify and (digest := _sha256(path)) != sha256:
+    advice = "Call the loader without a path to use the copy shipped with fohw."
+    if not verify:
+        check_input_file(path, what)
+    elif (digest := _sha256(path, advice)) != sha256:
         raise DataFileError(f"{path}: sha256 {digest} does not match the published {sha256}; "
                             "the file is corrupted or another file. Call the loader without a "
                             "path to use the copy shipped with fohw, or pass verify=False.")

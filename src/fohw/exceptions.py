@@ -45,28 +45,48 @@ class SimulationDivergedError(FohwError, ArithmeticError):
         The offending output value (may be ``inf`` or ``nan``).
     threshold : float
         The bound on ``|y[k]|`` that was exceeded.
-    cause : {"growth", "output_basis"}
+    cause : {"growth", "output_basis", "transfer_function"}
         ``"growth"``: the model is unstable for this input (the output grew past the bound).
+        ``"transfer_function"``: the same for a :class:`fohw.FractionalTF` (its own advice).
         ``"output_basis"``: the output basis ``g`` returned NaN or inf at a finite ``y[k]`` (a
         function used outside its domain, such as ``sqrt`` of a negative output). An input
         basis that does so is caught before the simulation starts (a ``ParameterError``).
+    overflow : bool, optional
+        With ``"output_basis"``: the basis values overflowed (``y[k]**3`` past the largest
+        double) rather than left a function's domain; the message says so.
     """
 
-    CAUSES = ("growth", "output_basis")
+    CAUSES = ("growth", "output_basis", "transfer_function")
 
-    def __init__(self, sample: int, value: float, threshold: float, cause: str = "growth"):
+    def __init__(self, sample: int, value: float, threshold: float, cause: str = "growth",
+                 overflow: bool = False):
         self.sample = int(sample)
         self.value = float(value)
         self.threshold = float(threshold)
         if cause not in self.CAUSES:            # a programming error inside fohw: say so
             raise ValueError(f"`cause` must be one of {self.CAUSES}; got {cause!r}.")
         self.cause = cause
+        self.overflow = bool(overflow) and cause == "output_basis"
         k = self.sample
-        if self.cause == "output_basis":
+        if self.overflow:
+            text = (f"the output basis g overflowed at sample k = {k}: y[k] = {self.value!r} is so "
+                    "large that g(y[k]) (a power of it, or its sum with the coefficients) passes "
+                    "the largest double, 1.8e308. The output is out of scale: the model is "
+                    "unstable for this input, or its parameters (a result file edited by hand?) "
+                    "or the data are in extreme units; rescale, fohw's estimates rescale with "
+                    "the data.")
+        elif self.cause == "output_basis":
             text = (f"the output basis g returned a non-finite value at sample k = {k} "
                     f"(y[k] = {self.value!r}): a basis function is not defined there (e.g. "
                     "sqrt or log of a negative value). Check the output's range (an operating "
                     "point shifts it), or use basis functions defined on the whole line.")
+        elif self.cause == "transfer_function":
+            text = (f"the simulated output diverged at sample k = {k}: y[k] = {self.value!r} "
+                    f"(|y| must stay finite and at most {self.threshold:g}, by default 1e8 times "
+                    "the output scale of a bounded response). The transfer function "
+                    "is unstable for this input (see G.is_stable()), or grows without bound (an "
+                    "integrator on a long record); pass divergence_threshold=np.inf to get the "
+                    "growing output anyway.")
         else:
             text = (f"the simulated output diverged at sample k = {k}: y[k] = {self.value!r} "
                     f"(|y| must stay finite and at most {self.threshold:g}). The model is "
@@ -77,7 +97,7 @@ class SimulationDivergedError(FohwError, ArithmeticError):
         super().__init__(text)
 
     def __reduce__(self):               # picklable across process and dask executors
-        return (type(self), (self.sample, self.value, self.threshold, self.cause))
+        return (type(self), (self.sample, self.value, self.threshold, self.cause, self.overflow))
 
 
 class DataFileError(FohwError, ValueError):

@@ -628,7 +628,7 @@ class IdentificationResult(ResultPresentation):
         where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
         u0, y0 = self.operating_point
-        u = check_inputs(u, self.structure.n_inputs)
+        u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
         y = check_array(y, "y")
         builder = RegressorBuilder(u - np.asarray(u0) if np.any(u0) else u,
                                    y - y0 if y0 else y, structure=self.structure)
@@ -639,7 +639,7 @@ class IdentificationResult(ResultPresentation):
             yhat = hmap.evaluate(yhat, list(self.output_map_params.values()))
         return yhat
 
-    def simulate(self, u, *, initial=None, y=None, history=None, **kwargs):
+    def simulate(self, u, *, initial=None, y=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.
 
         Uses ``theta`` itself (and the offset and orders), i.e. exactly the model that was
@@ -659,15 +659,10 @@ class IdentificationResult(ResultPresentation):
             levels, and ``n`` free past outputs, of *this* record fitted to its output ``y``);
             a measured history ``(u_hist, y_hist)`` just before ``u``; or an
             :class:`fohw.InitialState` (e.g. ``fohw.compare(...).initial``). A fit with
-            ``past="estimate"`` has no default: without ``initial`` (or ``history``) it raises
-            a ParameterError that lists the choices.
+            ``past="estimate"`` has no default: without ``initial`` it raises a ParameterError
+            that lists the choices.
         y : array_like, optional
             The measured output of the record, for ``initial="estimate"`` only.
-        history : (u_past, y_past), optional
-            The older spelling of ``initial=(u_past, y_past)``: measured data just before
-            ``u`` (e.g. the estimation record, to simulate the validation record that follows
-            it); the GL memory starts from them, after the fit's own levels if it has any.
-            Not together with ``initial``.
         **kwargs
             ``noise``, ``noise_std``, ``random_state``, ``divergence_threshold``
             (:func:`fohw.simulate`).
@@ -678,7 +673,7 @@ class IdentificationResult(ResultPresentation):
             The identified model is unstable on this input.
         ParameterError
             No ``initial`` for a ``past="estimate"`` fit; a bad ``initial``; ``y`` without
-            ``initial="estimate"`` or the reverse; both ``initial`` and ``history``.
+            ``initial="estimate"`` or the reverse.
 
         Warns
         -----
@@ -686,8 +681,8 @@ class IdentificationResult(ResultPresentation):
             ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
-        u = check_inputs(u, self.structure.n_inputs)
-        state = self.initial_state(u, y, initial, history=history)
+        u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
+        state = self.initial_state(u, y, initial)
         if self.input_range is not None:
             u_arr = u
             if u_arr.ndim == 2 and not input_in_range(u_arr, self.input_range):
@@ -706,19 +701,13 @@ class IdentificationResult(ResultPresentation):
                     "there, so check the simulation before trusting it."), stacklevel=2)
         return simulate_from(self, u, state, **kwargs)
 
-    def initial_state(self, u, y=None, initial=None, *, history=None):
+    def initial_state(self, u, y=None, initial=None):
         """The state a free run on the record ``(u, y)`` starts from: :func:`fohw.initial_state`.
 
         ``initial`` as for :meth:`simulate`; ``y`` only for ``"estimate"``, whose fitted levels
         (and window) the returned :class:`fohw.InitialState` holds.
         """
-        return initial_state(self, u, y, initial, history=history)
-
-    def validate(self, u, y, **kwargs):
-        """Free-run simulation and one-step prediction on a record: :func:`fohw.compare`."""
-        from .analysis.validation import compare
-
-        return compare(self, u, y, **kwargs)
+        return initial_state(self, u, y, initial)
 
     def order_test(self):
         """The likelihood-ratio test of the free orders against orders 0, without refitting.

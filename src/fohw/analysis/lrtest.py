@@ -259,6 +259,14 @@ def _check_nested(restricted, full):
         raise ParameterError(f"`restricted` ({rs.describe()}; bases {rs.f_basis!r}, "
                              f"{rs.g_basis!r}) and `full` ({fs.describe()}; bases {fs.f_basis!r}, "
                              f"{fs.g_basis!r}) differ beyond their orders.")
+    if rs.output_map != fs.output_map:
+        def text(m):
+            return "none" if m is None else m.describe()
+        raise ParameterError(f"`restricted` (output map {text(rs.output_map)}) and `full` (output map "
+                             f"{text(fs.output_map)}) differ beyond their orders: the map's "
+                             "parameters would enter the test beside the orders, and its reference "
+                             "distribution counts the orders only. Fit both with the same "
+                             "`output_map`.")
     for what in ("n_samples", "operating_point", "input_range"):
         a, b = getattr(restricted, what), getattr(full, what)
         if a != b:

@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-from .._parallel import TaskError, progress_bar, run_tasks
+from .._parallel import TaskError, check_jobs, progress_bar, run_tasks
 from .._threads import thin_solves
 from ..datasets import paper_example
 from ..estimators.fit import fit
@@ -115,8 +115,9 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
         ``make_data(seed, **setting)`` returns a :class:`fohw.datasets.SimulatedData`. Default:
         the paper's example, ``paper_example(n_samples=10000, random_state=seed, ...)``.
     n_jobs : int, optional
-        Parallel workers through joblib (``-1``: all cores). 1 (default) runs serially. If
-        joblib is not installed the run is serial, with a ``RuntimeWarning``.
+        Parallel workers through joblib (``-1``: all cores), at most the processors this
+        process may use (more are refused). 1 (default) runs serially. If joblib is not
+        installed the run is serial, with a ``RuntimeWarning``.
     progress : bool, optional
         A progress bar on stderr (tqdm, a notebook widget, if installed; plain lines
         otherwise): True from the start, False never; default (None) once the work has run
@@ -152,6 +153,8 @@ def monte_carlo(methods, *, seeds=range(20), settings=({},), make_data=None, n_j
     if executor is not None and n_jobs != 1:
         raise ParameterError("give `executor` or `n_jobs`, not both; got n_jobs="
                              f"{n_jobs!r} with an executor.")
+    if n_jobs != 1:
+        check_jobs(n_jobs, "n_jobs", negative=True)
     joblib = None
     if executor is None and n_jobs != 1:
         try:

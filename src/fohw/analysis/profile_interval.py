@@ -75,7 +75,7 @@ def check_data(result, u, y, name):
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
-    u = check_inputs(u, result.structure.n_inputs)
+    u = check_inputs(u, result.structure.n_inputs, names=result.structure.inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if u.shape[0] != result.n_samples:

@@ -204,7 +204,7 @@ def free_run_check(res, u, reference, envelope, *, initial="fitted"):
     try:
         ysim = res.simulate(u, initial=initial)
     except SimulationDivergedError as exc:
-        return None, "diverged" if exc.cause == "growth" else "nan", str(exc)
+        return None, "nan" if exc.cause == "output_basis" else "diverged", str(exc)
     found = implausible_sample(ysim, reference, envelope)
     if found is not None:
         return None, "implausible", implausible_message(found, envelope)
@@ -503,19 +503,20 @@ def _cell(v):
     return str(v).replace("|", "/")
 
 
-def split_validation(u, y, validation):
+def split_validation(u, y, validation, names=()):
     """``(u_est, y_est, u_sim, y_score, score_from, description)`` of ``validation``.
 
     A fraction or a number of samples held back at the end (``score_from`` is where they
     start), or a separate record ``(u_val, y_val)`` (``score_from`` 0); checked, with a
-    :class:`fohw.ParameterError` naming ``validation``.
+    :class:`fohw.ParameterError` naming ``validation``; a separate record's DataFrame columns
+    are matched by the input ``names``.
     """
     n = len(y)
     if isinstance(validation, Record):
         validation = (validation.u, validation.y)
     if isinstance(validation, tuple) and len(validation) == 2:
         uv = check_inputs(validation[0], 1 if np.ndim(u) == 1 else np.shape(u)[1],
-                          "validation input")
+                          "validation input", names=names or ())
         yv = check_array(validation[1], "validation output")
         check_same_length(uv, yv, "validation input", "validation output")
         if len(yv) < 2:
@@ -719,7 +720,8 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     own = expand_candidates(candidates)
     cands = check_candidates(own, common)
     factor = check_envelope(envelope)
-    u_est, y_est, u_sim, y_score, score_from, described = split_validation(u, y, validation)
+    u_est, y_est, u_sim, y_score, score_from, described = split_validation(
+        u, y, validation, common.get("inputs") or names or ())
     if score == "fit" and np.ptp(y_score) == 0:
         raise ParameterError(f"the held-back output ({described}) is constant ({float(y_score[0])!r}): "
                              "no candidate can be ranked by its fit %. Hold back a part where "

@@ -1,6 +1,6 @@
 """Validation of an identified model on a record, the way MATLAB's ``compare`` does it.
 
-:func:`compare` (also ``result.validate(u, y)``) simulates the model in free run from the input
+:func:`compare` simulates the model in free run from the input
 alone and predicts one step ahead from the measured data, and reports for both the fit % and
 the RMSE in the data's units, plus the residual tests of the one-step errors. A model can
 predict one step very well and still simulate badly or diverge; the free run is the measure
@@ -331,8 +331,7 @@ def _measure(what, fn, notes, *args, **kwargs):
 
 
 def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
-            initial: Any = None, history: tuple[ArrayLike, ArrayLike] | None = None,
-            n_init: int = 0,
+            initial: Any = None, n_init: int = 0,
             max_lag: int = 25, confidence: float = 0.99,
             envelope: float = ENVELOPE) -> Validation:
     """Validate an identified model on a record: free run and one-step prediction.
@@ -362,9 +361,6 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         parameters: compare models with the same choice); a measured history
         ``(u_past, y_past)``; or an :class:`fohw.InitialState`. A ``past="estimate"`` result
         has no default: a ParameterError lists the choices.
-    history : (u_past, y_past), optional
-        The older spelling of ``initial=(u_past, y_past)``: measured data just before the
-        record (the free run continues from them). Not with ``initial``; lagged kind only.
     n_init : int
         Leading samples left out of every measure (a start-up transient).
     max_lag, confidence :
@@ -374,7 +370,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         skipped with a note in ``notes``; the fit % and RMSE are still given.
     envelope : float or None
         Plausibility factor (default :data:`ENVELOPE`, 10): a free run that goes more than
-        ``envelope`` times the range of the measured ``y`` (and of ``history``'s output)
+        ``envelope`` times the range of the measured ``y`` (and of a measured history's output)
         outside that range is ``"implausible"`` (:func:`implausible_sample`) and not scored.
         None switches the test off.
 
@@ -388,8 +384,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     ------
     ParameterError
         ``model`` is neither a result nor a model, or a bad ``n_init`` or
-        ``envelope``; no ``initial`` for a ``past="estimate"`` result, a bad ``initial``, or
-        both ``initial`` and ``history``.
+        ``envelope``; no ``initial`` for a ``past="estimate"`` result, or a bad ``initial``.
     DimensionError
         ``u`` and ``y`` differ in length, or the record has fewer than 2 samples (or no more
         than the ``2 + n`` unknowns of ``initial="estimate"``).
@@ -399,30 +394,30 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     >>> import fohw
     >>> data = fohw.datasets.paper_example(1200, random_state=0)
     >>> res = fohw.identify(data.u[:800], data.y[:800], na=2, nb=2, f_basis=2, g_basis=3)
-    >>> v = res.validate(data.u[800:], data.y[800:])
+    >>> v = fohw.compare(res, data.u[800:], data.y[800:])
     >>> v.fit_prediction > v.fit_simulation, v.diverged, v.status
     (True, '', 'ok')
     """
     other = generic_model(model)
     if other is not None:
-        out = _compare_model(other, u, y, initial=initial, history=history, n_init=n_init,
+        out = _compare_model(other, u, y, initial=initial, n_init=n_init,
                              max_lag=max_lag, confidence=confidence, envelope=envelope)
         out.dt = _sampling_time(other)
         return out
-    out = _compare_lagged(model, u, y, initial=initial, history=history, n_init=n_init,
+    out = _compare_lagged(model, u, y, initial=initial, n_init=n_init,
                           max_lag=max_lag, confidence=confidence, envelope=envelope)
     out.dt = _sampling_time(model)
     return out
 
 
-def _compare_lagged(model, u, y, *, initial, history, n_init, max_lag, confidence, envelope):
+def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelope):
     """:func:`compare` of a result or a :class:`fohw.HammersteinWiener` (the lagged kind)."""
     is_model = isinstance(model, HammersteinWiener)
     if not is_model and not all(callable(getattr(model, name, None))
                                 for name in ("simulate", "predict")):
         raise ParameterError("`model` must be an identification result (fohw.identify) or a "
                              f"fohw.HammersteinWiener; got {type(model).__name__}.")
-    u = check_inputs(u, model.structure.n_inputs)
+    u = check_inputs(u, model.structure.n_inputs, names=model.structure.inputs)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
     if y.size < 2:
@@ -430,8 +425,7 @@ def _compare_lagged(model, u, y, *, initial, history, n_init, max_lag, confidenc
                              "least 2 (a fit % compares the output with its mean).")
     n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
     factor = check_envelope(envelope)
-    state = initial_state(model, u, y if _is_estimate(initial) else None, initial,
-                          history=history)
+    state = initial_state(model, u, y if _is_estimate(initial) else None, initial)
     ysim, status, diverged, caught = _free_run(model, u, state)
     in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
     for w in caught:
@@ -448,17 +442,13 @@ def _compare_lagged(model, u, y, *, initial, history, n_init, max_lag, confidenc
                    n_init=n_init, max_lag=max_lag, confidence=confidence)
 
 
-def _compare_model(model, u, y, *, initial, history, n_init, max_lag, confidence, envelope):
+def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelope):
     """:func:`compare` of a model of any kind but the lagged one (an output-error model).
 
     Its one-step prediction is its free run (the noise is on the output), so the free run is
     scored and the residual tests are of its errors; ``initial`` goes to ``model.simulate``.
     """
     kind = type(model).__name__
-    if history is not None:
-        raise ParameterError(f"`history` is for the lagged HammersteinWiener kind; a {kind} "
-                             "takes its initial state through `initial` (passed to its "
-                             "simulate).")
     if _is_estimate(initial):
         raise ParameterError(f"initial={initial!r} (the record's initial state fitted to its "
                              f"output) is for the lagged HammersteinWiener kind; a {kind} "

@@ -24,6 +24,7 @@ from .._validation import (
     check_int,
     check_same_length,
     check_scalar,
+    unpack_pair,
 )
 from ..exceptions import DataWarning, DimensionError, ParameterError
 from ..model.regressors import RegressorBuilder
@@ -121,6 +122,9 @@ def split_inputs(u, name="u", names=None):
     single column, ``(N, 1)``, is the single-input model of a 1-D ``u``.
     """
     columns = getattr(u, "columns", None) if type(u).__module__.startswith("pandas") else None
+    if np.ndim(u) == 2 and np.shape(u)[1] == 0:
+        raise DimensionError(f"`{name}` has no columns (shape ({np.shape(u)[0]}x0)): give one column per "
+                             "input.")
     if np.ndim(u) == 2 and np.shape(u)[1] > 1:
         arr = check_inputs(u, np.shape(u)[1], name)
         if names is None:
@@ -212,6 +216,8 @@ def _operating_point(spec, u, y):
             return (float(np.mean(u)), float(np.mean(y)))
         raise ParameterError(f"`operating_point` must be None, one of {OPERATING_POINTS} or a "
                              f"pair (u0, y0); got {spec!r}.")
+    if isinstance(spec, Mapping):
+        unpack_pair(spec, "operating_point", "(u0, y0)")
     try:
         u0, y0 = spec
     except (TypeError, ValueError):

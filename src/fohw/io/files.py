@@ -17,8 +17,8 @@ import numpy as np
 
 from ..exceptions import DataFileError, ParameterError
 
-__all__ = ["check_output_path", "read_json", "write_json", "write_text", "atomic_writer",
-           "save_figure", "first_non_finite"]
+__all__ = ["check_output_path", "check_input_file", "read_json", "write_json", "write_text",
+           "atomic_writer", "save_figure", "first_non_finite"]
 
 
 def check_output_path(path, what="the output") -> str:
@@ -69,6 +69,37 @@ def _file_kind(mode):
     return "a special file"
 
 
+def check_input_file(path, what="a data file") -> str:
+    """``path`` as a string if it is a regular file (symbolic links followed), else a clear error.
+
+    A directory, a FIFO, a device (``/dev/zero`` behind a symbolic link: a read that never ends)
+    or a socket is refused before it is opened; a missing file is a ``FileNotFoundError``.
+
+    Raises
+    ------
+    FileNotFoundError
+        Nothing exists at ``path`` (a dangling symbolic link included).
+    DataFileError
+        ``path`` is not a regular file.
+    """
+    path = os.fspath(path)
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{what.removeprefix('a ')} not found: {path!r}") from None
+    except OSError as exc:
+        raise DataFileError(f"{path!r}: cannot be read ({exc.strerror or exc}).") from None
+    if stat.S_ISREG(mode):
+        return path
+    link = f" (a symbolic link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
+    if stat.S_ISDIR(mode):
+        raise DataFileError(f"{path!r}{link} is a directory, not {what}.")
+    raise DataFileError(f"{path!r}{link} is {_file_kind(mode)}, not a regular file; fohw reads "
+                        f"{what} only from a regular file (a FIFO or a device may never end).")
+
+
 def read_json(path) -> dict:
     """The JSON content of ``path``; a :class:`~fohw.DataFileError` saying why it cannot be read.
 
@@ -79,9 +110,7 @@ def read_json(path) -> dict:
     DataFileError
         ``path`` is a directory, not UTF-8, not valid JSON, or unreadable.
     """
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise DataFileError(f"{path!r} is a directory, not a fohw JSON file.")
+    path = check_input_file(path, "a fohw JSON file")
     try:
         with open(path, encoding="utf-8") as fh:
             return json.load(fh)

@@ -126,9 +126,13 @@ def _inputs_pairs(d, path):
     ranges = d.get("input_range")
     if ranges is not None and not (isinstance(ranges, list) and len(ranges) == 2
                                    and all(finite_list(r) for r in ranges)
-                                   and len(ranges[0]) == len(ranges[1]) == len(point[0])):
+                                   and len(ranges[0]) == len(ranges[1])):
         raise DataFileError(f"{path}: field 'input_range' must be [[smallest per input], "
                             f"[largest per input]] or null; got {ranges!r}.")
+    if ranges is not None and len(ranges[0]) != len(point[0]):
+        raise DataFileError(f"{path}: field 'operating_point' gives {len(point[0])} input levels but "
+                            f"field 'input_range' gives {len(ranges[0])} inputs; each gives one entry "
+                            "per input.")
     if ranges is not None and any(lo > hi for lo, hi in zip(*ranges)):
         raise DataFileError(f"{path}: field 'input_range' is reversed ({ranges!r}); it "
                             "is the (smallest, largest) input of the estimation record.")

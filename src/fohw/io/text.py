@@ -41,6 +41,7 @@ import numpy as np
 
 from ..exceptions import DataFileError, ParameterError
 from ..record import Record
+from .files import check_input_file
 
 __all__ = ["Table", "read_table", "read_record"]
 
@@ -246,10 +247,7 @@ def read_table(path, *, decimal=".") -> Table:
         raise ParameterError(f"`decimal` must be '.' or ','; got {decimal!r}.")
     src = _Source(path)
     if src.path is not None:
-        if os.path.isdir(src.path):
-            raise DataFileError(f"{src.path!r} is a directory, not a data file.")
-        if not os.path.exists(src.path):
-            raise FileNotFoundError(f"data file not found: {src.path!r}")
+        check_input_file(src.path, "a data file")
     try:
         before = src.snapshot()
         last = src.last_byte() if src.path is not None else b"\n"

@@ -52,8 +52,20 @@ __all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KI
 
 
 def _omega(f):
-    f = np.asarray(f, dtype=np.float64)
-    return 2.0 * np.pi * f
+    """``2 pi f`` for finite real frequencies ``f`` [Hz] (NaN, inf, strings are refused naming `f`)."""
+    return 2.0 * np.pi * check_array(f, "f", ndim=None, min_length=0)
+
+
+def _finite_impedance(z, f, what):
+    """``z``, or a ParameterError at the first frequency where it is infinite (a pole at s = 0)."""
+    bad = np.flatnonzero(~np.isfinite(np.ravel(z)))
+    if bad.size:
+        i = int(bad[0])
+        fi = float(np.ravel(np.asarray(f, dtype=np.float64))[i])
+        raise ParameterError(f"`f` = {fi!r} (index {i}): the impedance of {what} is infinite there: it "
+                             "integrates the current (a pole at s = 0, or at a multiple of 1/dt for the "
+                             "discretised model). Give frequencies above 0.")
+    return z
 
 
 def _check_signal(x, name):
@@ -277,9 +289,12 @@ class Warburg:
     def impedance(self, f, dt=None):
         """Impedance at frequencies ``f`` [Hz]: ``sigma s^-alpha`` (GL-discretised with ``dt``)."""
         omega = _omega(f)
-        if dt is None:
-            return operator_response([self.sigma], [-self.alpha], omega)
-        return gl_operator_response([self.sigma], [-self.alpha], omega, dt)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if dt is None:
+                z = operator_response([self.sigma], [-self.alpha], omega)
+            else:
+                z = gl_operator_response([self.sigma], [-self.alpha], omega, dt)
+        return _finite_impedance(z, f, "a Warburg element")
 
     def unit_response(self, i, dt):
         """``x / sigma``: the GL fractional sum of ``i`` of order ``alpha`` at the step ``dt``."""
@@ -733,7 +748,8 @@ class EquivalentCircuit(Model):
         Parameters
         ----------
         f : array_like
-            Frequencies [Hz].
+            Finite frequencies [Hz] (NaN and inf are refused; ``f = 0`` is refused where the
+            impedance is infinite: a Warburg element, or the OCV's capacitor with ``capacity``).
         discrete : bool, optional
             True: the response of the model discretised at its step ``dt`` (the GL symbol in
             place of ``s``); default False: the continuous circuit.
@@ -750,18 +766,22 @@ class EquivalentCircuit(Model):
         ndarray of complex, shape of ``f``
         """
         dt = self.dt if discrete else None
-        z = np.full(np.shape(f), self.r0, dtype=np.complex128)
+        f = check_array(f, "f", ndim=None, min_length=0)
+        omega = _omega(f)
+        z = np.full(omega.shape, self.r0, dtype=np.complex128)
         for e in self.elements:
             z = z + e.impedance(f, dt)
         if capacity is not None:
             capacity = check_scalar(capacity, "capacity", lower=0.0, lower_inclusive=False)
             slope = check_scalar(ocv_slope, "ocv_slope") + self.b
-            if dt is None:
-                integrator = 1.0 / (1j * _omega(f))
-            else:       # the coulomb count sums the current before the sample: dt z^-1 / (1 - z^-1)
-                zinv = np.exp(-1j * _omega(f) * dt)
-                integrator = dt * zinv / (1.0 - zinv)
-            z = z + slope / (3600.0 * capacity) * integrator
+            with np.errstate(divide="ignore", invalid="ignore"):
+                if dt is None:
+                    integrator = 1.0 / (1j * omega)
+                else:   # the coulomb count sums the current before the sample: dt z^-1 / (1 - z^-1)
+                    zinv = np.exp(-1j * omega * dt)
+                    integrator = dt * zinv / (1.0 - zinv)
+                z = z + slope / (3600.0 * capacity) * integrator
+            z = _finite_impedance(z, f, "the open-circuit voltage (capacity=)")
         return z
 
     def __str__(self):

@@ -361,7 +361,7 @@ class FractionalHW(Model):
                                  f"value or shape {y.shape} for x[{k}] = {x[k]!r}.")
         return y
 
-    def simulate(self, u, *, initial=None, dt=None, states=False):
+    def simulate(self, u, *, initial=None, dt=None, states=False, divergence_threshold=None):
         """Output for the input ``u`` (zero initial conditions of ``G``).
 
         Parameters
@@ -374,6 +374,9 @@ class FractionalHW(Model):
             Sampling time (default :attr:`dt`).
         states : bool, optional
             Also return ``w = fbar(u)`` and ``x = G w``.
+        divergence_threshold : float, optional
+            The bound on ``|x|`` of :meth:`fohw.FractionalTF.simulate` (default: ``1e8`` times
+            the output scale of a bounded response; ``np.inf``: no bound).
 
         Returns
         -------
@@ -385,7 +388,7 @@ class FractionalHW(Model):
                                  f"conditions of G) only; got {initial!r}.")
         u = self.check_input(u)
         w = self.input_signal(u)
-        x = self.G.simulate(w, self._need_dt(dt))
+        x = self.G.simulate(w, self._need_dt(dt), divergence_threshold=divergence_threshold)
         y = self._map(x)
         return (w, x, y) if states else y
 
@@ -396,7 +399,7 @@ class FractionalHW(Model):
         fu = self.f_basis.evaluate(u, "u")
         w = self.p @ fu
         G = self.G
-        x = G.simulate(w, h)
+        x = G.simulate(w, h, divergence_threshold=np.inf)      # the free run, as fit scores it
         yhat = self._map(x)
         wd = _shifted(w, delay_samples(self._delay, h))
         with np.errstate(over="ignore", invalid="ignore"):

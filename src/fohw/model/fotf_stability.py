@@ -181,14 +181,20 @@ def rhp_zero_count(coefs, orders, *, points_per_decade=200, max_points=2_000_000
     top = int(np.argmax(orders))
     m = coefs.size
     small = 1e-6 / m
-    w_lo = min((small * abs(coefs[lo]) / abs(coefs[i])) ** (1.0 / orders[i])
-               for i in range(m) if i != lo)
-    w_hi = max((abs(coefs[i]) / (small * abs(coefs[top]))) ** (1.0 / (orders[top] - orders[i]))
-               for i in range(m) if i != top)
-    decades = max(np.log10(w_hi / w_lo), 1.0)
+    log_c = np.log10(np.abs(coefs))                 # in logs: the corners may leave the doubles
+    log_lo = min((np.log10(small) + log_c[lo] - log_c[i]) / orders[i] for i in range(m) if i != lo)
+    log_hi = max((log_c[i] - np.log10(small) - log_c[top]) / (orders[top] - orders[i])
+                 for i in range(m) if i != top)
+    if log_lo < -300.0 or log_hi * orders[top] > 300.0:     # omega, omega^order stay doubles
+        raise ParameterError(
+            f"the argument principle needs the frequencies 10**{log_lo:.4g} to 10**{log_hi:.4g} "
+            f"(where the lowest and the highest term of the denominator dominate), beyond double "
+            f"precision for the orders {orders.tolist()}: the coefficients {coefs.tolist()} span "
+            "too many decades. Rescale the time unit, or drop a negligible term.")
+    decades = max(log_hi - log_lo, 1.0)
     n = int(points_per_decade * decades) + 1
     while True:
-        omega = np.logspace(np.log10(w_lo), np.log10(w_hi), n)
+        omega = np.logspace(log_lo, log_hi, n)
         d = operator_response(coefs, orders, omega)
         scale = sum(abs(c) * omega ** a for c, a in zip(coefs, orders))
         if np.min(np.abs(d) / scale) < 1e-10:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validation import check_array
 from ..exceptions import DimensionError
 
 __all__ = ["operator_response", "gl_operator_response"]
@@ -63,7 +64,7 @@ def operator_response(coefs, orders, omega):
     array([1.+2.j])
     """
     coefs, orders = _as_terms(coefs, orders)
-    omega = np.asarray(omega, dtype=np.float64)
+    omega = check_array(omega, "omega", ndim=None, min_length=0)
     modulus = np.abs(omega)
     angle = np.sign(omega) * (np.pi / 2)
     out = np.zeros(omega.shape, dtype=complex)
@@ -103,7 +104,7 @@ def gl_operator_response(coefs, orders, omega, h):
     True
     """
     coefs, orders = _as_terms(coefs, orders)
-    omega = np.asarray(omega, dtype=np.float64)
+    omega = check_array(omega, "omega", ndim=None, min_length=0)
     theta = omega * float(h)
     modulus = 2.0 * np.abs(np.sin(theta / 2.0)) / float(h)
     angle = np.sign(theta) * (np.pi - np.abs(theta)) / 2.0

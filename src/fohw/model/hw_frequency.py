@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validation import check_array, check_int
 from ..exceptions import ParameterError
 from .frequency_response import gl_operator_response
 
@@ -201,7 +202,8 @@ class LinearBlock:
         Parameters
         ----------
         omega : array_like
-            ``0 < |omega| h < 2 pi`` (``omega = 0`` is :attr:`static_gain`).
+            Finite, ``0 < |omega| h < 2 pi`` (``omega = 0`` is :attr:`static_gain`); where the
+            response is infinite (a pole on the unit circle) it is refused, never ``inf + nan j``.
 
         Returns
         -------
@@ -216,9 +218,17 @@ class LinearBlock:
         >>> bool(abs(blk.frequency_response([0.3])[0] - (1 / z) / (1 - 0.5 / z)) < 1e-15)
         True
         """
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.f_slope * self.input_polynomial(omega) / (1.0 - self.g_slope
-                                                                   * self.output_polynomial(omega))
+        omega = check_array(omega, "omega", ndim=None, min_length=0)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            h = np.asarray(self.f_slope * self.input_polynomial(omega)
+                           / (1.0 - self.g_slope * self.output_polynomial(omega)))
+        bad = np.flatnonzero(~np.isfinite(h.ravel()))
+        if bad.size:
+            w = float(omega.ravel()[bad[0]])
+            raise ParameterError(f"`omega` = {w!r}: the block's response is infinite there (1 - g' A = 0: "
+                                 f"a pole on the unit circle{', an integrator' if w == 0.0 else ''}; "
+                                 f"static gain {self.static_gain!r}). Give other frequencies.")
+        return h
 
     @property
     def static_gain(self):
@@ -236,7 +246,8 @@ class LinearBlock:
     def default_frequencies(self, n=400):
         """Logarithmic grid from ``10^-3`` of the Nyquist frequency up to it (``pi / h``)."""
         nyq = np.pi / self.dt
-        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), int(n))
+        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), check_int(n, "n", minimum=2,
+                                                                        maximum=1_000_000))
 
     def stability(self, points=20_000):
         """BIBO stability of the block: no zero of ``1 - g' A(x)`` in ``|x| <= 1`` (module docstring).

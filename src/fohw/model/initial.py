@@ -27,7 +27,7 @@ answers that for an identified predictor (an :class:`fohw.IdentificationResult`)
     optimistic, by about as much as ``2 + n`` more parameters would be; compare models with the
     same ``initial``).
 ``(u_hist, y_hist)``
-    Measured input and output just before the record (``history=``): the free run continues
+    Measured input and output just before the record (``initial=(u_past, y_past)``): the free run continues
     from them (for records contiguous in time). A ``past="estimate"`` fit's own levels precede
     the history (right when the history is the estimation record). Costs nothing in fairness,
     but the history must really be the record's past.
@@ -40,11 +40,12 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import check_array, check_inputs, check_same_length
+from .._validation import check_array, check_inputs, check_same_length, unpack_pair
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .simulation import simulate
 from .structure import Structure
@@ -125,20 +126,14 @@ def _fitted_past(model):
     return (float(nl[n_free]), float(nl[n_free + 1]))
 
 
-def check_initial(initial, history=None, *, default=None):
-    """``(choice, value)`` of an ``initial`` argument (and the older ``history``), checked.
+def check_initial(initial, *, default=None):
+    """``(choice, value)`` of an ``initial`` argument, checked.
 
     ``choice`` is one of ``"rest"``, ``"fitted"``, ``"estimate"`` (``value``: the window
     length), ``"history"`` (``value``: the checked pair) or ``"given"`` (``value``: the
-    :class:`InitialState`). ``initial=None`` without a history gives ``(default, None)``
-    (``None`` when the caller has no default).
+    :class:`InitialState`). ``initial=None`` gives ``(default, None)`` (``None`` when the
+    caller has no default).
     """
-    if history is not None:
-        if initial is not None:
-            raise ParameterError("pass the measured history as `initial=(u_hist, y_hist)` or "
-                                 "as `history=`, not both; got both `initial` "
-                                 f"({_describe(initial)}) and `history`.")
-        initial = history
     if initial is None:
         return default, None
     if isinstance(initial, InitialState):
@@ -156,6 +151,8 @@ def check_initial(initial, history=None, *, default=None):
                                  "('estimate', n), n >= 0 free past output samples; got "
                                  f"{initial!r}.")
         return "estimate", int(n)
+    if isinstance(initial, Mapping):
+        unpack_pair(initial, "initial", "(u_hist, y_hist)")
     try:
         u_hist, y_hist = initial
     except (TypeError, ValueError):
@@ -199,7 +196,7 @@ def default_initial(model):
         "measured history initial=(u_hist, y_hist).")
 
 
-def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialState:
+def initial_state(model, u, y=None, initial=None) -> InitialState:
     """The state a free run of ``model`` on the record ``(u, y)`` starts from.
 
     Parameters
@@ -215,8 +212,6 @@ def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialSta
         ``"fitted"``, ``"estimate"``, ``("estimate", n)``, a measured history
         ``(u_hist, y_hist)`` or an :class:`InitialState` (see the module notes for what each
         assumes and costs).
-    history : (u_hist, y_hist), optional
-        The older spelling of ``initial=(u_hist, y_hist)``; not with ``initial``.
 
     Returns
     -------
@@ -226,8 +221,7 @@ def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialSta
     ------
     ParameterError
         No ``initial`` for a ``past="estimate"`` fit (:func:`default_initial`); an unknown
-        ``initial``; ``"estimate"`` without ``y``; ``y`` with another choice; both
-        ``initial`` and ``history``.
+        ``initial``; ``"estimate"`` without ``y``; ``y`` with another choice.
     DimensionError
         ``y`` and ``u`` differ in length; the record has no more samples than the unknowns of
         ``"estimate"`` (``2 + n``).
@@ -268,17 +262,17 @@ def initial_state(model, u, y=None, initial=None, *, history=None) -> InitialSta
     True
     """
     n_inputs = model.structure.n_inputs
-    if n_inputs > 1 and (history is not None or initial == "estimate" or (
+    if n_inputs > 1 and (initial == "estimate" or (
             initial is not None and not isinstance(initial, (str, InitialState)))):
-        what = "a measured history" if history is not None else f"initial={_describe(initial)}"
+        what = f"initial={_describe(initial)}"
         raise ParameterError(f"{what} is implemented for single-input models; this one has "
                              f"{n_inputs} inputs (its past levels would be one per input). Use "
                              "initial='rest', or simulate a longer record that contains the "
                              "history.")
-    choice, value = check_initial(initial, history)
+    choice, value = check_initial(initial)
     if choice is None:
         choice = default_initial(model)
-    u = check_inputs(u, n_inputs)
+    u = check_inputs(u, n_inputs, names=model.structure.inputs)
     u0, y0 = model.operating_point
     op = (float(u0) if n_inputs == 1 else tuple(float(v) for v in u0), float(y0))
     if y is not None and choice != "estimate":
@@ -335,14 +329,14 @@ def simulate_from(model, u, state, **kwargs):
                                       f_basis=model.f_basis, g_basis=model.g_basis,
                                       orders=s.orders, dt=model.dt, offset=model.offset,
                                       past=past, operating_point=model.operating_point)
-        return simulate(model, u, history=history, **kwargs)
+        return simulate(model, u, initial=history, **kwargs)
     if s.past == "rest" and past == (0.0, 0.0):
         params = np.r_[linear, nonlinear]
     else:
         params = np.r_[linear, nonlinear[:n_free], past, s.output_map_params(nonlinear)]
         s = _level_structure(s)
     return simulate(s, u, params=params, operating_point=model.operating_point,
-                    history=history, **kwargs)
+                    initial=history, **kwargs)
 
 
 def _estimate(model, u, y, n_window, op):

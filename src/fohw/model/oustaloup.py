@@ -16,20 +16,27 @@ numerator and denominator are summed as rational functions. Two filters for ``s^
 from __future__ import annotations
 
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._validation import check_array, check_int, unpack_pair
 from ..exceptions import ParameterError
 
 __all__ = ["oustaloup_filter", "oustaloup_approximation", "OustaloupApproximation"]
 
 METHODS = ("oustaloup", "refined")
+#: The largest ``N``: already at ``N = 80`` the polynomial coefficients of a six-decade band leave
+#: double precision (measured), and ``np.poly`` of ``2N + 1`` roots costs ``O(N^2)``.
+MAX_ORDER = 100
 REFINED_B = 10.0
 REFINED_D = 9.0
 
 
 def _check_band(band):
+    if isinstance(band, Mapping):
+        unpack_pair(band, "band", "(omega_b, omega_h)")
     try:
         lo, hi = (float(v) for v in band)
     except (TypeError, ValueError):
@@ -69,9 +76,7 @@ def oustaloup_filter(r, band, order, method="oustaloup"):
     """
     if method not in METHODS:
         raise ParameterError(f"`method` must be one of {METHODS}; got {method!r}.")
-    if isinstance(order, (bool, np.bool_)) or not isinstance(order, (numbers.Integral, np.integer)) \
-            or order < 1:
-        raise ParameterError(f"`order` must be a positive integer; got {order!r}.")
+    _check_order(order)
     lo, hi = _check_band(band)
     r = float(r)
     if not -1.0 < r < 1.0:
@@ -81,13 +86,28 @@ def oustaloup_filter(r, band, order, method="oustaloup"):
     k = np.arange(-n, n + 1)
     w_zero = lo * mu ** ((k + n + 0.5 * (1.0 - r)) / (2 * n + 1))
     w_pole = lo * mu ** ((k + n + 0.5 * (1.0 + r)) / (2 * n + 1))
-    num = hi ** r * np.poly(-w_zero)
-    den = np.poly(-w_pole)
-    if method == "refined":
-        b, d = REFINED_B, REFINED_D
-        num = (d / b) ** r * np.polymul(num, [d, b * hi, 0.0])
-        den = np.polymul(den, [d * (1.0 - r), b * hi, d * r])
+    with np.errstate(over="ignore", invalid="ignore"):
+        num = hi ** r * np.poly(-w_zero)
+        den = np.poly(-w_pole)
+        if method == "refined":
+            b, d = REFINED_B, REFINED_D
+            num = (d / b) ** r * np.polymul(num, [d, b * hi, 0.0])
+            den = np.polymul(den, [d * (1.0 - r), b * hi, d * r])
+    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+        raise ParameterError(_wide_band_text(band, lo, hi, order, "its polynomial coefficients overflow"))
     return num, den
+
+
+def _check_order(order):
+    if isinstance(order, (bool, np.bool_)) or not isinstance(order, (numbers.Integral, np.integer)) \
+            or not 1 <= order <= MAX_ORDER:
+        raise ParameterError(f"`order` must be an integer from 1 to {MAX_ORDER}; got {order!r}.")
+
+
+def _wide_band_text(band, lo, hi, order, what):
+    return (f"`band` = {band!r} spans {np.log10(hi) - np.log10(lo):.4g} decades: with order N = {order} the "
+            f"approximation cannot be represented in double precision ({what}); give a narrower "
+            "band around the frequencies of interest (or a lower order).")
 
 
 def _rational_sum(terms):
@@ -160,9 +180,16 @@ class OustaloupApproximation:
         >>> G.oustaloup().frequency_response([1.0])                 # integer orders: exact
         array([0.5-0.5j])
         """
-        omega = np.asarray(omega, dtype=np.float64)
+        omega = check_array(omega, "omega", ndim=None, min_length=0)
         s = 1j * omega
-        g = np.polyval(self.num, s) / np.polyval(self.den, s)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            g = np.asarray(np.polyval(self.num, s) / np.polyval(self.den, s))
+        bad = np.flatnonzero(~np.isfinite(g.ravel()))
+        if bad.size:
+            w = float(omega.ravel()[bad[0]])
+            raise ParameterError(f"`omega` = {w!r}: the integer-order approximation's response is not "
+                                 "finite there (a pole at s = 0 of an integrator, or its polynomials of "
+                                 f"degree {len(self.den) - 1} overflow at |s| = {abs(w):.3g}).")
         delay = self.source.delay
         return g * np.exp(-1j * omega * delay) if delay else g
 
@@ -188,7 +215,8 @@ class OustaloupApproximation:
         array([ 1.        ,  3.16227766, 10.        ])
         """
         lo, hi = _check_band(self.band if band is None else band)
-        n = max(int(np.ceil(points_per_decade * np.log10(hi / lo))), 1) + 1
+        points_per_decade = check_int(points_per_decade, "points_per_decade", minimum=1, maximum=10_000)
+        n = max(int(np.ceil(points_per_decade * (np.log10(hi) - np.log10(lo)))), 1) + 1
         return np.logspace(np.log10(lo), np.log10(hi), n)
 
     def errors(self, band=None, points_per_decade=100):
@@ -310,6 +338,7 @@ def oustaloup_approximation(model, band=(1e-3, 1e3), order=5, method="oustaloup"
     if method not in METHODS:
         raise ParameterError(f"`method` must be one of {METHODS}; got {method!r}.")
     band = _check_band(band)
+    _check_order(order)
     nums = [_term_rational(c, o, band, order, method) for c, o in zip(model.num, model.num_orders)]
     dens = [_term_rational(c, o, band, order, method) for c, o in zip(model.den, model.den_orders)]
     pn, qn = _rational_sum(nums)
@@ -319,4 +348,11 @@ def oustaloup_approximation(model, band=(1e-3, 1e3), order=5, method="oustaloup"
     num = np.trim_zeros(num, "f") if np.any(num) else np.array([0.0])
     den = np.trim_zeros(den, "f")
     scale = den[0]
-    return OustaloupApproximation(num / scale, den / scale, band, int(order), method, model)
+    approx = OustaloupApproximation(num / scale, den / scale, band, int(order), method, model)
+    omega = approx.band_frequencies(points_per_decade=10)
+    try:
+        approx.frequency_response(omega)
+    except ParameterError:
+        raise ParameterError(_wide_band_text(band, *band, order, "its response in the band is not "
+                                             "finite")) from None
+    return approx

@@ -352,6 +352,12 @@ class DeadZone(_TwoLimits):
                                  f"measured output lies from {lo:.6g} to {hi:.6g}, inside the "
                                  "dead zone, so a model output near it would be mapped to 0 "
                                  "everywhere. Check the limits (they are in the data's units).")
+        if self.lower is not None and self.lower > hi or self.upper is not None and self.upper < lo:
+            side = "above" if self.lower is not None and self.lower > hi else "below"
+            raise ParameterError(f"`output_map` {self.describe()} lies entirely {side} the measured "
+                                 f"output (from {lo:.6g} to {hi:.6g}): the data never reach the dead "
+                                 "zone, so it is not seen in them and the fit would only shift the "
+                                 "output. Check the limits (they are in the data's units).")
 
     def start(self, z, y):
         """As :meth:`SeriesMap.start`."""
@@ -466,6 +472,20 @@ class PiecewiseLinear(SeriesMap):
             J[rows, n + i] += -slope * (1.0 - t)
             J[rows, n + i + 1] += -slope * t
         return J
+
+    def check_data(self, y):
+        """As :meth:`SeriesMap.check_data`: fixed breakpoints must not all lie on one side of ``y``."""
+        if self.breakpoints is None or self.free_breakpoints:
+            return
+        lo, hi = float(np.min(y)), float(np.max(y))
+        b = self.breakpoints
+        if hi <= b[0] or lo >= b[-1]:
+            side = "above" if hi <= b[0] else "below"
+            raise ParameterError(f"`output_map` {self.describe()} has every breakpoint {side} the "
+                                 f"measured output (from {lo:.6g} to {hi:.6g}): the data see one "
+                                 "straight end segment, so the values at the other breakpoints "
+                                 "cannot be estimated. Check the breakpoints (they are in the "
+                                 "data's units) or let fohw place them (an int).")
 
     def start(self, z, y):
         """As :meth:`SeriesMap.start`."""

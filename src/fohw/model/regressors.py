@@ -218,7 +218,7 @@ class RegressorBuilder:
             structure = Structure.make(na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
                                        orders=orders, offset=offset, past=past, dt=dt, nk=nk,
                                        inputs=inputs)
-        u = check_inputs(u, structure.n_inputs)
+        u = check_inputs(u, structure.n_inputs, names=structure.inputs)
         check_same_length(u, y, "u", "y")
         self.structure = structure
         na, nb = structure.na, structure.nb

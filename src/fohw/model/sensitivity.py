@@ -133,7 +133,7 @@ def _feedback_problem(structure, linear, params, u):
                              f"{type(structure).__name__}.")
     linear = check_array(linear, "linear")
     params = np.atleast_1d(np.asarray(params, dtype=np.float64))
-    u = check_inputs(u, structure.n_inputs)
+    u = check_inputs(u, structure.n_inputs, names=structure.inputs)
     y = simulate_predictor(structure, linear, params, u)
     builder = RegressorBuilder(u, y, structure=structure)
     E = builder.jacobian(linear, params)

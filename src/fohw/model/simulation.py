@@ -29,6 +29,7 @@ from .._validation import (
     check_random_state,
     check_same_length,
     check_scalar,
+    unpack_pair,
 )
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from . import _compiled
@@ -58,7 +59,6 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
              operating_point: PairLike | None = None, noise: ArrayLike | None = None,
              noise_std: float = 0.0, random_state: RandomStateLike = None,
              divergence_threshold: float | None = None,
-             history: tuple[ArrayLike, ArrayLike] | None = None,
              initial: Any = None) -> np.ndarray:
     """Simulate the output of a fractional-order Hammerstein–Wiener model.
 
@@ -98,14 +98,12 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
         exceeds this or is not finite. Default: ``1e8`` times the largest magnitude that drives
         the recursion (input branch, noise, offset, past levels, history), so the test means the
         same in every unit.
-    history : (u_past, y_past), optional
-        Measured input and output just before ``u`` (same units): the simulation continues
-        from them, its GL memory holding that history, in free run from the first sample of
-        ``u``. The model's past levels (if any) apply before the history.
-    initial : str, tuple or InitialState, optional
-        With an identification result: its initial state, as ``result.simulate(u,
-        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit). With
-        a model of another kind: passed to its ``simulate`` (what it accepts is the kind's).
+    initial : tuple, str or InitialState, optional
+        A measured history ``(u_past, y_past)`` just before ``u`` (same units): the simulation
+        continues from it, its GL memory holding that history, in free run from the first
+        sample of ``u`` (the model's past levels, if any, apply before the history). With an
+        identification result, any of its initial states, as ``result.simulate(u,
+        initial=...)`` (:mod:`fohw.model.initial`; needed for a ``past="estimate"`` fit).
 
     Returns
     -------
@@ -167,7 +165,7 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
     if other is not None:
         lagged = {"params": params, "operating_point": operating_point, "noise": noise,
                   "noise_std": noise_std or None, "random_state": random_state,
-                  "divergence_threshold": divergence_threshold, "history": history}
+                  "divergence_threshold": divergence_threshold}
         given = [f"{k}={v!r}" for k, v in lagged.items() if v is not None]
         if given:
             raise ParameterError(f"{', '.join(given)}: these keywords are for the lagged "
@@ -175,19 +173,19 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
                                  "by its own simulate(u, initial=...) (add noise to the output "
                                  "yourself).")
         return other.simulate(u, initial=initial)
-    if initial == "estimate" or (isinstance(initial, tuple) and initial[:1] == ("estimate",)):
+    if (isinstance(initial, str) and initial == "estimate") or (
+            isinstance(initial, tuple) and initial and isinstance(initial[0], str)
+            and initial[0] == "estimate"):
         raise ParameterError("initial='estimate' fits the record's initial state to its "
                              "measured output, which fohw.simulate does not take: use "
                              "result.simulate(u, initial='estimate', y=y) or "
                              "fohw.compare(result, u, y, initial='estimate').")
-    if initial is not None and not callable(getattr(model, "initial_state", None)):
-        raise ParameterError(f"`initial` is for an identification result; got it with a "
-                             f"{type(model).__name__} (fohw.compare takes `initial` for a "
-                             "HammersteinWiener too).")
+    result = callable(getattr(model, "initial_state", None))
+    history = None if result else measured_history(initial, type(model).__name__)
     if isinstance(model, Model):        # a model kind (the lagged HammersteinWiener among them)
         _only_for_structure(params, operating_point, f"a {type(model).__name__}")
         return model.simulate(u, noise=noise, noise_std=noise_std, random_state=random_state,
-                              divergence_threshold=divergence_threshold, history=history)
+                              divergence_threshold=divergence_threshold, initial=history)
     if isinstance(model, Structure):
         if params is None:
             raise ParameterError("simulating a Structure needs its parameter values `params` "
@@ -202,13 +200,28 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
             and isinstance(model.structure, Structure):
         _only_for_structure(params, operating_point, "an identification result")
         kwargs = dict(noise=noise, noise_std=noise_std, random_state=random_state,
-                      divergence_threshold=divergence_threshold, history=history)
+                      divergence_threshold=divergence_threshold)
         own = getattr(model, "simulate", None)
         if callable(own):          # a result: its own checks (input range), then this engine
             return own(u, **kwargs) if initial is None else own(u, initial=initial, **kwargs)
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
+
+
+def measured_history(initial, what):
+    """``initial`` of a model or a structure: ``None`` or a measured pair ``(u_past, y_past)``.
+
+    The other initial states (``"rest"``, ``"fitted"``, ``"estimate"``, an InitialState) belong
+    to an identification result, whose fitted levels they read.
+    """
+    if initial is None:
+        return None
+    if isinstance(initial, str) or not isinstance(initial, (tuple, list)) or len(initial) != 2:
+        raise ParameterError(f"`initial` of a {what} is a measured history (u_past, y_past); "
+                             f"the initial states {initial!r}-like belong to an identification "
+                             "result (result.simulate(u, initial=...), or fohw.compare).")
+    return tuple(initial)
 
 
 def generic_model(obj):
@@ -286,7 +299,7 @@ def simulate_predictor(structure, linear, nonlinear, u, *, operating_point=(0.0,
     qa, pb = layout.blocks(linear[:layout.n_params])
     offset = float(linear[layout.n_params]) if structure.offset else 0.0
     values, past = structure.split_nonlinear(nonlinear)
-    u = check_inputs(u, structure.n_inputs)
+    u = check_inputs(u, structure.n_inputs, names=structure.inputs)
     v = equation_noise(u.shape[0], noise, noise_std, random_state)
     Q, A = _output_representation(qa)
     hmap = structure.output_map
@@ -443,9 +456,35 @@ def recursion(Q, A, out_terms, g_basis, w, threshold, method="auto", h=1.0, y_fi
         leaf = _pure_leaf(output_terms(g_basis, Q), acc.terms, acc.memory, acc.memoryless, rev,
                           w, y, z, dz, threshold, y_fixed)
         _compiled.count_pure(n)
-    with np.errstate(over="ignore", invalid="ignore"):
-        divide_and_conquer(n, leaf_size, leaf, lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            divide_and_conquer(n, leaf_size, leaf, lambda lo, mid, hi: merge(z, dz, lo, mid, hi))
+    except SimulationDivergedError as err:
+        if err.cause == "output_basis" and _basis_overflows(g_basis, err.value):
+            raise SimulationDivergedError(err.sample, err.value, err.threshold, err.cause,
+                                          overflow=True) from None
+        raise
     return y
+
+
+def _basis_overflows(g_basis, y):
+    """Whether ``g`` is non-finite at the finite ``y`` by overflow (no function left its domain)."""
+    if not np.isfinite(y):
+        return False
+    x = np.array([float(y)])
+    for f in getattr(g_basis, "functions", ()):
+        try:
+            with np.errstate(over="ignore", invalid="raise", divide="raise"):
+                value = np.asarray(f(x), dtype=np.float64)
+        except FloatingPointError:
+            return False                    # invalid or divide: sqrt, log of a bad value
+        except (OverflowError, ArithmeticError):
+            continue
+        except Exception:                   # a user's function failing otherwise: not known
+            return False
+        if np.any(np.isnan(value)):
+            return False
+    return True
 
 
 def _pure_leaf(zfun, terms, memory, memoryless, rev, w, y, z, dz, threshold, y_fixed):
@@ -582,8 +621,7 @@ def free_run(structure, Q, A, qa, pb, order_values, u, v, *, offset, past, opera
                       structure.dt, y_fixed, kernel=kernel, leaf_size=leaf_size)
     except SimulationDivergedError as err:
         raise SimulationDivergedError(err.sample - n_hist, err.value + y0, err.threshold,
-                                      err.cause) \
-            from None
+                                      err.cause, overflow=err.overflow) from None
     y = y[n_hist:]
     return y + y0 if y0 != 0.0 else y
 
@@ -641,11 +679,7 @@ def equation_noise(n, noise=None, noise_std=0.0, random_state=None):
 
 def check_input_point(operating_point, n_inputs):
     """``(u0, y0)`` of a model with several inputs: ``u0`` one level per input (a tuple)."""
-    try:
-        u0, y0 = operating_point
-    except (TypeError, ValueError):
-        raise ParameterError(f"`operating_point` must be a pair (u0, y0); got "
-                             f"{operating_point!r}.") from None
+    u0, y0 = unpack_pair(operating_point, "operating_point", "(u0, y0)")
     if np.ndim(u0) == 0:
         u0 = [check_scalar(u0, "operating_point[0]")] * n_inputs
     u0 = check_array(u0, "operating_point[0]")
@@ -656,11 +690,7 @@ def check_input_point(operating_point, n_inputs):
 
 
 def _check_history(history, n_inputs=1):
-    try:
-        u_hist, y_hist = history
-    except (TypeError, ValueError):
-        raise ParameterError("`history` must be a pair (u_past, y_past) of measured records; "
-                             f"got {type(history).__name__}.") from None
+    u_hist, y_hist = unpack_pair(history, "history", "(u_past, y_past) of measured records")
     u_hist = check_inputs(u_hist, n_inputs, "history u")
     y_hist = check_array(y_hist, "history y")
     check_same_length(u_hist, y_hist, "history u", "history y")

@@ -333,15 +333,21 @@ class HammersteinWiener(Model):
             operating_point=self.operating_point)
 
     def simulate(self, u, *, initial=None, noise=None, noise_std=0.0, random_state=None,
-                 divergence_threshold=None, history=None):
-        """The model's output for ``u``: :func:`fohw.simulate` (the same keywords)."""
-        kwargs = dict(noise=noise, noise_std=noise_std, random_state=random_state,
-                      divergence_threshold=divergence_threshold, history=history)
-        if initial is not None:
-            raise ParameterError("HammersteinWiener.simulate: `initial` needs an identification "
-                                 "result's estimated state; use `history=(u_past, y_past)` to "
-                                 "continue from measured samples.")
-        return simulate_model(self, u, **kwargs)
+                 divergence_threshold=None):
+        """The model's output for ``u``: :func:`fohw.simulate` (the same keywords).
+
+        ``initial`` is ``None`` (at rest before ``u``, after the model's past levels) or a
+        measured history ``(u_past, y_past)`` just before ``u``, from which the free run
+        continues.
+        """
+        if isinstance(initial, str) or (initial is not None and (
+                not isinstance(initial, (tuple, list)) or len(initial) != 2)):
+            raise ParameterError("HammersteinWiener.simulate: `initial` is a measured history "
+                                 "(u_past, y_past); the other initial states need an "
+                                 f"identification result's estimate; got {initial!r}.")
+        return simulate_model(self, u, noise=noise, noise_std=noise_std,
+                              random_state=random_state,
+                              divergence_threshold=divergence_threshold, history=initial)
 
     def config(self) -> dict:
         """The model in its own file format (:meth:`to_dict`): what :meth:`fohw.Model.to_dict` stores."""

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import fohw
+from fohw._parallel import max_jobs
 from fohw._plotting import subplots
 from fohw.analysis.montecarlo import summarise
 from fohw.io.files import save_figure
@@ -88,7 +89,8 @@ def parse_args(argv):
     ap.add_argument("--outdir", type=Path, default=Path("results"))
     ap.add_argument("--fast", action="store_true", help="3 seeds, N = 2000, N-sweep to 4000")
     ap.add_argument("--seeds", type=int, default=20)
-    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--jobs", type=int, default=min(2, max_jobs()),
+                    help="worker processes, at most the processors (default 2)")
     return ap.parse_args(argv)
 
 

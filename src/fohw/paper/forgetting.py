@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._parallel import TaskError, run_tasks
+from .._parallel import TaskError, max_jobs, run_tasks
 from .._plotting import subplots
 from ..datasets import paper_example
 from ..exceptions import FohwError, ParameterError
@@ -155,9 +155,9 @@ def forgetting_map(seeds=range(10), n_samples=10_000, *, forgetting=FORGETTING_F
              for lam in sorted(forgetting) for seed in seeds]
     pool = None
     if jobs != 1:
-        from concurrent.futures import ProcessPoolExecutor
+        from .._parallel import check_jobs, process_pool
 
-        pool = ProcessPoolExecutor(max_workers=jobs)
+        pool = process_pool(min(check_jobs(jobs, "jobs"), len(tasks)))
     try:
         parts = run_tasks(_forgetting_task, tasks, executor=pool, progress=progress,
                           label="forgetting map")
@@ -438,10 +438,12 @@ def main(argv=None, description=None):
                         help="a smoke run: 2 seeds, N = 600, lambda in (1, 0.9), P in (1, 5), "
                         "at most 10 passes of the iterative schedules")
     parser.add_argument("--seeds", type=int, default=10, help="number of seeds (0, 1, ...)")
-    parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--jobs", type=int, default=min(2, max_jobs()),
+                        help="worker processes, at most the processors (default 2)")
     args = parser.parse_args(argv)
-    if args.seeds < 1 or args.jobs < 1:
-        parser.error(f"--seeds and --jobs must be >= 1; got {args.seeds} and {args.jobs}.")
+    if args.seeds < 1 or not 1 <= args.jobs <= max_jobs():
+        parser.error(f"--seeds must be >= 1 and --jobs from 1 to {max_jobs()} (the processors); "
+                     f"got {args.seeds} and {args.jobs}.")
     if args.fast:
         n_seeds, n, lams, Ps, ks, step = 2, 600, (1.0, 0.9), (1, 5), (300, 600), 10
     else:

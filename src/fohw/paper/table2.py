@@ -199,9 +199,9 @@ def monte_carlo_table2(seeds=range(10), n_samples=10_000, *, innovation_lengths=
     if jobs == 1:
         parts = [_one_seed(*a) for a in args]
     else:
-        from concurrent.futures import ProcessPoolExecutor
+        from .._parallel import check_jobs, process_pool
 
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        with process_pool(min(check_jobs(jobs, "jobs"), len(args))) as pool:
             parts = list(pool.map(_one_seed, *zip(*args)))
     return [row for part in parts for row in part]
 
