@@ -862,9 +862,10 @@ def _model_input(args, loaded, data, names):
                                    else None)
     given = [p.strip() for p in spec.split(",")] if spec is not None else None
     if given is not None and len(given) != n and n > 1:
-        raise UsageError(f"--column gives {len(given)} column(s), but {args.model} has {n} inputs "
-                         f"({', '.join(inputs)}): give one column per input, e.g. --column "
-                         f"{','.join(inputs)}.")
+        example = ",".join(inputs) if inputs else ",".join(str(k) for k in range(n))
+        raise UsageError(f"--column needs {n} entries, one per input of {args.model}"
+                         + (f" ({', '.join(inputs)})" if inputs else "")
+                         + f"; got {len(given)}. E.g. --column {example}.")
     if given is not None and len(given) != n:
         raise UsageError(f"--column gives {len(given)} column(s), but {args.model} has {n} "
                          f"input(s): give {'one column' if n == 1 else 'one column per input'}.")

@@ -217,6 +217,8 @@ def measured_history(initial, what):
     """
     if initial is None:
         return None
+    if isinstance(initial, Mapping):
+        unpack_pair(initial, "initial", "(u_past, y_past) of measured records")
     if isinstance(initial, str) or not isinstance(initial, (tuple, list)) or len(initial) != 2:
         raise ParameterError(f"`initial` of a {what} is a measured history (u_past, y_past); "
                              f"the initial states {initial!r}-like belong to an identification "
