@@ -28,12 +28,14 @@ def paper_example(outdir):
 def fractional_hw(outdir):
     """u -> u + 0.3 u^2 -> 1/(2 s^0.6 + 1) -> x - 0.2 x^2: fitted from noisy samples."""
     G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0])
-    true = fohw.FractionalHW(G, p=[1.0, 0.3], f_basis=2, output_map=("polynomial", [-0.2]))
+    true = fohw.FractionalHW(G, p=[1.0, 0.3], f_basis=2, output_map=2, output_params=[-0.2],
+                             dt=0.05)
     rng = np.random.default_rng(7)
     u = rng.uniform(-2, 2, 2000)
-    y = true.simulate(u, dt=0.05) + 0.01 * rng.standard_normal(u.size)
-    fit = fohw.fit_fractional_hw(u, y, dt=0.05, num_orders=[0.0], den_orders=[0.5, 0.0], f_basis=2,
-                                 output_map=2)
+    y = true.simulate(u) + 0.01 * rng.standard_normal(u.size)
+    start = fohw.FractionalHW(fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]), p=[1.0, 0.0],
+                              f_basis=2, output_map=2, dt=0.05)
+    fit = fohw.fit(start, u, y)
     print(fit.summary())
     fig = fit.model.G.bode(others={"true G": G}, title="f → G(s) → h: G of the fit beside the truth")
     fig.savefig(outdir / "fotf_hw_bode.png", dpi=90)

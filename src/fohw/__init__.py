@@ -18,7 +18,6 @@ from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
 from .estimators.fit import fit
-from .estimators.fotf_hw_fit import FractionalHWFit, fit_fractional_hw, fractional_hw_crb
 from .estimators.hybrid import (
     HybridIdentifier,
     HybridOptions,
@@ -52,7 +51,7 @@ from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
 from .model.fotf import FractionalTF
-from .model.fotf_hw import FractionalHW, OutputMap
+from .model.fotf_hw import FractionalHW
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
@@ -160,10 +159,6 @@ __all__ = [
     "ProfileInterval",
     "profile_interval",
     "FractionalHW",
-    "FractionalHWFit",
-    "OutputMap",
-    "fit_fractional_hw",
-    "fractional_hw_crb",
     "Saturation",
     "DeadZone",
     "PiecewiseLinear",

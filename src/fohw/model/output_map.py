@@ -134,6 +134,21 @@ class SeriesMap:
         """One short line."""
         return self.kind
 
+    def formula(self, params) -> str:
+        """``h`` at the parameter values ``params`` as one line.
+
+        Examples
+        --------
+        >>> from fohw.model.output_map import DeadZone, PolynomialMap, Saturation
+        >>> Saturation().formula([-1.0, 1.0]), PolynomialMap(3).formula([-0.2, 0.0])
+        ('h(z) = clip(z, -1, 1)', 'h(z) = z - 0.2 z^2')
+        >>> DeadZone().formula([-0.5, 0.5])
+        'h = deadzone(lower=free, upper=free) with h_lower = -0.5, h_upper = 0.5'
+        """
+        params = np.atleast_1d(np.asarray(params, dtype=np.float64))
+        values = ", ".join(f"{n} = {v:g}" for n, v in zip(self.names, params))
+        return f"h = {self.describe()}" + (f" with {values}" if values else "")
+
     def to_dict(self) -> dict:
         """A JSON-ready description (no parameter values: those are the result's)."""
         raise NotImplementedError
@@ -278,6 +293,11 @@ class Saturation(_TwoLimits):
         continued a saturated noise-free record).
         """
         return np.asarray(y, dtype=np.float64).copy()     # within the limits h is the identity
+
+    def formula(self, params):
+        """As :meth:`SeriesMap.formula`."""
+        lo, hi = self.limits(params)
+        return f"h(z) = clip(z, {lo:g}, {hi:g})"
 
 
 class DeadZone(_TwoLimits):
@@ -588,6 +608,12 @@ class PolynomialMap(SeriesMap):
     def describe(self):
         """As :meth:`SeriesMap.describe`."""
         return f"polynomial(degree={self.degree}{', monotone' if self.monotone else ''})"
+
+    def formula(self, params):
+        """As :meth:`SeriesMap.formula` (the coefficients of ``h`` in powers of ``z``)."""
+        c = self.coefficients(params)
+        terms = " + ".join(f"{v:g} z^{j}" for j, v in enumerate(c[2:], start=2) if v != 0)
+        return ("h(z) = z" + (" + " + terms if terms else "")).replace("+ -", "- ")
 
     def to_dict(self):
         """As :meth:`SeriesMap.to_dict`."""
