@@ -8,8 +8,8 @@ from tf_reference import SYSTEMS, literal_simulation, mittag_leffler
 
 import fohw
 from fohw.exceptions import DimensionError, ParameterError, SimulationDivergedError
-from fohw.model.fotf_stability import commensurate_base, rhp_zero_count
 from fohw.model.kernels import series_divide, series_reciprocal
+from fohw.model.transfer_stability import commensurate_base, rhp_zero_count
 
 RNG = np.random.default_rng(20250)
 

@@ -99,7 +99,7 @@ def test_parameters_follow_the_terms_as_given_and_the_default_preset():
     assert [p[n].value for n in p] == [0.5, 1.0, -0.5, 0.0, 1.0, 2.0, 0.0, 0.6]
     # every coefficient but the lowest-order denominator one (a0 here), every non-zero order
     assert p.free_names == ("b0", "b1", "beta0", "a1", "alpha1")
-    assert p["beta0"].bounds == fohw.model.fotf.NUM_ORDER_RANGE == (-2.0, 2.0)
+    assert p["beta0"].bounds == fohw.model.transfer.NUM_ORDER_RANGE == (-2.0, 2.0)
     assert p["alpha1"].bounds == fohw.model.orders.ORDER_RANGE == (0.0, 2.0)
     # an order given beyond the range widens its own bound to it
     assert fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [2.5, 0.0]).parameters["alpha0"].bounds == (0.0, 2.5)

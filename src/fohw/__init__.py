@@ -50,8 +50,6 @@ from .io.text import read_record
 from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
-from .model.fotf import FractionalTF
-from .model.fotf_hw import FractionalHW
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
@@ -62,6 +60,8 @@ from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
 from .model.structure import Structure
 from .model.system import HammersteinWiener
+from .model.transfer import FractionalTF
+from .model.wiener import FractionalHW
 from .record import Benchmark, Record
 from .results import IdentificationResult, Status
 

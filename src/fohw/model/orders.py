@@ -51,7 +51,7 @@ __all__ = ["Orders", "Term", "PRESETS", "ORDER_RANGE", "OrdersLike", "check_nk"]
 
 #: The orders a term may have (fixed or free): ``[0, 2]``. The one order range of fohw: a
 #: transfer function's numerator order, which may be negative, takes it mirrored, ``(-2, 2)``
-#: (:data:`fohw.model.fotf.NUM_ORDER_RANGE`).
+#: (:data:`fohw.model.transfer.NUM_ORDER_RANGE`).
 ORDER_RANGE = (0.0, 2.0)
 #: The named presets.
 PRESETS = ("commensurate", "per_lag", "mixed")

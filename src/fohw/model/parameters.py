@@ -9,7 +9,7 @@ slices a parameter vector by hand. After lmfit's ``Parameter``/``Parameters``.
 
 Fractional orders have one range rule: :data:`ORDER_RANGE` (``[0, 2]``), mirrored to
 ``(-2, 2)`` where an order may be negative (a numerator order of a transfer function, a fractional
-integral: :data:`fohw.model.fotf.NUM_ORDER_RANGE`). A kind whose model was given an order
+integral: :data:`fohw.model.transfer.NUM_ORDER_RANGE`). A kind whose model was given an order
 outside its range widens that order's own bound to its value.
 """
 

@@ -8,7 +8,7 @@ static maps):
 - ``f``: a :class:`fohw.Basis` with coefficients ``p``, **normalised by** ``p_1 = 1`` (the gain
   lives in ``G``, whose lowest-order denominator coefficient is held fixed as the normaliser);
 - ``G``: a :class:`fohw.FractionalTF`, simulated by its GL discretisation with the current
-  sample on both sides (implicit; sample alignment of :mod:`fohw.model.fotf`);
+  sample on both sides (implicit; sample alignment of :mod:`fohw.model.transfer`);
 - ``h``: a series output map of :mod:`fohw.model.output_map` (the family the lagged kind uses:
   :class:`~fohw.Saturation`, :class:`~fohw.DeadZone`, :class:`~fohw.PiecewiseLinear`,
   :class:`~fohw.PolynomialMap`, :class:`~fohw.CustomMap`), or none (the identity).
@@ -41,7 +41,6 @@ from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
 from .base import Model
 from .basis import Basis, as_basis
-from .fotf import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights
 from .gl import gl_weights, gl_weights_derivative
 from .kernels import causal_product, series_divide, series_reciprocal
 from .output_map import (
@@ -54,6 +53,7 @@ from .output_map import (
     output_map_from_dict,
 )
 from .parameters import ORDER_RANGE, Parameter, Parameters
+from .transfer import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights
 
 __all__ = ["FractionalHW", "tf_sensitivities"]
 
@@ -104,7 +104,7 @@ def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h, *, orders=True)
     Examples
     --------
     >>> import numpy as np
-    >>> from fohw.model.fotf_hw import tf_sensitivities
+    >>> from fohw.model.wiener import tf_sensitivities
     >>> x = np.array([0.5, 0.75, 0.875])                  # 1 / (s + 1), h = 1, a unit step
     >>> tf_sensitivities(np.ones(1), np.zeros(1), np.ones(2), np.array([1.0, 0.0]),
     ...                  np.ones(3), x, 1.0)[:, 0]       # d x / d b0 = x / b0
@@ -176,7 +176,7 @@ class FractionalHW(Model):
     ``y = h(x)``; the tests compare every sample with the literal per-sample loop.
 
     Parameters (:attr:`parameters`): every term of ``G`` (orders ``order=True``, numerator orders
-    bounded by :data:`fohw.model.fotf.NUM_ORDER_RANGE`, denominator orders by ``ORDER_RANGE``, each
+    bounded by :data:`fohw.model.transfer.NUM_ORDER_RANGE`, denominator orders by ``ORDER_RANGE``, each
     widened to reach a value given beyond them), ``p2…`` and the map's. Fixed by default: the
     denominator coefficient of the lowest order (the scale normaliser) and every order that is
     0 in the ``G`` given (a constant term). Change that with ``model.with_parameters(parameters)``.

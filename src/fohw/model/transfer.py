@@ -24,12 +24,12 @@ import scipy  # submodules (scipy.fft, .signal, ...) load on first use: import t
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
 from .base import Model
-from .fotf_stability import commensurate_base, matignon_roots, rhp_zero_count
 from .frequency_response import gl_operator_response, operator_response
 from .gl import gl_weights, gl_weights_derivative, sampling_scale
 from .kernels import causal_product, series_divide, series_reciprocal
 from .orders import ORDER_RANGE
 from .parameters import Parameter, Parameters
+from .transfer_stability import commensurate_base, matignon_roots, rhp_zero_count
 
 __all__ = ["FractionalTF", "operator_weights", "delay_samples", "NUM_ORDER_RANGE", "TF_ORDER_LIMIT",
            "DIVERGENCE_FACTOR"]
@@ -78,7 +78,7 @@ def operator_weights(coefs, orders, h, n):
 
     Examples
     --------
-    >>> from fohw.model.fotf import operator_weights
+    >>> from fohw.model.transfer import operator_weights
     >>> operator_weights([1.0, 1.0], [1.0, 0.0], 0.5, 3)     # D + 1 with h = 0.5
     array([ 3., -2.,  0.])
     """
@@ -104,7 +104,7 @@ def delay_samples(delay, h):
 
     Examples
     --------
-    >>> from fohw.model.fotf import delay_samples
+    >>> from fohw.model.transfer import delay_samples
     >>> delay_samples(0.3, 0.1)
     3
     """
@@ -301,7 +301,7 @@ class FractionalTF(Model):
             if far.size:
                 raise ParameterError(
                     f"`{name}` must lie in [{lo:g}, {TF_ORDER_LIMIT:g}]; got {float(orders[far[0]])!r} at "
-                    f"index {int(far[0])}. A transfer function's orders are bounded by fohw.model.fotf."
+                    f"index {int(far[0])}. A transfer function's orders are bounded by fohw.model.transfer."
                     "TF_ORDER_LIMIT: beyond it dt**-order and the GL weights leave double precision.")
         # The terms as given name the parameters (b0 is num[0], ...); the merged ones simulate.
         self._terms = tuple(x.copy() for x in (b, beta, a, alpha))
@@ -968,7 +968,7 @@ class FractionalTF(Model):
             ``"matignon"``: the roots ``lambda`` of the polynomial in ``s^q`` satisfy
             ``|arg lambda| > q pi / 2`` (commensurate orders only); ``"argument"``: the argument
             principle counts no zero of the denominator in ``Re s >= 0``
-            (:func:`fohw.model.fotf_stability.rhp_zero_count`); ``"auto"``: Matignon when the
+            (:func:`fohw.model.transfer_stability.rhp_zero_count`); ``"auto"``: Matignon when the
             orders are commensurate, the argument principle otherwise.
         max_denominator : int, optional
             For :meth:`commensurate_order`.

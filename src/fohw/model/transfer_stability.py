@@ -51,7 +51,7 @@ def commensurate_base(orders, *, max_denominator=100, tol=1e-9):
 
     Examples
     --------
-    >>> from fohw.model.fotf_stability import commensurate_base
+    >>> from fohw.model.transfer_stability import commensurate_base
     >>> commensurate_base([1.5, 0.5, 0.0])
     0.5
     >>> commensurate_base([2.0, 1.0]), commensurate_base([2 ** 0.5, 1.0]) is None
@@ -94,7 +94,7 @@ def commensurate_polynomial(coefs, orders, q):
 
     Examples
     --------
-    >>> from fohw.model.fotf_stability import commensurate_polynomial
+    >>> from fohw.model.transfer_stability import commensurate_polynomial
     >>> commensurate_polynomial([1.0, 3.0, 2.0], [1.0, 0.5, 0.0], 0.5)
     array([1., 3., 2.])
     """
@@ -128,7 +128,7 @@ def matignon_roots(coefs, orders, q):
 
     Examples
     --------
-    >>> from fohw.model.fotf_stability import matignon_roots
+    >>> from fohw.model.transfer_stability import matignon_roots
     >>> roots, stable = matignon_roots([1.0, 1.0], [0.5, 0.0], 0.5)   # s^0.5 + 1: lambda = -1
     >>> roots, stable
     (array([-1.]), True)
@@ -167,7 +167,7 @@ def rhp_zero_count(coefs, orders, *, points_per_decade=200, max_points=2_000_000
 
     Examples
     --------
-    >>> from fohw.model.fotf_stability import rhp_zero_count
+    >>> from fohw.model.transfer_stability import rhp_zero_count
     >>> rhp_zero_count([1.0, 1.0], [0.5, 0.0]), rhp_zero_count([1.0, -1.0], [0.5, 0.0])
     (0, 1)
     """

@@ -390,7 +390,7 @@ def test_linear_start_solves_a_noise_free_record_at_the_true_orders():
 
 
 def test_coefficient_sensitivities_alone_are_the_full_ones_columns():
-    from fohw.model.fotf_hw import tf_sensitivities
+    from fohw.model.wiener import tf_sensitivities
     G = fohw.FractionalTF([1.0, 0.3], [0.5, 0.0], [2.0, 0.7, 1.0], [1.3, 0.6, 0.0])
     w = np.random.default_rng(3).uniform(-1, 1, 300)
     x = G.simulate(w, dt=0.05)
