@@ -31,8 +31,8 @@ from .orders import ORDER_RANGE
 from .parameters import Parameter, Parameters
 from .transfer_stability import commensurate_base, matignon_roots, rhp_zero_count
 
-__all__ = ["FractionalTF", "operator_weights", "delay_samples", "NUM_ORDER_RANGE", "TF_ORDER_LIMIT",
-           "DIVERGENCE_FACTOR"]
+__all__ = ["FractionalTF", "operator_weights", "delay_samples", "tf_sensitivities", "NUM_ORDER_RANGE",
+           "TF_ORDER_LIMIT", "DIVERGENCE_FACTOR"]
 
 # Orders closer than this are one term (their coefficients are summed).
 ORDER_TOL = 1e-12
@@ -211,6 +211,62 @@ def _term_text(c, o):
 def _poly_text(coefs, orders):
     text = " + ".join(_term_text(c, o) for c, o in zip(coefs, orders))
     return text.replace("+ -", "- ")
+
+
+def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h, *, orders=True):
+    """``d x / d (num, num_orders, den, den_orders)`` of ``x = G wd`` (GL discretisation).
+
+    Parameters
+    ----------
+    num, num_orders, den, den_orders : ndarray
+        ``G``'s terms (any order; equal orders need not be merged).
+    wd : ndarray, shape (N,)
+        The input, already delayed.
+    x : ndarray, shape (N,)
+        ``G``'s output for ``wd``.
+    h : float
+        Sampling time.
+
+    orders : bool, optional
+        False: the coefficients' columns only.
+
+    Returns
+    -------
+    ndarray, shape (N, 2 m + 2 k)
+        Columns ``b_0…, beta_0…, a_0…, alpha_0…`` (module notes for the formulas); with
+        ``orders=False`` shape ``(N, m + k)``, columns ``b_0…, a_0…``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fohw.model.transfer import tf_sensitivities
+    >>> x = np.array([0.5, 0.75, 0.875])                  # 1 / (s + 1), h = 1, a unit step
+    >>> tf_sensitivities(np.ones(1), np.zeros(1), np.ones(2), np.array([1.0, 0.0]),
+    ...                  np.ones(3), x, 1.0)[:, 0]       # d x / d b0 = x / b0
+    array([0.5  , 0.75 , 0.875])
+    """
+    n = wd.shape[0]
+    c = operator_weights(den, den_orders, h, n)
+    if c[0] == 0.0 or not np.isfinite(c[0]):
+        raise ParameterError(f"the implicit GL step of `G` is singular for dt = {h!r}.")
+    r = series_reciprocal(c, n)
+    nfft = scipy.fft.next_fast_len(3 * n - 2, real=True)
+    rr = scipy.fft.rfft(r, nfft)
+    ww = rr * scipy.fft.rfft(wd, nfft)
+    xx = -rr * scipy.fft.rfft(x, nfft)
+    log_h = np.log(h)
+    cols = []
+    for coefs, nus, spec in ((num, num_orders, ww), (den, den_orders, xx)):
+        block_c, block_o = [], []
+        for cf, nu in zip(coefs, nus):
+            s = h ** (-nu)
+            w = gl_weights(nu, n)
+            block_c.append(scipy.fft.irfft(spec * scipy.fft.rfft(s * w, nfft), nfft)[:n])
+            if orders:
+                dw = gl_weights_derivative(nu, n) - log_h * w
+                block_o.append(scipy.fft.irfft(spec * scipy.fft.rfft(cf * s * dw, nfft), nfft)[:n])
+        cols += block_c + block_o
+    return np.column_stack(cols)
 
 
 class FractionalTF(Model):
@@ -477,32 +533,7 @@ class FractionalTF(Model):
         ud = self._delayed(u, h)
         yhat = self.simulate(u, divergence_threshold=np.inf)   # the free run, as fit scores it
         with np.errstate(over="ignore", invalid="ignore"):
-            return yhat, self._gl_jacobian(ud, yhat, h)
-
-    def _gl_jacobian(self, ud, yhat, h):
-        b, beta, a, alpha = self._terms
-        n = ud.size
-        c = operator_weights(a, alpha, h, n)
-        if c[0] == 0.0 or not np.isfinite(c[0]):
-            raise ParameterError(f"the implicit GL step is singular for dt = {h!r}: sum_i a_i "
-                                 "dt^(-alpha_i) = 0 (`den`).")
-        r = series_reciprocal(c, n)
-        nfft = scipy.fft.next_fast_len(3 * n - 2, real=True)
-        rr = scipy.fft.rfft(r, nfft)
-        uu = rr * scipy.fft.rfft(ud, nfft)
-        yy = -rr * scipy.fft.rfft(yhat, nfft)
-        log_h = np.log(h)
-        cols = []
-        for coefs, orders, x in ((b, beta, uu), (a, alpha, yy)):
-            scale = h ** (-orders)
-            block_c, block_o = [], []
-            for cf, nu, sc in zip(coefs, orders, scale):
-                w = gl_weights(nu, n)
-                dw = gl_weights_derivative(nu, n) - log_h * w
-                block_c.append(scipy.fft.irfft(x * scipy.fft.rfft(sc * w, nfft), nfft)[:n])
-                block_o.append(scipy.fft.irfft(x * scipy.fft.rfft(cf * sc * dw, nfft), nfft)[:n])
-            cols += block_c + block_o
-        return np.column_stack(cols)
+            return yhat, tf_sensitivities(*self._terms, ud, yhat, h)
 
     def linear_start(self, u, y):
         """The model with its free coefficients from the linear equation error (or ``None``).

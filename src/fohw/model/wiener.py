@@ -41,8 +41,7 @@ from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
 from .base import Model
 from .basis import Basis, as_basis
-from .gl import gl_weights, gl_weights_derivative
-from .kernels import causal_product, series_divide, series_reciprocal
+from .kernels import causal_product, series_divide
 from .output_map import (
     CustomMap,
     PiecewiseLinear,
@@ -53,9 +52,9 @@ from .output_map import (
     output_map_from_dict,
 )
 from .parameters import ORDER_RANGE, Parameter, Parameters
-from .transfer import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights
+from .transfer import NUM_ORDER_RANGE, FractionalTF, delay_samples, operator_weights, tf_sensitivities
 
-__all__ = ["FractionalHW", "tf_sensitivities"]
+__all__ = ["FractionalHW"]
 
 #: Rounds of :meth:`FractionalHW.linear_start` (G's coefficients, then b and p, then the map).
 ROUNDS = 2
@@ -76,62 +75,6 @@ def _shifted(w, shift):
     if shift < w.shape[0]:
         out[shift:] = w[:w.shape[0] - shift]
     return out
-
-
-def tf_sensitivities(num, num_orders, den, den_orders, wd, x, h, *, orders=True):
-    """``d x / d (num, num_orders, den, den_orders)`` of ``x = G wd`` (GL discretisation).
-
-    Parameters
-    ----------
-    num, num_orders, den, den_orders : ndarray
-        ``G``'s terms (any order; equal orders need not be merged).
-    wd : ndarray, shape (N,)
-        The input, already delayed.
-    x : ndarray, shape (N,)
-        ``G``'s output for ``wd``.
-    h : float
-        Sampling time.
-
-    orders : bool, optional
-        False: the coefficients' columns only.
-
-    Returns
-    -------
-    ndarray, shape (N, 2 m + 2 k)
-        Columns ``b_0…, beta_0…, a_0…, alpha_0…`` (module notes for the formulas); with
-        ``orders=False`` shape ``(N, m + k)``, columns ``b_0…, a_0…``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from fohw.model.wiener import tf_sensitivities
-    >>> x = np.array([0.5, 0.75, 0.875])                  # 1 / (s + 1), h = 1, a unit step
-    >>> tf_sensitivities(np.ones(1), np.zeros(1), np.ones(2), np.array([1.0, 0.0]),
-    ...                  np.ones(3), x, 1.0)[:, 0]       # d x / d b0 = x / b0
-    array([0.5  , 0.75 , 0.875])
-    """
-    n = wd.shape[0]
-    c = operator_weights(den, den_orders, h, n)
-    if c[0] == 0.0 or not np.isfinite(c[0]):
-        raise ParameterError(f"the implicit GL step of `G` is singular for dt = {h!r}.")
-    r = series_reciprocal(c, n)
-    nfft = scipy.fft.next_fast_len(3 * n - 2, real=True)
-    rr = scipy.fft.rfft(r, nfft)
-    ww = rr * scipy.fft.rfft(wd, nfft)
-    xx = -rr * scipy.fft.rfft(x, nfft)
-    log_h = np.log(h)
-    cols = []
-    for coefs, nus, spec in ((num, num_orders, ww), (den, den_orders, xx)):
-        block_c, block_o = [], []
-        for cf, nu in zip(coefs, nus):
-            s = h ** (-nu)
-            w = gl_weights(nu, n)
-            block_c.append(scipy.fft.irfft(spec * scipy.fft.rfft(s * w, nfft), nfft)[:n])
-            if orders:
-                dw = gl_weights_derivative(nu, n) - log_h * w
-                block_o.append(scipy.fft.irfft(spec * scipy.fft.rfft(cf * s * dw, nfft), nfft)[:n])
-        cols += block_c + block_o
-    return np.column_stack(cols)
 
 
 class FractionalHW(Model):
