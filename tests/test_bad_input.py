@@ -347,7 +347,7 @@ API = [
     ("load_model", "'version': \"1\" (a string)",
      lambda t: fohw.load_model(_model_file(t, version="1")),
      fohw.DataFileError, "field 'version' is the string '1'; this fohw reads fohw-model files of "
-     "version 2 or 3, written as a JSON integer"),
+     "version 3, written as a JSON integer"),
     ("load_model", "#15/#17 a directory", lambda t: fohw.load_model(t),
      fohw.DataFileError, "is a directory, not a fohw JSON file"),
     ("load_result", "a NaN J", lambda t: fohw.load_result(_result_file(t, J=float("nan"))),

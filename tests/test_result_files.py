@@ -1,7 +1,6 @@
 """One source of truth for a result, and its files: every field survives the JSON round trip,
-derived facts cannot disagree with what they derive from, and files of the previous layout
-(version 2, tests/data/*_v2_*.json, written by fohw before format 3) still load to the same
-result.
+derived facts cannot disagree with what they derive from, and golden files of earlier fits
+(tests/data/result_*.json) are what today's fits of the same data give.
 """
 
 import dataclasses
@@ -188,114 +187,28 @@ def test_offset_is_a_value_and_the_structure_says_whether_it_is_fitted():
     assert o.structure.offset and o.offset == o.linear[-1] == o.model.offset
 
 
-# ---- version 2 files, written by fohw before format 3 (tests/data/make_v2_results.py) ----------
-V2 = sorted(p.name[len("result_v2_"):-len(".json")] for p in DATA.glob("result_v2_*.json")
-            if not p.name.endswith(".view.json"))
+# ---- golden files: fits written by an earlier fohw (tests/data/result_<name>.json) ------------
+# First written as version-2 files by fohw's code before format 3 (commit 29a506a, with
+# tests/data/make_v2_results.py of that era), read by the version-2 reader fohw then had and
+# written again as version 3, the only version read now; the numbers are those first written.
+GOLDEN = ["fixed_order", "hybrid", "output_error_mixed", "varpro"]
 
 
-def test_there_are_version_2_fixtures():
-    assert V2 == ["fixed_order", "hybrid", "output_error_mixed", "varpro"]
-
-
-def _plain(value):
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, (tuple, list)):
-        return [_plain(v) for v in value]
-    if hasattr(value, "keys"):
-        return {k: _plain(value[k]) for k in value}
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-@pytest.mark.parametrize("name", V2)
-def test_a_version_2_file_loads_to_the_same_result(name):
-    """Every attribute as the fohw that wrote the file read it back (its ``.view.json``)."""
-    view = json.loads((DATA / f"result_v2_{name}.view.json").read_text())
-    r = fohw.load_result(DATA / f"result_v2_{name}.json")
-    options = dict(view.pop("options"))
-    if "simulation_sse" in options:                   # an output, now in details
-        assert r.details["simulation_sse"] == options.pop("simulation_sse")
-    assert _plain(r.options) == options
-    offset = view.pop("offset")                       # null meant "none fitted": now 0.0
-    assert r.offset == (0.0 if offset is None else offset)
-    assert [r.layout.na, r.layout.nb, list(r.layout.names)] == view.pop("layout")
-    assert list(r.f_basis.names) == view.pop("f_basis")
-    assert list(r.g_basis.names) == view.pop("g_basis")
-    structure = r.structure.to_dict()
-    assert {k: structure[k] for k in ("orders", "offset", "past", "dt")} == view.pop("structure")
-    assert (None if r.model is None else repr(r.model)) == view.pop("model")
-    assert repr(r) == view.pop("repr") and r.summary(linear_block=False) == view.pop("summary")
-    for key, want in view.items():
-        assert _plain(getattr(r, key)) == want, key
-    d = json.loads((DATA / f"result_v2_{name}.json").read_text())
-    assert np.array_equal(r.theta, d["theta"]["data"]) and r.alpha == d["alpha"]
+def test_a_version_2_file_is_refused_by_name(tmp_path):
+    d = json.loads((DATA / "result_varpro.json").read_text())
+    d["version"] = 2
+    (tmp_path / "old.json").write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match="field 'version' is 2; this fohw reads "
+                                                  "fohw-result files of version 3"):
+        fohw.load_result(tmp_path / "old.json")
 
 
 @pytest.mark.parametrize("name", ["paper", "mixed"])
-def test_a_version_2_model_file_loads_to_the_same_model(name):
-    view = json.loads((DATA / f"model_v2_{name}.view.json").read_text())
-    m = fohw.load_model(DATA / f"model_v2_{name}.json")
-    assert repr(m) == view["repr"]
-    d = json.loads((DATA / f"model_v2_{name}.json").read_text())
+def test_a_golden_model_file_loads(name):
+    m = fohw.load_model(DATA / f"model_{name}.json")
+    d = json.loads((DATA / f"model_{name}.json").read_text())
     assert all(np.array_equal(getattr(m, k), d[k]) for k in "abpq")
     assert (m.offset, list(m.past), m.orders) == (d["offset"], d["past"], d["orders"])
-
-
-def test_a_version_2_result_resaved_is_format_3(tmp_path):
-    r = fohw.load_result(DATA / "result_v2_output_error_mixed.json")
-    fohw.save_result(r, tmp_path / "r.json")
-    back = fohw.load_result(tmp_path / "r.json")
-    for name in FIELDS + DERIVED:
-        assert same(getattr(back, name), getattr(r, name)), name
-
-
-def _v2_file(tmp_path, name="varpro", **change):
-    d = json.loads((DATA / f"result_v2_{name}.json").read_text())
-    for key, value in change.items():
-        if "." in key:
-            outer, inner = key.split(".")
-            d[outer][inner] = value
-        else:
-            d[key] = value
-    path = tmp_path / "old.json"
-    path.write_text(json.dumps(d))
-    return path
-
-
-@pytest.mark.parametrize("change, match", [
-    (dict(alpha=0.1), "field 'alpha' is 0.1, but field 'orders' gives 0.602"),
-    (dict(layout={"na": 1, "nb": 2}), "field 'layout' is .* but field 'structure' has na = 2"),
-    (dict(parameter_names=["a1"]), "field 'parameter_names' is"),
-    (dict(orders={"alpha": 2.5}), "order 'alpha' is 2.5, outside \\[0, 2\\]"),
-    (dict(input_range=[2.0, 1.0]), "field 'input_range' is reversed"),
-    (dict(method="magic"), "field 'method' must be one of fohw's methods"),
-    (dict(offset=0.5), "the structure fits no offset"),
-    (dict(alpha=float("nan")), "field 'alpha' must be a finite number or null; got nan"),
-    (dict(extra=1), "field 'extra' is not part of a fohw-result file of version 2"),
-])
-def test_a_version_2_file_that_contradicts_itself_is_refused(tmp_path, change, match):
-    with pytest.raises(fohw.DataFileError, match=match):
-        fohw.load_result(_v2_file(tmp_path, **change))
-
-
-def test_a_version_2_file_with_a_null_offset_where_one_was_fitted_is_refused(tmp_path):
-    with pytest.raises(fohw.DataFileError, match="field 'offset' is null, but field "
-                                                 "'structure.offset' says an offset was fitted"):
-        fohw.load_result(_v2_file(tmp_path, "output_error_mixed", offset=None))
-
-
-@pytest.mark.parametrize("change, match", [
-    (dict(offset=1.0), "field 'structure.offset' is False, but field 'offset' is 1.0"),
-    (dict(past=[0.5, 0.0]), "field 'structure.past' is 'rest', but field 'past' is"),
-])
-def test_a_version_2_model_file_that_contradicts_itself_is_refused(tmp_path, change, match):
-    d = json.loads((DATA / "model_v2_paper.json").read_text())
-    d.update(change)
-    (tmp_path / "m.json").write_text(json.dumps(d))
-    with pytest.raises(fohw.DataFileError, match=match):
-        fohw.load_model(tmp_path / "m.json")
 
 
 @pytest.mark.parametrize("model", [
@@ -324,7 +237,7 @@ def test_structure_and_basis_dicts_round_trip():
         fohw.Basis.from_dict(custom.to_dict(), fohw.Basis((np.sin,), names=("sin",)))
 
 
-V2_FITS = {      # as in tests/data/make_v2_results.py
+GOLDEN_FITS = {      # as the golden files were made
     "varpro": dict(n=300, method="varpro", **PAPER),
     "hybrid": dict(n=100, method="hybrid", innovation_length=3, **PAPER),
     "output_error_mixed": dict(n=300, method="output_error", na=1, nb=1, f_basis=2, g_basis=1,
@@ -333,11 +246,11 @@ V2_FITS = {      # as in tests/data/make_v2_results.py
 }
 
 
-@pytest.mark.parametrize("name", V2)
-def test_todays_fit_is_the_one_the_version_2_file_holds(name):
+@pytest.mark.parametrize("name", GOLDEN)
+def test_todays_fit_is_the_one_the_golden_file_holds(name):
     """No number moved: today's fit of the same data matches the old file (golden tolerances)."""
-    old = fohw.load_result(DATA / f"result_v2_{name}.json")
-    kw = dict(V2_FITS[name])
+    old = fohw.load_result(DATA / f"result_{name}.json")
+    kw = dict(GOLDEN_FITS[name])
     if name == "output_error_mixed":
         # The file's fit started from the varpro estimate, output_error's default then; since
         # issue 26 the default is a chain of starts, so the old path is asked for by name.

@@ -11,9 +11,8 @@ Files are written atomically (:mod:`fohw.io.files`).
 Reading checks every field for its type and, for numbers, finiteness (and the covariance for
 symmetry and non-negative variances) before anything is built, and refuses a file whose facts
 contradict each other: a :class:`~fohw.DataFileError` naming the file and the field, never a
-result that fails later. Files of the previous layout (version 2, which stored ``alpha``,
-``layout``, the bases and ``parameter_names`` beside what they derive from, and outputs in
-``options``) are read too, after checking that those copies agree.
+result that fails later. Only the current version is read (fohw is unreleased: the layout of
+version 2, which stored derived facts beside what they derive from, is gone).
 """
 
 from __future__ import annotations
@@ -45,7 +44,7 @@ MODEL_FORMAT_VERSION = 3
 #: bases, the settings in ``options`` and the method's outputs in ``details``).
 RESULT_FORMAT_VERSION = 3
 #: The versions read, per format.
-READS = {"fohw-model": (2, 3), "fohw-result": (2, 3)}
+READS = {"fohw-model": (3,), "fohw-result": (3,)}
 _HEADER = ("format", "version")
 
 
@@ -330,28 +329,6 @@ def model_to_dict(model: HammersteinWiener | Model) -> dict:
     return {"format": "fohw-model", "version": MODEL_FORMAT_VERSION, **model.to_dict()}
 
 
-def _model_from_v2(d, path):
-    """A version-2 model file's fields in the current layout, after checking its copies agree."""
-    _require_fields(d, ("a", "b", "p", "q", "orders", "structure", "offset", "past",
-                        "operating_point", "f_basis", "g_basis"), "fohw-model", 2, path)
-    s = d["structure"]
-    if not isinstance(s, dict) or set(s) != {"orders", "offset", "past", "dt"}:
-        _bad(d, "structure", "an object with 'orders', 'offset', 'past' and 'dt'", path)
-    _number(d, "offset", path)
-    _finite_pair(d, "past", path)
-    if s["offset"] != (d["offset"] != 0.0):
-        raise DataFileError(f"{path}: field 'structure.offset' is {s['offset']!r}, but field "
-                            f"'offset' is {d['offset']!r}: the file contradicts itself.")
-    past = "rest" if d["past"] == [0.0, 0.0] else "estimate"
-    if s["past"] != past:
-        raise DataFileError(f"{path}: field 'structure.past' is {s['past']!r}, but field 'past' "
-                            f"is {d['past']!r}: the file contradicts itself.")
-    return {"a": d["a"], "b": d["b"], "p": d["p"], "q": d["q"], "orders": d["orders"],
-            "terms": s["orders"], "f_basis": d["f_basis"], "g_basis": d["g_basis"],
-            "dt": s["dt"], "offset": d["offset"], "past": d["past"],
-            "operating_point": d["operating_point"]}
-
-
 def _no_bases(f_basis, g_basis, output_map, kind, path):
     for name, value in (("f_basis", f_basis), ("g_basis", g_basis), ("output_map", output_map)):
         if value is not None:
@@ -360,7 +337,7 @@ def _no_bases(f_basis, g_basis, output_map, kind, path):
 
 
 def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> HammersteinWiener:
-    """The model of a model file's content (:func:`model_to_dict`; version 2 files too).
+    """The model of a model file's content (:func:`model_to_dict`).
 
     A file with a ``kind`` field holds a model of that registered kind
     (:meth:`fohw.Model.from_dict`; its module must be imported first); the parameters it
@@ -372,8 +349,6 @@ def model_from_dict(d: dict, *, f_basis=None, g_basis=None, path="<dict>") -> Ha
     if _is_generic_model(body):
         _no_bases(f_basis, g_basis, None, body["kind"], path)
         return _generic_model_from_dict(body, version, path)
-    if version == 2:
-        body = _model_from_v2(body, path)
     _require_fields(body, HammersteinWiener.DICT_FIELDS, "fohw-model", version, path)
     for key in "abpq":
         _finite_list(body, key, path)
@@ -445,56 +420,6 @@ _V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_hi
 def result_to_dict(result) -> dict:
     """The content of a result file: the header and the result's ``to_dict()``."""
     return {"format": "fohw-result", "version": RESULT_FORMAT_VERSION, **result.to_dict()}
-
-
-def _result_from_v2(d, path):
-    """A version-2 result file's fields in the current layout, and its copies of derived facts.
-
-    Version 2 also stored ``alpha``, ``layout`` and ``parameter_names`` (checked against what
-    they derive from once the result is built), the bases beside the structure, the histories
-    as fields (now ``details``, a history that only repeats the estimate dropped), an offset of
-    ``null`` when none was fitted (now ``0.0``), and ``simulation_sse`` and a ``start``
-    description among the settings (now ``details``).
-    """
-    v2 = ("method", "schedule", "alpha", "J", "nit", "nfev", "message", "alpha_at_bound",
-          "n_samples", "noise_variance", "status", "theta", "covariance", "layout", "f_basis",
-          "g_basis", "structure", "orders", "offset", "past", "operating_point", "input_range",
-          "options", "parameter_names") + _V2_HISTORIES
-    _require_fields(d, v2, "fohw-result", 2, path)
-    _number(d, "alpha", path, optional=True)
-    _number(d, "J", path, lower=0.0)
-    _orders_field(d, "orders", path)
-    s = d["structure"]
-    if not isinstance(s, dict) or set(s) != {"orders", "offset", "past", "dt"}:
-        _bad(d, "structure", "an object with 'orders', 'offset', 'past' and 'dt'", path)
-    if d["offset"] is None:
-        if s["offset"] is True:
-            raise DataFileError(f"{path}: field 'offset' is null, but field 'structure.offset' "
-                                "says an offset was fitted: the file contradicts itself.")
-        offset = 0.0
-    else:
-        _number(d, "offset", path, optional=True)
-        offset = d["offset"]
-    if not isinstance(d["options"], dict):
-        _bad(d, "options", "an object (the run's settings)", path)
-    options, details = dict(d["options"]), {}
-    if isinstance(options.get("start"), str):       # a description of the start, not a setting
-        details["start"] = options.pop("start")
-    if "simulation_sse" in options:
-        details["simulation_sse"] = options.pop("simulation_sse")
-    alpha = next(iter(d["orders"].values()), None)
-    derived = {"alpha_history": [] if alpha is None else [alpha], "J_history": [d["J"]]}
-    for key in _V2_HISTORIES:
-        entry = d[key]
-        if entry is None or (key in derived and isinstance(entry, dict)
-                             and entry.get("data") == derived[key]):
-            continue
-        details[key] = entry
-    body = {key: d[key] for key in _RESULT_FIELDS if key in d}
-    body.update(structure=dict(s, f_basis=d["f_basis"], g_basis=d["g_basis"]), offset=offset,
-                schedule="" if d["schedule"] is None else d["schedule"], options=options,
-                details=details)
-    return body, {key: d[key] for key in ("alpha", "layout", "parameter_names")}
 
 
 def _check_result_fields(d, version, path):
@@ -705,26 +630,8 @@ def _check_covariance(cov, n_estimates, path):
                             "none.")
 
 
-def _check_v2_copies(result, copies, path):
-    """The copies a version-2 file kept of derived facts must agree with what they derive from."""
-    if copies["alpha"] != result.alpha:
-        raise DataFileError(f"{path}: field 'alpha' is {copies['alpha']!r}, but field 'orders' "
-                            f"gives {result.alpha!r} as the first free order: the file "
-                            "contradicts itself.")
-    layout = copies["layout"]
-    if not isinstance(layout, dict) or (layout.get("na"), layout.get("nb")) \
-            != (result.layout.na, result.layout.nb):
-        raise DataFileError(f"{path}: field 'layout' is {layout!r}, but field 'structure' has "
-                            f"na = {result.layout.na}, nb = {result.layout.nb}: the file "
-                            "contradicts itself.")
-    if copies["parameter_names"] != list(result.parameter_names):
-        raise DataFileError(f"{path}: field 'parameter_names' is {copies['parameter_names']!r}, "
-                            f"but the structure names theta {list(result.parameter_names)}: the "
-                            "file contradicts itself.")
-
-
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, path="<dict>"):
-    """The result of a result file's content (:func:`result_to_dict`; version 2 files too).
+    """The result of a result file's content (:func:`result_to_dict`).
 
     Every field is checked for its type and, for numbers, finiteness before use (the estimates,
     orders, offset, past levels, operating point and input range included; a covariance must
@@ -733,8 +640,7 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
     known method, ``input_range`` in order, the orders those the structure frees and inside the
     run's ``alpha_bounds``, theta as long as the structure's, a record longer than the lags,
     ``schedule`` the run's, standard errors only from a method that gives them and not for a
-    rank-deficient fit, ``details`` of their kinds; in a version-2 file ``alpha``, ``layout`` and
-    ``parameter_names`` as derived): a file edited or damaged by hand is a
+    rank-deficient fit, ``details`` of their kinds): a file edited or damaged by hand is a
     :class:`~fohw.DataFileError` naming the field, never a result that fails later.
     """
     version = _check_header(d, "fohw-result", path)
@@ -742,9 +648,6 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
     if _is_generic_result(body):
         _no_bases(f_basis, g_basis, output_map, body["model"]["kind"], path)
         return _generic_result_from_dict(body, version, path)
-    copies = None
-    if version == 2:
-        body, copies = _result_from_v2(body, path)
     _check_result_fields(body, version, path)
     f = _basis(body["structure"]["f_basis"], f_basis, "f_basis", path)
     g = _basis(body["structure"]["g_basis"], g_basis, "g_basis", path)
@@ -758,8 +661,6 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
         raise DataFileError(f"{path}: malformed or inconsistent fohw-result file "
                             f"({type(exc).__name__}: {exc})") from None
     _check_covariance(result.covariance, len(result.estimate_names), path)
-    if copies is not None:
-        _check_v2_copies(result, copies, path)
     return result
 
 
