@@ -34,8 +34,7 @@ differ.
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
-import scipy.optimize
+import scipy  # submodules (scipy.fft, ...) load on first use: import time
 
 from .._validation import check_int
 from ..exceptions import DimensionError, ParameterError
