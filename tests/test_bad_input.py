@@ -906,6 +906,64 @@ API = [
     ("Warburg.impedance", "f = 0 (was inf+nanj)",
      lambda t: fohw.Warburg(0.01, 0.5).impedance([0.0]), fohw.ParameterError,
      "the impedance of a Warburg element is infinite there"),
+    # issue 34 (fits): transfer functions and FractionalHW #7-#13, circuits #15-#20
+    ("fit", "a FractionalHW on a zero input (#8)",
+     lambda t: fohw.fit(fohw.FractionalHW(_G34, dt=0.1), np.zeros(50), U), fohw.ParameterError,
+     "`u` is zero at every sample"),
+    ("fit", "data scaled by 1e-200 (#9: was garbage marked converged)",
+     lambda t: fohw.fit(_TF, U * 1e-200, U**3 * 1e-200), fohw.ParameterError,
+     "`u` has magnitudes near 9.95e-201, outside [1e-150, 1e+150]"),
+    ("fit", "data scaled by 1e200 (#10: was 'give starts or bounds')",
+     lambda t: fohw.fit(_TF, U * 1e200, U**3 * 1e200), fohw.ParameterError,
+     "rescale `u` (e.g. to an RMS near 1)"),
+    ("fit", "order_grid = 0 (#11)", lambda t: fohw.fit(_TF, U, U**3, order_grid=0),
+     fohw.ParameterError, "`order_grid` must be at least 1; got 0"),
+    ("fit", "n_starts = -1 (#11)", lambda t: fohw.fit(_TF, U, U**3, n_starts=-1),
+     fohw.ParameterError, "`n_starts` must be at least 1; got -1"),
+    ("fit", "order_grid = 10**6 (#11: ran past 120 s)",
+     lambda t: fohw.fit(_TF, U, U**3, order_grid=10**6), fohw.ParameterError,
+     "`order_grid` = 1000000 scans 1000001 points for 1 free orders, more than 20000"),
+    ("fit", "tol = 0 (#12: was scipy's raw message)", lambda t: fohw.fit(_TF, U, U**3, tol=0),
+     fohw.ParameterError, "`tol` must be in [2.22045e-16, 1); got 0"),
+    ("fit", "a circuit with 3 samples (#15)",
+     lambda t: fohw.fit(_circ34(), *_cell34(n=3)), fohw.DimensionError,
+     "`y` has 3 samples for 6 free parameters (a, b, R0, R1, tau1, alpha1)"),
+    ("fit", "a circuit with 5 samples for 6 parameters (#15)",
+     lambda t: fohw.fit(_circ34(), *_cell34(n=5)), fohw.DimensionError,
+     "`y` has 5 samples for 6 free parameters"),
+    ("fit", "a circuit on a constant current (#15: was a rank-deficiency warning)",
+     lambda t: fohw.fit(_circ34(), *_cell34(current=np.ones(600))), fohw.ParameterError,
+     "the current `u[:, 0]` is constant (1.0 A at all 600 samples): R0 i is then a constant, "
+     "which the offset `a` already is"),
+    ("fit", "a circuit on a constant voltage (#15)",
+     lambda t: fohw.fit(_circ34(), _cell34()[0], np.full(600, 3.7)), fohw.ParameterError,
+     "`y` is constant"),
+    ("fit", "an OCV that returns NaN (#16: the error named the parameter a)",
+     lambda t: fohw.fit(_circ34(ocv=lambda s: np.full_like(s, np.nan)), *_cell34()),
+     fohw.ParameterError, "returned np.float64(nan) at sample 0"),
+    ("fit", "an OCV that returns 3 values for 600 samples (#17: raw broadcast error)",
+     lambda t: fohw.fit(_circ34(ocv=lambda s: np.ones(3)), *_cell34()), fohw.ParameterError,
+     "must return one voltage per sample of the state of charge: shape (600,) for 600 samples; "
+     "got shape (3,)"),
+    ("fit", "a state of charge of 1.5 (#18: accepted without a word)",
+     lambda t: fohw.fit(_circ34(), *_cell34(soc_shift=0.7)), fohw.ParameterError,
+     "the state of charge `u[:, 1]` must be in [0, 1] (a fraction of the capacity); got 1.4"),
+    ("EquivalentCircuit.simulate", "a negative state of charge (#18)",
+     lambda t: _CIRC34.simulate(np.column_stack([U, U])), fohw.ParameterError,
+     "the state of charge `u[:, 1]` must be in [0, 1]"),
+    ("EquivalentCircuit", "c3 = 'yes' (#19)", lambda t: fohw.EquivalentCircuit(["rc"], c3="yes"),
+     fohw.ParameterError, "`c3` must be a real number; got 'yes'"),
+    ("EquivalentCircuit.from_config", "current_map = 'yes' (#19: was taken as True)",
+     lambda t: fohw.EquivalentCircuit.from_config({"elements": ["rc"], "current_map": "yes"}),
+     fohw.ParameterError, "`current_map` of a circuit's config must be true or false (with or "
+     "without the c3 i^3 term); got 'yes'"),
+    ("fit", "five ZARCs at the default grid (#20: the start scan ran past 120 s)",
+     lambda t: fohw.fit(_circ34(("zarc",) * 5), *_cell34(), n_starts=1, max_nfev=20),
+     fohw.ParameterError, "would solve more than MAX_GRID_STARTS = 50000 combinations of grid "
+     "points (`n_tau` = 8 time constants and `n_alpha` = 5 orders per element)"),
+    ("fit", "n_tau = 10**6 (#20: no cap)",
+     lambda t: fohw.fit(_circ34(n_tau=10**6), *_cell34()), fohw.ParameterError,
+     "(`n_tau` = 1000000 time constants"),
 ]
 
 CLI = [
@@ -1079,6 +1137,20 @@ def _circuit_fit(soc=_SOC, dt=1.0, **held):
     for name, value in held.items():
         params = params.replace(name, value=value, fixed=True)
     return fohw.fit(model.with_parameters(params), _circuit_u(soc), U)
+
+
+def _cell34(n=600, current=None, soc_shift=0.0):
+    """Issue 34's circuit record: 20 s current steps from U(-3, 1.2) A, soc from 0.8, ``(u, v)``."""
+    rng = np.random.default_rng(1)
+    i = np.repeat(rng.uniform(-3.0, 1.2, 30), 20) if current is None else current
+    soc = 0.8 + np.cumsum(i) / (3600 * 5)
+    v = _CIRC34.simulate(np.column_stack([i, soc])) + 3.3 + 0.9 * soc
+    return np.column_stack([i, soc + soc_shift])[:n], (v + 1e-4 * rng.standard_normal(600))[:n]
+
+
+def _circ34(elements=("zarc",), ocv=lambda s: 3.3 + 0.9 * s, **kw):
+    """The circuit fitted in issue 34 (``kw``: constructor settings)."""
+    return fohw.EquivalentCircuit(list(elements), ocv=ocv, tau_bounds=(1.0, 500.0), **kw)
 
 
 def _hybrid():

@@ -309,14 +309,17 @@ def test_zero_current_and_constant_voltage_are_refused():
         fohw.fit(circuit(("zarc",)), u, np.full(u.shape[0], 3.7))
 
 
-def test_a_constant_current_leaves_r0_and_the_offset_unidentified():
+def test_a_constant_current_is_refused_unless_the_offset_or_r0_is_held():
+    # R0 i is then a constant, the offset a: issue 34 #15 (it was a rank-deficiency warning with
+    # the lagged kind's advice, "remove a basis function or a lag"). With a held it is a fit.
     u = record(300, seed=15)
     u[:, 0] = -1.0
     v = TRUE.simulate(u) + 1e-4 * np.random.default_rng(16).standard_normal(u.shape[0])
-    with pytest.warns(fohw.RankDeficiencyWarning):
-        fit = fohw.fit(circuit(()), u, v)
-    assert fit.status == fohw.Status.RANK_DEFICIENT
-    assert "a" in fit.message.split("columns of")[1] or "R0" in fit.message
+    with pytest.raises(fohw.ParameterError, match="current `u\\[:, 0\\]` is constant \\(-1.0 A at "
+                                                  "all 300 samples\\): R0 i is then a constant"):
+        fohw.fit(circuit(()), u, v)
+    fit = fohw.fit(circuit((), current_map=True, a=TRUE.a, c3=TRUE.c3), u, v)
+    assert fit.converged and fit.parameters["a"].value == TRUE.a
 
 
 def test_a_current_of_the_other_sign_is_named():

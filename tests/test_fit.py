@@ -248,6 +248,20 @@ def test_the_order_scan_is_capped():
     with pytest.raises(fohw.ParameterError, match=f"more than {MAX_SCAN}"):
         fohw.fit(Orders(), *_record(), order_grid=20)
 
+    class ManyStarts(Orders, register=False):
+        def with_parameters(self, values):
+            return ManyStarts(**self.parameters.with_values(values).valuesdict())
+
+        def starts(self, u, y):
+            return [self.with_parameters({"nu0": 0.1 + 0.01 * k}) for k in range(20)]
+
+    # Issue 34 #20: 20 start models of 7 * 6**3 = 1512 points each (nu0's own value is off the
+    # grid): each below the cap, their sum above
+    # (a circuit's five scan starts of five ZARCs made 5 x 6**5 = 38 880 simulations: 171 s).
+    with pytest.raises(fohw.ParameterError, match=f"scans more than {MAX_SCAN} points over the 20 "
+                                                  "start models"):
+        fohw.fit(ManyStarts(), *_record(), order_grid=6)
+
 
 def test_nothing_free_is_refused():
     fixed = Lag().parameters.replace("a", fixed=True).replace("b", fixed=True)

@@ -48,7 +48,8 @@ from ._common import bounded_least_squares, dependent_columns_note
 __all__ = ["fit", "free_jacobian", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
            "PENALTY", "FD_RCOND"]
 
-#: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model).
+#: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model, summed
+#: over the start models: a kind's :meth:`~fohw.Model.starts` may return several).
 MAX_SCAN = 20_000
 
 #: A free run beyond this many times the largest measured ``|y|`` is out of range: the search
@@ -217,7 +218,7 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         :meth:`~fohw.Model.linear_start` get them when they take a ``sample_weight`` keyword.
     order_grid : int, optional
         Scan points per free order for each start (its own value is always among them); 1 skips
-        the scan. At most ``MAX_SCAN`` points in all.
+        the scan. At most ``MAX_SCAN`` points in all (over every start model).
     n_starts : int, optional
         How many of the best-ranked starts are refined by least squares.
     max_nfev : int, optional
@@ -323,8 +324,16 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
     candidates = []
+    scanned = 0
     for base in bases:
-        for m in _order_grid(base, order_grid):
+        grid = _order_grid(base, order_grid)
+        scanned += len(grid)
+        if scanned > MAX_SCAN:
+            raise ParameterError(
+                f"`order_grid` = {order_grid} scans more than {MAX_SCAN} points over the "
+                f"{len(bases)} start models of the {type(model).__name__} ({len(grid)} for one); "
+                "use a smaller grid (order_grid=1 skips the scan).")
+        for m in grid:
             candidates.append(m)
             try:
                 with np.errstate(all="ignore"):
@@ -389,7 +398,8 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
             messages.append(note)
         inverse, fac = _linalg.inverse_gram(jac, rcond=rank_rcond(how_cov, *jac.shape))
         if inverse is None:
-            status = Status.RANK_DEFICIENT
+            # the kind's own sentence (check_fitted) names the cause: it stays FAILED, first
+            status = Status.FAILED if note else Status.RANK_DEFICIENT
             note = dependent_columns_note(fac, list(names))
             messages.append(note[0].upper() + note[1:])
             covariance = None

@@ -324,6 +324,11 @@ ELEMENT_KINDS = {"rc": RC, "zarc": ZARC, "warburg": Warburg}
 #: Scan starts :meth:`EquivalentCircuit.starts` returns (the best grid points, distinct).
 SCAN_STARTS = 5
 
+#: Most combinations of grid points the start scan (:meth:`EquivalentCircuit.starts`) may
+#: solve: about 30 us each (4 ZARCs at the default grid, 43 750 of them, take 1.3 s); five ZARCs
+#: at the default grid would need 175 000 and are refused, naming ``n_tau`` and ``n_alpha``.
+MAX_GRID_STARTS = 50_000
+
 
 class OCVTable:
     """A tabulated open-circuit voltage ``OCV(soc)``: linear interpolation between points.
@@ -439,7 +444,9 @@ class EquivalentCircuit(Model):
         infinite.
     n_tau, n_alpha : int, optional
         The scan's grid (:meth:`starts`): log-spaced time constants and orders per element
-        (default 8 and 5).
+        (default 8 and 5). The scan visits every combination of the elements' grid points (same-kind
+        elements in increasing order), at most ``MAX_GRID_STARTS`` (50 000) of them: a fit
+        beyond is refused before it starts, naming ``n_tau`` and ``n_alpha``.
 
     Notes
     -----
@@ -578,13 +585,43 @@ class EquivalentCircuit(Model):
 
     def _signals(self, u):
         u = self.check_input(u)
-        return np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(u[:, 1])
+        soc = u[:, 1]
+        bad = np.flatnonzero((soc < 0.0) | (soc > 1.0))
+        if bad.size:
+            k = int(bad[0])
+            raise ParameterError(f"the state of charge `u[:, 1]` must be in [0, 1] (a fraction of the "
+                                 f"capacity); got {float(soc[k])!r} at sample {k} (values from "
+                                 f"{float(soc.min())!r} to {float(soc.max())!r}). Check its units "
+                                 "and the initial state of charge of the coulomb count.")
+        return np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(soc)
+
+    def ocv_values(self, soc):
+        """``OCV(soc)`` [V] from the circuit's map, checked: one finite value per sample (0 without a map)."""
+        if self.ocv is None:
+            return np.zeros_like(soc)
+        try:
+            out = np.asarray(self.ocv(soc), dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise ParameterError(f"`ocv` ({self.ocv!r}) must map the state of charge to volts; "
+                                 f"it returned something that is not an array of numbers ({err}).") \
+                from None
+        if out.shape != soc.shape:
+            raise ParameterError(f"`ocv` ({self.ocv!r}) must return one voltage per sample of the "
+                                 f"state of charge: shape {soc.shape} for {soc.size} samples; got "
+                                 f"shape {out.shape}.")
+        bad = np.flatnonzero(~np.isfinite(out))
+        if bad.size:
+            k = int(bad[0])
+            raise ParameterError(f"`ocv` ({self.ocv!r}) returned {out[k]!r} at sample {k} (soc = "
+                                 f"{float(soc[k])!r}), {bad.size} non-finite value(s) in all: the "
+                                 "open-circuit voltage must be finite wherever the record goes.")
+        return out
 
     def static_part(self, i, soc):
         """``OCV(soc) + a + b soc + R0 i + c3 i^3``: the terms without memory."""
         v = self.a + self.b * soc + self.r0 * i
         if self.ocv is not None:
-            v = v + np.asarray(self.ocv(soc), dtype=np.float64)
+            v = v + self.ocv_values(soc)
         if self.c3 is not None:
             v = v + self.c3 * i ** 3
         return v
@@ -641,7 +678,8 @@ class EquivalentCircuit(Model):
         squares. The best ``SCAN_STARTS`` are returned (:func:`fohw.fit` refines its
         ``n_starts`` best). Without the scan, local searches of RC + ZARC mixtures were seen to
         end at ``alpha -> 1`` or ``alpha -> 0``. A record whose current is zero at every sample
-        is refused.
+        is refused, as is a constant current (``R0 i`` is then the offset ``a``) unless ``a`` or
+        ``R0`` is fixed, and a grid of more than ``MAX_GRID_STARTS`` combinations.
         """
         i, soc = self._signals(u)
         y = check_array(y, "y")
@@ -649,11 +687,17 @@ class EquivalentCircuit(Model):
             raise ParameterError("the current `u[:, 0]` is zero at every sample: the record has no "
                                  "excitation, so no resistance or time constant of the circuit can "
                                  "be identified from it.")
-        sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
-                                                                                 "sample_weight"))
         params = self.parameters
         fixed = {n: p.value for n, p in params.items() if p.fixed}
-        ocv_v = 0.0 if self.ocv is None else np.asarray(self.ocv(soc), dtype=np.float64)
+        if np.ptp(i) == 0.0 and "a" not in fixed and "R0" not in fixed:
+            raise ParameterError(
+                f"the current `u[:, 0]` is constant ({float(i[0])!r} A at all {i.size} samples): "
+                "R0 i is then a constant, which the offset `a` already is, so R0 cannot be "
+                "identified; give a record in which the current changes (e.g. a rest before the "
+                "pulse), or fix `a` or `R0` (circuit.parameters.replace(name, fixed=True)).")
+        sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
+                                                                                 "sample_weight"))
+        ocv_v = self.ocv_values(soc)
         grids = []
         for k, kind in enumerate(self.kinds, start=1):
             if kind == "warburg":
@@ -678,6 +722,15 @@ class EquivalentCircuit(Model):
             if f"alpha{k}" in fixed:
                 g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
             grids.append(g)
+        n_combos = sum(1 for _ in itertools.islice(_combos(self.kinds, grids, fixed),
+                                                   MAX_GRID_STARTS + 1))
+        if n_combos > MAX_GRID_STARTS:
+            raise ParameterError(
+                f"the start scan of this circuit (elements {', '.join(self.kinds)}) would solve "
+                f"more than MAX_GRID_STARTS = {MAX_GRID_STARTS} combinations of grid points "
+                f"(`n_tau` = {self.n_tau} time constants and `n_alpha` = {self.n_alpha} orders per "
+                "element); lower `n_tau` or `n_alpha`, use fewer elements, or fix some time "
+                "constants or orders.")
         found = _scan(self.kinds, self.c3 is not None, i, soc, y - ocv_v, self.dt, fixed, grids,
                       SCAN_STARTS, sw)
         tied = {n for n, p in params.items() if p.tie is not None}
@@ -729,6 +782,9 @@ class EquivalentCircuit(Model):
         """A circuit of :meth:`config`'s structure with placeholder values."""
         config = dict(config)
         current_map = config.pop("current_map", False)
+        if not isinstance(current_map, bool):
+            raise ParameterError(f"`current_map` of a circuit's config must be true or false (with "
+                                 f"or without the c3 i^3 term); got {current_map!r}.")
         elements = config.pop("elements")
         return cls(elements, c3=0.0 if current_map else None, **config)
 
@@ -896,6 +952,33 @@ def _check_rest(initial):
                              "column u[:, 1].")
 
 
+def _combos(kinds, grids, fixed):
+    """The combinations of grid points the scan visits, generated without the skipped ones.
+
+    Same-kind elements are interchangeable: their time constants (Warburg: orders) increase
+    along the circuit, except those the user holds.
+    """
+    key = []
+    for e, kind in enumerate(kinds):
+        name = f"{'alpha' if kind == 'warburg' else 'tau'}{e + 1}"
+        key.append(None if name in fixed else 1 if kind == "warburg" else 0)
+    prefix = []
+
+    def visit(e, last):
+        if e == len(kinds):
+            yield tuple(prefix)
+            return
+        j, kind = key[e], kinds[e]
+        for point in grids[e]:
+            if j is not None and kind in last and not point[j] > last[kind]:
+                continue
+            prefix.append(point)
+            yield from visit(e + 1, last if j is None else {**last, kind: point[j]})
+            prefix.pop()
+
+    yield from visit(0, {})
+
+
 def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     """Best grid points by linear least squares of the linear parameters: ``[(combo, coef)]``."""
     base = [np.ones_like(i), soc, i] + ([i ** 3] if cubic else [])
@@ -920,15 +1003,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     names = base_names + [f"R{e + 1}" if kinds[e] != "warburg" else f"sigma{e + 1}"
                           for e in range(len(kinds))]
     found, negative = [], []
-    # Same-kind elements are interchangeable: their time constants (Warburg: orders) increase,
-    # unless the user holds one of a pair.
-    pairs = [(p, q, 1 if kinds[p] == "warburg" else 0) for p in range(len(kinds))
-             for q in range(p + 1, len(kinds)) if kinds[p] == kinds[q]
-             and not any(f"{'alpha' if kinds[p] == 'warburg' else 'tau'}{e + 1}" in fixed
-                         for e in (p, q))]
-    for combo in itertools.product(*grids):
-        if any(combo[p][j] >= combo[q][j] for p, q, j in pairs):
-            continue
+    for combo in _combos(kinds, grids, fixed):
         idx = list(range(nb)) + [index[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
         free = [j for j, n in zip(idx, names) if n not in fixed]
         fix = [(j, fixed[n]) for j, n in zip(idx, names) if n in fixed]
