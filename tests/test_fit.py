@@ -328,3 +328,16 @@ def test_bounds_can_be_widened_and_a_value_beyond_the_old_ones_given_at_once():
     assert m.parameters["a"].value == 0.995 and m.parameters["a"].bounds == (-0.999, 0.999)
     narrow = Lag(0.9).parameters.replace("a", value=0.2, bounds=(0.0, 0.5))
     assert Lag(0.9).with_parameters(narrow).parameters["a"].bounds == (0.0, 0.5)
+
+
+def test_two_kinds_of_one_name_in_two_modules_are_both_registered():
+    namespace = {"fohw": fohw, "np": np, "__name__": "another_notebook"}
+    exec("class Lag(fohw.Model):\n"
+         "    parameters = property(lambda self: fohw.Parameters([fohw.Parameter('k', 1.0)]))\n"
+         "    def with_parameters(self, values):\n        return self\n"
+         "    def simulate(self, u, *, initial=None):\n        return self.check_input(u)\n",
+         namespace)
+    other = namespace["Lag"]
+    assert other.kind_name() == "another_notebook.Lag" and Lag.kind_name() == "Lag"
+    assert type(fohw.Model.from_dict(other().to_dict())) is other
+    assert type(fohw.Model.from_dict(Lag().to_dict())) is Lag

@@ -141,8 +141,9 @@ class Model(abc.ABC):
 
     Subclass it and provide :attr:`parameters`, :meth:`with_parameters` and :meth:`simulate`;
     every fohw verb then works for the new kind. The class is registered under its ``kind``
-    (default: the class name) when it is defined; pass ``register=False`` in the class
-    statement to skip that and call :func:`fohw.register_model` later.
+    (default: the class name; the qualified name ``module.Class`` when another class already
+    holds that name) when it is defined; pass ``register=False`` in the class statement to skip
+    that and call :func:`fohw.register_model` later.
 
     Optional hooks: :attr:`dt` (the sampling time; 1 by default), :attr:`n_inputs`,
     :meth:`jacobian` (exact ``d yhat / d parameters``; finite differences otherwise),
@@ -193,6 +194,12 @@ class Model(abc.ABC):
         if "with_parameters" in cls.__dict__:
             cls.with_parameters = _keep_settings(cls.__dict__["with_parameters"])
         if register and not inspect.isabstract(cls):
+            taken = _REGISTRY.get(cls.kind_name())
+            if taken is not None and taken is not cls and "kind" not in cls.__dict__ and \
+                    (taken.__module__, taken.__qualname__) != (cls.__module__, cls.__qualname__):
+                # Another class of that name (e.g. a `Lag` in two notebooks or test files): this
+                # one is registered under its qualified name, which its files then carry.
+                cls.kind = f"{cls.__module__}.{cls.__qualname__}"
             register_model(cls)
 
     @classmethod
