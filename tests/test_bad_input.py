@@ -600,7 +600,7 @@ API = [
      lambda t: _result().simulate(U, initial=3), fohw.ParameterError,
      "`initial` must be one of ('rest', 'fitted', 'estimate'), ('estimate', n), a measured "
      "history (u_hist, y_hist) or an InitialState; got 3"),
-    ("compare", "`history=`, an older spelling that is gone",
+    ("compare", "`history=` (the measured history is `initial=(u_past, y_past)`)",
      lambda t: fohw.compare(_result(), U, Y, history=(U, Y)),
      TypeError, "unexpected keyword argument 'history'"),
     ("simulate", "a named initial state with a HammersteinWiener (it carries its own levels)",
