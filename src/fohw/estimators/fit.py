@@ -43,7 +43,7 @@ from ..exceptions import (
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..results import Status
-from ._common import bounded_least_squares, dependent_columns_note
+from ._common import bounded_least_squares
 
 __all__ = ["fit", "free_jacobian", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
            "PENALTY", "FD_RCOND"]
@@ -400,8 +400,12 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         if inverse is None:
             # the kind's own sentence (check_fitted) names the cause: it stays FAILED, first
             status = Status.FAILED if note else Status.RANK_DEFICIENT
-            note = dependent_columns_note(fac, list(names))
-            messages.append(note[0].upper() + note[1:])
+            cols = ", ".join(names[i] for i in fac.dependent)
+            messages.append(f"Rank deficient: rank {fac.rank} of {fac.n_columns}; the columns of "
+                            f"{cols} are linear combinations of the others (the output's "
+                            "sensitivities to the free parameters), so those parameters are not "
+                            "identifiable from this record (fix one of them, or fit a record "
+                            "whose input excites them).")
             covariance = None
         else:
             covariance = sse / (n_used - len(names)) * inverse
