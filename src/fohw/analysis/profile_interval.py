@@ -314,16 +314,16 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
     >>> bool(low < res.alpha < high)
     True
     """
+    level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
+                         upper_inclusive=False)
+    n_grid = check_int(n_grid, "n_grid", minimum=3)
+    xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
     if is_fit(result):
         return _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective)
     result = check_result(result, "result")
     if not isinstance(name, str) or name not in result.orders:
         raise ParameterError(f"`name` must be one of the free orders {list(result.orders)}; "
                              f"got {name!r}.")
-    level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
-                         upper_inclusive=False)
-    n_grid = check_int(n_grid, "n_grid", minimum=3)
-    xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
     u, y = check_data(result, u, y, "result")
     rss_hat, n = criterion(result)
     n = check_n_effective(n_effective, n)
@@ -385,10 +385,6 @@ def _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective):
     if not isinstance(name, str) or name not in free:
         raise ParameterError(f"`name` must be one of the free parameters {list(free)} of the "
                              f"{type(result.model).__name__} fit; got {name!r}.")
-    level = check_scalar(level, "level", lower=0.0, upper=1.0, lower_inclusive=False,
-                         upper_inclusive=False)
-    n_grid = check_int(n_grid, "n_grid", minimum=3)
-    xtol = check_scalar(xtol, "xtol", lower=0.0, lower_inclusive=False)
     u, y = check_fit_record(result, u, y, "result")
     rss_hat, n = result.sse, check_n_effective(n_effective, result.n_samples)
     quantile = float(scipy.stats.chi2.ppf(level, 1))

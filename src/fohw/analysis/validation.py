@@ -410,6 +410,24 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     return out
 
 
+def _checked_record(u, y, n_init, envelope):
+    """``(y, n_init, factor)`` of a validation record whose input ``u`` is already checked."""
+    y = check_array(y, "y")
+    check_same_length(u, y, "u", "y")
+    if y.size < 2:
+        raise DimensionError(f"the record has {y.size} sample (`u` and `y`); compare needs at "
+                             "least 2 (a fit % compares the output with its mean).")
+    return y, check_int(n_init, "n_init", minimum=0, maximum=y.size - 2), check_envelope(envelope)
+
+
+def _replayed(caught):
+    """Re-issue a free run's warnings but the extrapolation one; whether the input stayed in range."""
+    for w in caught:
+        if not issubclass(w.category, ExtrapolationWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
+
+
 def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelope):
     """:func:`compare` of a result or a :class:`fohw.HammersteinWiener` (the lagged kind)."""
     is_model = isinstance(model, HammersteinWiener)
@@ -418,19 +436,10 @@ def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelo
         raise ParameterError("`model` must be an identification result (fohw.identify) or a "
                              f"fohw.HammersteinWiener; got {type(model).__name__}.")
     u = check_inputs(u, model.structure.n_inputs, names=model.structure.inputs)
-    y = check_array(y, "y")
-    check_same_length(u, y, "u", "y")
-    if y.size < 2:
-        raise DimensionError(f"the record has {y.size} sample (`u` and `y`); compare needs at "
-                             "least 2 (a fit % compares the output with its mean).")
-    n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
-    factor = check_envelope(envelope)
+    y, n_init, factor = _checked_record(u, y, n_init, envelope)
     state = initial_state(model, u, y if _is_estimate(initial) else None, initial)
     ysim, status, diverged, caught = _free_run(model, u, state)
-    in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
-    for w in caught:
-        if not issubclass(w.category, ExtrapolationWarning):
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    in_range = _replayed(caught)
     if ysim is not None:
         reference = y if state.history is None else np.r_[state.history[1], y]
         found = implausible_sample(ysim, reference, factor)
@@ -454,18 +463,9 @@ def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelop
                              f"output) is for the lagged HammersteinWiener kind; a {kind} "
                              "takes its own `initial` (passed to its simulate).")
     u = model.check_input(u)
-    y = check_array(y, "y")
-    check_same_length(u, y, "u", "y")
-    if y.size < 2:
-        raise DimensionError(f"the record has {y.size} sample (`u` and `y`); compare needs at "
-                             "least 2 (a fit % compares the output with its mean).")
-    n_init = check_int(n_init, "n_init", minimum=0, maximum=y.size - 2)
-    factor = check_envelope(envelope)
+    y, n_init, factor = _checked_record(u, y, n_init, envelope)
     ysim, status, diverged, caught = _free_run(model, u, initial)
-    in_range = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
-    for w in caught:
-        if not issubclass(w.category, ExtrapolationWarning):
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    in_range = _replayed(caught)
     if ysim is not None:
         found = implausible_sample(ysim, y, factor)
         if found is not None:
