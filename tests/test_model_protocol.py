@@ -413,6 +413,24 @@ def test_the_command_line_takes_one_column_per_input(tmp_path, capsys):
     assert "--column needs 2 entries" in capsys.readouterr().err
 
 
+def test_the_command_line_compares_a_model_of_two_inputs(tmp_path, capsys):
+    model = TwoGains(0.5, -2.0)
+    fohw.save_model(model, tmp_path / "m.json")
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((40, 2))
+    y = model.simulate(u) + 0.1 * rng.standard_normal(40)
+    np.savetxt(tmp_path / "d.txt", np.column_stack([u, y]), fmt="%.17g", header="i soc v",
+               comments="")
+    capsys.readouterr()
+    assert main(["compare", "--model", str(tmp_path / "m.json"), "--data",
+                 str(tmp_path / "d.txt"), "--columns", "i,soc,v", "--json", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["free_run"]["fit_percent"] == pytest.approx(fohw.compare(model, u, y).fit, rel=1e-12)
+    assert main(["compare", "--model", str(tmp_path / "m.json"), "--data",
+                 str(tmp_path / "d.txt"), "--columns", "i,v"]) == 2     # one input short
+    assert "--columns needs 3 entries" in capsys.readouterr().err
+
+
 def test_select_on_a_separate_validation_record(case):
     fresh = _case(case.factory, seed=2)
     wrong = _with(case.start, case.order, value=case.true.parameters[case.order].value + 0.2,

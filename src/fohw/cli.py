@@ -517,7 +517,8 @@ def _add_compare_parser(sub):
     cmp.add_argument("--data", required=True, help="data file with the input and output columns "
                      "(or @NAME for a shipped record)")
     cmp.add_argument("--columns", default=None, help="input and output columns, numbers from 0 "
-                     "or header names (default: u,y, or the only two columns)")
+                     "or header names: one per input, then the output, e.g. i,soc,v for a "
+                     "circuit (default: u,y, or the file's columns when it has that many)")
     cmp.add_argument("--decimal-comma", action="store_true", help="as for identify")
     cmp.add_argument("--initial", choices=("rest", "fitted", "estimate"), default=None,
                      help="the state the free run starts from (fohw.compare's initial=): rest, "
@@ -933,9 +934,23 @@ def _compare(args):
     from .analysis.validation import compare
 
     _check_plot_out(args.plot, "--plot", [args.data, args.model])
+    import numpy as np
+
+    from .model.simulation import generic_model
+
     _, loaded = _load_model_or_result(args.model)
     data, names, _ = read_table(args.data, _decimal(args))
-    u, y = _pick_columns(data, names, args.columns, 2, args.data)
+    other = generic_model(loaded)
+    if other is not None:                   # a model (or fit) of any kind: its inputs, then y
+        if args.initial is not None:
+            raise UsageError(f"--initial is for the lagged HammersteinWiener kind; {args.model} "
+                             f"holds a {type(other).__name__}, simulated from its own initial "
+                             "state.")
+        n_in = other.n_inputs
+    else:
+        n_in = loaded.structure.n_inputs if hasattr(loaded, "structure") else 1
+    *inputs, y = _pick_columns(data, names, args.columns, n_in + 1, args.data)
+    u = inputs[0] if n_in == 1 else np.column_stack(inputs)
     _stage(args, f"scoring on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():
