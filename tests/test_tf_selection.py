@@ -58,6 +58,9 @@ def test_true_structure_beats_integer_and_a_failed_candidate_is_a_row(record):
     se = sel.best.standard_errors()["alpha0"]                  # refitted on all the data
     assert abs(sel.best.parameters["alpha0"].value - 0.6) < 4 * se, se
     assert sel.best.residuals.size == u.size
+    table = sel.to_markdown().splitlines()
+    assert table[2].startswith("| 1: FractionalTF") and "| ok |" in table[2]   # ranked first
+    assert "| failed |" in table[4] and "in_range" not in "\n".join(table)
     assert "failed" in sel.to_markdown()
 
 

@@ -136,7 +136,6 @@ def test_noiseless_two_term_non_commensurate_system_is_recovered():
     np.testing.assert_allclose(np.r_[est.num, est.den, est.den_orders],
                                [1.5, 0.8, 1.2, 1.0, 1.4, 0.45, 0.0], rtol=1e-6)
     assert fit.converged and fit.noise_variance < 1e-16
-    assert fit.starts[0][1] <= fit.starts[-1][1]
 
 
 def test_commensurate_tie_and_fixed_orders():
@@ -320,3 +319,11 @@ def test_a_fit_round_trips_through_its_dict(record):
     assert again.model == fit.model and again.parameters["a0"].bounds == (0.0, 10.0)
     assert again.model.delay == 0.1 and again.model.dt == 0.05
     np.testing.assert_array_equal(again.simulate(u), fit.simulate(u))
+
+
+def test_an_order_tied_to_a_coefficient_is_refused():
+    G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0], dt=0.05)
+    with pytest.raises(fohw.ParameterError, match="a tie joins two orders or two coefficients"):
+        G.with_parameters(G.parameters.replace("alpha0", tie=("a0", 1.0)))
+    tied = G.parameters.replace("b0", tie=("a0", 2.0))           # two coefficients: fine
+    assert G.with_parameters(tied).parameters["b0"].value == 2.0

@@ -202,6 +202,7 @@ def test_fit_recovers_a_simulated_system_within_the_crb(kind):
     assert fit.status == fohw.Status.CONVERGED, fit.message
     names = fit.free_names
     assert set(names) == set(TRUE) & set(fit.parameters)
+    assert names == _truth(kind).parameters.free_names    # the bound's order (zip below)
     sd = _crb_sd(_truth(kind), u, SIGMA)
     assert np.all(np.isfinite(sd))                      # every parameter is informed
     z = np.array([(fit.parameters[n].value - TRUE[n]) / s for n, s in zip(names, sd)])

@@ -113,6 +113,7 @@ def _keep_settings(method):
             with bounds_overridden():
                 own = fget(self) if fget is not None else self.parameters
             settings = own.merged(values)
+            self.check_settings(settings)
             probe = copy.copy(self)
             _attach(probe, settings)
             new = method(probe, values)
@@ -251,6 +252,14 @@ class Model(abc.ABC):
 
     def linear_start(self, u, y):
         """A start whose linear parameters are solved for ``y`` (or ``None``: no such step)."""
+        return None
+
+    def check_settings(self, parameters):
+        """Refuse settings the kind cannot hold, naming the parameter (default: accept them).
+
+        Called when :meth:`with_parameters` gets a :class:`fohw.Parameters`: a bound beyond the
+        kind's domain, or a tie the kind has no meaning for, is refused there.
+        """
         return None
 
     def check_fitted(self, u, y):

@@ -566,6 +566,24 @@ class EquivalentCircuit(Model):
                 out.append(Parameter(f"alpha{k}", e.alpha, bounds=e.order_bounds, order=True))
         return Parameters(out)
 
+    def check_settings(self, parameters):
+        """Refuse an element's order bounds beyond its domain, naming the parameter.
+
+        A ZARC's order lies in ``(0, 1]`` (order 1 is an RC element), a Warburg element's in
+        ``(0, 1)`` (order 1 is a capacitor, the ``b soc`` term).
+        """
+        for k, e in enumerate(self.elements, start=1):
+            if e.kind == "rc":
+                continue
+            name = f"alpha{k}"
+            lo, hi = parameters[name].bounds
+            top_ok = hi <= 1.0 if e.kind == "zarc" else hi < 1.0
+            if not (lo > 0.0 and top_ok):
+                domain, what = (("(0, 1]", "ZARC") if e.kind == "zarc" else
+                                ("(0, 1), below 1", "Warburg"))
+                raise ParameterError(f"the bounds of {name!r} ({lo:g}, {hi:g}) leave the order "
+                                     f"domain {domain} of a {what} element; give bounds inside it.")
+
     def with_parameters(self, values) -> EquivalentCircuit:
         """The same structure with new parameter values (a mapping ``name -> float``, or Parameters)."""
         if isinstance(values, Parameters) and values.names == self._names():

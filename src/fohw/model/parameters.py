@@ -346,6 +346,8 @@ class Parameters(Mapping):
 
     def replace(self, name, **changes) -> Parameters:
         """A copy in which parameter ``name`` has some attributes changed (see :meth:`Parameter.replace`)."""
+        if name not in self._items:
+            raise ParameterError(f"no parameter {name!r}; names are {list(self._items)}.")
         par = self[name]
         return Parameters(par.replace(**changes) if n == name else p for n, p in self._items.items())
 

@@ -535,6 +535,17 @@ class FractionalTF(Model):
         with np.errstate(over="ignore", invalid="ignore"):
             return yhat, tf_sensitivities(*self._terms, ud, yhat, h)
 
+    def check_settings(self, parameters):
+        """Refuse a tie between an order and a coefficient, naming the parameter.
+
+        A tie joins two orders or two coefficients; an order tied to a coefficient mixes a
+        dimensionless exponent with a gain.
+        """
+        for name, par in parameters.items():
+            if par.tie is not None and par.order != parameters[par.tie[0]].order:
+                raise ParameterError(f"{name!r} is tied to {par.tie[0]!r}: a tie joins two orders "
+                                     "or two coefficients, not an order and a coefficient.")
+
     def linear_start(self, u, y):
         """The model with its free coefficients from the linear equation error (or ``None``).
 
