@@ -203,6 +203,15 @@ def test_a_version_2_file_is_refused_by_name(tmp_path):
         fohw.load_result(tmp_path / "old.json")
 
 
+def test_a_golden_file_that_contradicts_itself_is_refused(tmp_path):
+    # An offset where the structure fits none (a check the version-2 tests made on old files).
+    d = json.loads((DATA / "result_varpro.json").read_text())
+    d["offset"] = 0.5
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    with pytest.raises(fohw.DataFileError, match="`offset` is 0.5, but the structure fits no offset"):
+        fohw.load_result(tmp_path / "bad.json")
+
+
 @pytest.mark.parametrize("name", ["paper", "mixed"])
 def test_a_golden_model_file_loads(name):
     m = fohw.load_model(DATA / f"model_{name}.json")

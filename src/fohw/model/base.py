@@ -149,8 +149,9 @@ class Model(abc.ABC):
     Optional hooks: :attr:`dt` (the sampling time; 1 by default), :attr:`n_inputs`,
     :meth:`jacobian` (exact ``d yhat / d parameters``; finite differences otherwise),
     :meth:`starts` and :meth:`linear_start` (where :func:`fohw.fit` starts), :meth:`config`
-    (the settings that are not parameters, for files) and :meth:`check_fitted` (a kind's own
-    sanity check of a fitted model).
+    (the settings that are not parameters, for files), :meth:`check_settings` (bounds or ties
+    the kind cannot hold) and :meth:`check_fitted` (a kind's own sanity check of a fitted
+    model).
 
     Examples
     --------
