@@ -245,3 +245,58 @@ def test_resample_holds_the_input_and_interpolates_the_output():
     np.testing.assert_allclose(y_new, t_new, rtol=0, atol=1e-15)
     _, u_foh = resample(t, u, dt=1.0, intersample="foh")
     np.testing.assert_allclose(u_foh, [1.0, 2.0 + 0.1 / 1.2, 2.0 + 1.1 / 1.2, 4.0])
+
+
+# --- a fit on irregularly sampled data ------------------------------------------------------------
+def _recovers(fit, true, n_se=3.0):
+    assert fit.status == fohw.Status.CONVERGED, fit.message
+    se = fit.standard_errors()
+    z = {n: (fit.parameters[n].value - true.parameters[n].value) / se[n] for n in fit.free_names}
+    assert all(abs(v) < n_se for v in z.values()), z
+    return z
+
+
+def test_fit_on_irregular_instants_recovers_a_fractional_tf():
+    # 400 instants, steps uniform in [0.05, 0.15]; the record's instants reach fohw.fit, which
+    # simulates on them (simulate_at) with the fine grid's exact Jacobian (jacobian_at).
+    t = instants(400, 0)
+    u = np.repeat(np.random.default_rng(0).standard_normal(80), 5)
+    true = fohw.FractionalTF([2.0], [0.0], [TAU ** 0.5, 1.0], [0.5, 0.0], dt=0.1)
+    y = simulate_at(true, u, t) + 0.01 * np.random.default_rng(50).standard_normal(t.size)
+    record = fohw.Record(u=u, y=y, t=t)
+    assert not record.uniform
+    fit = fohw.fit(fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.7, 0.0], dt=0.1), record)
+    assert fit.jacobian == "exact"
+    _recovers(fit, true)
+    # the same samples read as uniform (the instants dropped) fit a different model
+    wrong = fohw.fit(fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.7, 0.0], dt=0.1), u, y)
+    assert wrong.sse > 4 * fit.sse
+
+
+def test_fit_on_irregular_instants_recovers_a_circuit():
+    # A cell logged at irregular instants (steps 0.5-1.5 s), current held between them (foh):
+    # R0 and an RC branch exact, a ZARC on the fine grid; finite differences of simulate_at.
+    t = instants(600, 1, low=0.5, high=1.5)
+    i = np.repeat(np.random.default_rng(2).uniform(-3.0, 1.5, 40), 15)
+    soc = 0.7 + np.concatenate([[0.0], np.cumsum(i[1:] * np.diff(t))]) / (3600 * 2.5)
+    u = np.column_stack([i, soc])
+    ocv = fohw.OCVTable([0.0, 1.0], [3.3, 4.2])
+    true = fohw.EquivalentCircuit([fohw.RC(0.006, 8.0), fohw.ZARC(0.012, 60.0, 0.55)],
+                                  r0=0.015, ocv=ocv, tau_bounds=(1.0, 600.0))
+    y = simulate_at(true, u, t, intersample="foh")
+    y = y + 1e-4 * np.random.default_rng(3).standard_normal(t.size)
+    record = fohw.Record(u=u, y=y, t=t, intersample="foh")
+    start = fohw.EquivalentCircuit(["rc", "zarc"], ocv=ocv, tau_bounds=(1.0, 600.0))
+    fit = fohw.fit(start, record)
+    assert fit.jacobian == "finite differences"
+    _recovers(fit, true)
+
+
+def test_circuit_warburg_first_order():
+    # sigma s^-alpha: the step response sigma x^alpha / Gamma(1 + alpha), superposed.
+    t, u = _record(seed=6)
+    cell = fohw.EquivalentCircuit([fohw.Warburg(0.01, 0.5)], dt=0.1)
+    exact = zoh_response(t, u, lambda x: np.where(np.asarray(x) > 0, 0.01 * np.maximum(x, 0.0)
+                                                  ** 0.5 / math.gamma(1.5), 0.0))
+    order, err = _order(cell, np.column_stack([u, np.full(t.size, 0.5)]), t, "zoh", exact)
+    assert abs(order - 1.0) < 0.2 and err < 1e-4, (order, err)

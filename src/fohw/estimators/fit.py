@@ -42,6 +42,7 @@ from ..exceptions import (
 )
 from ..fit_result import FitResult
 from ..model.base import Model
+from ..model.irregular import jacobian_at
 from ..record import as_records
 from ..results import Status
 from ._common import bounded_least_squares
@@ -129,13 +130,17 @@ class _Experiment:
             return self.u
         return np.concatenate([np.repeat(self.u[:1], self.warmup, axis=0), self.u])
 
+    def _instants(self):
+        t = self.t
+        if self.warmup:
+            step = (t[-1] - t[0]) / (t.size - 1)
+            t = np.r_[t[0] - step * np.arange(self.warmup, 0, -1), t]
+        return t
+
     def simulate(self, model):
         """The model's free run on this record (after its warm-up)."""
         if self.t is not None:
-            t = self.t
-            if self.warmup:
-                step = (t[-1] - t[0]) / (t.size - 1)
-                t = np.r_[t[0] - step * np.arange(self.warmup, 0, -1), t]
+            t = self._instants()
             simulate_at = getattr(model, "simulate_at", None)
             if simulate_at is None:
                 raise ParameterError(
@@ -150,8 +155,10 @@ class _Experiment:
 
     def jacobian(self, model, exact):
         """``(yhat, J)`` on this record: ``J`` over every parameter (:meth:`Model.jacobian`)."""
-        if exact and self.t is None:
-            out = model.jacobian(self._held())
+        if exact:
+            out = (model.jacobian(self._held()) if self.t is None else   # time stamps: the
+                   jacobian_at(model, self._held(), self._instants(),   # fine grid's, or None
+                               intersample=self.intersample))
             if out is not None:
                 return (np.asarray(out[0], dtype=float)[self.warmup:],
                         np.asarray(out[1], dtype=float)[self.warmup:])
