@@ -263,7 +263,7 @@ def _at_step(model, h):
         raise ParameterError(
             f"a {type(model).__name__} cannot be simulated at non-uniform instants: its config() "
             "has no sampling time `dt` to refine, so fohw cannot tell it is a discretised "
-            "continuous-time model. Resample the record onto a uniform grid "
+            "continuous-time model; resample the record to a uniform grid "
             "(fohw.model.irregular.resample), or give the kind a `dt` in config() or its own "
             "simulate_at.")
     return type(model).from_config({**config, "dt": h}).with_parameters(model.parameters)

@@ -354,7 +354,7 @@ class HammersteinWiener(Model):
         raise ParameterError(
             "a HammersteinWiener (the lagged kind) is discrete in samples: it has no meaning "
             "between its samples, so it cannot be simulated at non-uniform instants `t`. "
-            "Resample the record onto a uniform grid (fohw.model.irregular.resample), or use a "
+            "resample the record to a uniform grid (fohw.model.irregular.resample), or use a "
             "continuous-time kind (fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")
 
     def config(self) -> dict:
