@@ -32,6 +32,7 @@ from tf_reference import mittag_leffler
 import fohw
 from fohw.model.irregular import (
     MAX_FINE_SAMPLES,
+    fine_grid,
     jacobian_at,
     rc_response_at,
     resample,
@@ -186,20 +187,44 @@ def test_every_kind_on_uniform_instants_is_its_own_simulate(factory):
     assert np.max(np.abs(fine - finer)) < coarse_err
 
 
-def test_jacobian_at_against_finite_differences():
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_jacobian_at_against_finite_differences(hold):
     t, u = _record(seed=5, n=30)
     G = fohw.FractionalTF([1.0], [0.0], [TAU ** 0.5, 1.0], [0.5, 0.0], dt=0.1)
-    yhat, J = jacobian_at(G, u, t)
-    np.testing.assert_array_equal(yhat, simulate_at(G, u, t))
-    for c, (name, par) in enumerate(G.parameters.items()):
-        if par.fixed:                                   # beta0 = alpha1 = 0 sit on their bounds
-            continue
-        d = 1e-6 * max(1.0, abs(par.value))
-        up = simulate_at(G.with_parameters({name: par.value + d}), u, t)
-        down = simulate_at(G.with_parameters({name: par.value - d}), u, t)
-        np.testing.assert_allclose(J[:, c], (up - down) / (2 * d), atol=1e-7)
+    hw = fohw.FractionalHW(G, p=[1.0, 0.3], f_basis=2, output_map=2, output_params=[-0.2])
+    for model in (G, hw):
+        yhat, J = jacobian_at(model, u, t, intersample=hold)
+        np.testing.assert_array_equal(yhat, simulate_at(model, u, t, intersample=hold))
+        for c, (name, par) in enumerate(model.parameters.items()):
+            if par.fixed:                               # beta0 = alpha1 = 0 sit on their bounds
+                continue
+            d = 1e-6 * max(1.0, abs(par.value))
+            up = simulate_at(model.with_parameters({name: par.value + d}), u, t, intersample=hold)
+            down = simulate_at(model.with_parameters({name: par.value - d}), u, t,
+                               intersample=hold)
+            np.testing.assert_allclose(J[:, c], (up - down) / (2 * d), atol=1e-7, err_msg=name)
     cell = fohw.EquivalentCircuit([fohw.RC(0.01, 2.0)], dt=1.0)
     assert jacobian_at(cell, np.column_stack([u, np.full(u.size, 0.5)]), t) is None
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_held_input_of_several_columns_is_each_column_held(hold):
+    t, u = _record(seed=7, n=40)
+    u2 = np.column_stack([u, np.cos(t)])
+    grid = fine_grid(t, refine=3)
+    both = grid.hold(u2, t, hold)
+    np.testing.assert_array_equal(both[:, 0], grid.hold(u, t, hold))
+    np.testing.assert_array_equal(both[:, 1], grid.hold(np.cos(t), t, hold))
+    # the mean over each fine interval keeps the integral of the held input exactly
+    if hold == "zoh":
+        t_ext = np.concatenate([[2 * t[0] - t[1]], t])
+        total = u[0] * (t[1] - t[0]) + np.sum(u[1:] * np.diff(t))
+        assert grid.t0 - grid.step <= t_ext[0] < grid.t0     # the first fine interval holds it
+        k_end = grid.position(t[-1])[0]                  # the last point, in (t[-2], t[-1]]
+        tau_end = grid.times[k_end]
+        assert t[-2] < tau_end <= t[-1]
+        np.testing.assert_allclose(np.sum(both[:k_end + 1, 0]) * grid.step,
+                                   total - u[-1] * (t[-1] - tau_end), rtol=1e-12)
 
 
 def test_a_kind_without_a_step_is_refused_naming_resample():
