@@ -8,7 +8,7 @@ instants are not uniform means the same continuous-time input, held between its 
   the kinds' own alignment (the sample closes the interval it stands for); the value at
   ``t_k`` is ``u_k``, so a direct feedthrough (a circuit's ``R0 i``) reads ``u_k`` at ``t_k``.
   MATLAB's ``iddata`` holds ``u_k`` on ``[t_k, t_{k+1})`` instead: that is this hold with the
-  input moved one sample later (``u[1:]`` against ``t[:-1]``).
+  input one sample later (``u_k`` given at ``t_{k+1}``).
 - ``intersample="foh"`` (first-order hold): ``u`` linear between ``(t_{k-1}, u_{k-1})`` and
   ``(t_k, u_k)``.
 
@@ -50,8 +50,8 @@ from .._validation import check_array, check_int, check_scalar
 from ..exceptions import DimensionError, ParameterError
 
 __all__ = ["simulate_at", "jacobian_at", "grid_simulate", "rc_response_at", "resample",
-           "fine_grid", "FineGrid", "check_instants", "check_intersample", "INTERSAMPLE", "DEFAULT_REFINE",
-           "MAX_FINE_SAMPLES"]
+           "fine_grid", "FineGrid", "check_instants", "check_intersample", "INTERSAMPLE",
+           "DEFAULT_REFINE", "MAX_FINE_SAMPLES"]
 
 #: The intersample behaviours: zero-order hold (default) and first-order hold.
 INTERSAMPLE = ("zoh", "foh")
@@ -295,7 +295,8 @@ def grid_simulate(model, u, t, *, intersample="zoh", refine=None, step=None):
     u : array_like, shape (N,) or (N, n_inputs)
         Input at the instants.
     t : array_like, shape (N,)
-        Strictly increasing instants (``t[0]`` is the start, from rest).
+        Strictly increasing instants (the first sample stands for the first step before
+        ``t[0]``, from rest: module notes).
     intersample : {"zoh", "foh"}, optional
         How the input is held between instants (module notes).
     refine : int, optional
@@ -364,7 +365,8 @@ def simulate_at(model, u, t, *, intersample="zoh", refine=None, step=None):
     u : array_like, shape (N,) or (N, n_inputs)
         The input at the instants.
     t : array_like, shape (N,)
-        Strictly increasing instants; ``t[0]`` is the start (rest before it).
+        Strictly increasing instants; ``u[0]`` stands for the input on
+        ``(t[0] - (t[1] - t[0]), t[0]]``, from rest before it (module notes).
     intersample : {"zoh", "foh"}, optional
         ``"zoh"`` (default): ``u_k`` held on ``(t_{k-1}, t_k]``; ``"foh"``: linear between
         instants.
