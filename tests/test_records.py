@@ -233,3 +233,23 @@ def test_warmup_starts_each_record_where_its_first_input_settled():
                        rec, warmup=400)
     assert settled.sse < 1e-12 < from_rest.sse
     assert settled.parameters["a"].value == pytest.approx(a, abs=1e-6)
+
+
+def test_refine_reaches_the_fine_grid_of_a_fit_on_time_stamps():
+    # the same irregular record fitted at two refinements gives two different criteria (the
+    # scheme's discretisation error differs), and the option is kept on the result
+    G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.6, 0.0], dt=0.1)
+    rng = np.random.default_rng(5)
+    t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.15, 199)])
+    u = np.sign(np.sin(0.7 * t))
+    y = G.simulate_at(u, t, refine=64)
+    rec = fohw.Record(u=u, y=y, t=t)
+    coarse = fohw.fit(G, rec, order_grid=1)
+    fine = fohw.fit(G, rec, order_grid=1, refine=64)
+    assert fine.options["refine"] == 64 and coarse.options["refine"] is None
+    # the truth is among the starts: on its own grid its error is rounding, on the default one
+    # it is the scheme's discretisation error
+    assert fine.starts[0][1] < 1e-20 < coarse.starts[0][1]
+    assert fine.parameters["alpha0"].value != coarse.parameters["alpha0"].value
+    with pytest.raises(fohw.ParameterError, match="`refine`"):
+        fohw.fit(G, rec, refine=0)
