@@ -109,8 +109,20 @@ def test_the_impedance_fit_recovers_a_circuit_from_its_exact_spectrum(true, elem
             assert got[name] == 0.0 and res.parameters[name].fixed, name   # held, said so
             continue
         assert got[name] == pytest.approx(value, rel=1e-6), name
-    assert "not enter the impedance" in res.message
+    assert "not enter the impedance: held" in res.message
     assert res.sse < 1e-20 and res.n_samples == 2 * f.size
+
+
+def test_an_impedance_fit_is_a_fit_result_that_files_hold(tmp_path):
+    true = FIT_CASES[0][0]
+    f = np.logspace(-3, 1, 30)
+    res = fit_impedance(EquivalentCircuit(["rc", "zarc"], dt=0.01), f, true.impedance(f))
+    assert res.message.endswith("a and b do not enter the impedance: held at the model's values.")
+    assert set(res.starts[0][0]) == {"alpha2"}
+    fohw.save_result(res, tmp_path / "fit.json")
+    back = fohw.load_result(tmp_path / "fit.json")
+    assert back.parameters == res.parameters and back.options["data"] == "impedance"
+    np.testing.assert_array_equal(back.covariance, res.covariance)
 
 
 def test_the_impedance_fit_with_noise_is_within_its_standard_errors():

@@ -242,6 +242,12 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     return [model.with_parameters(params.with_values(v)) for _, v in found[:keep]]
 
 
+def _orders_of(problem, ranked):
+    """``FitResult.starts``: each ranked start's free orders and its sum of squares, best first."""
+    orders = [(j, n) for j, n in enumerate(problem.names) if problem.params[n].order]
+    return tuple(({n: float(x[j]) for j, n in orders}, sse) for sse, x in ranked)
+
+
 def _refine(problem, candidates, residual, jacobian, n_starts, max_nfev, tol):
     """Rank the candidates by their residual, refine the best ``n_starts``; the best result."""
     ranked = []
@@ -367,15 +373,16 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     covariance, rank_note = _covariance(jac, sse, r.size, problem.names, "finite differences")
     messages = [f"impedance fit (scipy.optimize.least_squares): {ls.message}"]
     if held:
-        messages.append(f"{', '.join(held)} do(es) not enter the impedance: held at the model's "
-                        "values.")
+        names = " and ".join([", ".join(held[:-1]), held[-1]] if len(held) > 1 else held)
+        messages.append(f"{names} {'do' if len(held) > 1 else 'does'} not enter the impedance: "
+                        "held at the model's values.")
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} evaluations; raise `max_nfev`.")
     status, message = _finish("fit_impedance", status, messages, rank_note)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=r.size, message=message,
                      nfev=int(ls.nfev), jacobian="finite differences",
-                     starts=tuple(({}, s) for s, _ in ranked), residuals=r,
+                     starts=_orders_of(problem, ranked), residuals=r,
                      data_digest=data_digest(f, np.concatenate([z.real, z.imag]), model.dt),
                      options=dict(data="impedance", n_starts=n_starts, max_nfev=max_nfev, tol=tol,
                                   weight=weight if isinstance(weight, str) else w.tolist(),
@@ -511,7 +518,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=n, message=message, nfev=int(ls.nfev),
                      jacobian="exact (record), finite differences (spectrum)",
-                     starts=tuple(({}, s) for s, _ in ranked), residuals=r,
+                     starts=_orders_of(problem, ranked), residuals=r,
                      data_digest=data_digest(u, np.concatenate([y, f, z.real, z.imag]), model.dt,
                                              sample_weight),
                      options=dict(data="record and impedance", noise=[s_time, s_spec],
