@@ -171,3 +171,30 @@ def test_infeasible_grid_points_are_projected_onto_non_negative_resistances():
     with pytest.warns(fohw.RankDeficiencyWarning, match="tau1"):   # R1 = 0: tau1 has no effect
         fit = fohw.fit(model, u, v)
     assert fit.parameters["R1"].value == 0.0
+
+
+@pytest.mark.slow
+def test_a_pulse_simulated_by_pybamm_is_fitted_in_its_own_sign_convention():
+    # PyBaMM's SPMe with the Chen2020 parameters (an LG M50 cell): a 30 s, 5 A discharge pulse
+    # between rests, PyBaMM's "Current [A]" positive on discharge.
+    pybamm = pytest.importorskip("pybamm")
+    dt = 0.5
+    t = np.arange(0.0, 120.0 + dt / 2, dt)
+    pulse = np.where((t >= 10.0) & (t < 40.0), 5.0, 0.0)
+    values = pybamm.ParameterValues("Chen2020")
+    values["Current function [A]"] = pybamm.Interpolant(t, pulse, pybamm.t, interpolator="linear")
+    solution = pybamm.Simulation(pybamm.lithium_ion.SPMe(), parameter_values=values).solve(
+        t_eval=t, t_interp=t, initial_soc=0.5)
+    i = solution["Current [A]"].entries
+    v = solution["Voltage [V]"].entries
+    soc = 0.5 - np.concatenate([[0.0], np.cumsum(i[:-1])]) * dt / (3600 * 5.0)
+    u = np.column_stack([i, soc])
+    with pytest.raises(fohw.ParameterError, match="current_sign='discharge_positive' \\(PyBaMM"):
+        fohw.fit(EquivalentCircuit(["rc", "rc"], dt=dt), u, v)
+    fit = fohw.fit(EquivalentCircuit(["rc", "rc"], dt=dt, current_sign="discharge_positive"), u, v)
+    assert fit.converged and fit.rmse < 1e-3
+    # R0 is about the voltage's jump at the pulse's ends divided by the current's (the first
+    # sample after each edge also holds the elements' first step, hence 25 %).
+    edges = [int(np.argmax(i > 4.99)), int(np.argmax((t > 40.0) & (i < 0.01)))]
+    jump = np.mean([abs(v[k] - v[k - 2]) for k in edges]) / 5.0
+    assert fit.parameters["R0"].value == pytest.approx(jump, rel=0.25)
