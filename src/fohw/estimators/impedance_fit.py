@@ -198,9 +198,9 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     base_names, base_cols = ["R0"], [np.ones(f.size, dtype=complex)]
     offset = np.zeros(f.size, dtype=complex)
     if capacity is not None:
-        cap = model.with_parameters({"R0": 0.0, "b": 0.0, **{
-            n: 0.0 for n in params.names if n[0] in "Rs" and n != "R0"}})
-        unit = cap.impedance(f, discrete=discrete, capacity=capacity, ocv_slope=1.0)
+        # The capacitor alone: a circuit without elements, R0 = b = 0, OCV slope 1.
+        unit = EquivalentCircuit((), dt=model.dt).impedance(f, discrete=discrete, capacity=capacity,
+                                                           ocv_slope=1.0)
         base_names.append("b")
         base_cols.append(unit)
         offset = offset + ocv_slope * unit
@@ -334,8 +334,8 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     n_starts = check_int(n_starts, "n_starts", minimum=1)
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
     tol = check_scalar(tol, "tol", lower=np.finfo(float).eps, upper=1.0, upper_inclusive=False)
-    held = [n for n in model.parameters.names
-            if not _enters(n, capacity) and not model.parameters[n].fixed]
+    held = [n for n in model.parameters.names if not _enters(n, capacity)
+            and not model.parameters[n].fixed and model.parameters[n].tie is None]
     params = model.parameters
     for n in held:
         params = params.replace(n, fixed=True)
@@ -411,6 +411,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
         ``(sigma_time [V], sigma_spectrum)``, the noise level of each part's residual (the
         spectrum's in the units of its weighting: relative by default). Default: each part's
         RMS residual ``sqrt(SSE / (n - p))`` from its own fit (:func:`fohw.fit` of the record,
+        with ``order_grid=1`` since the circuit's own scan covers the orders, and
         :func:`fit_impedance` of the spectrum), run first.
     sample_weight : array_like, optional
         Weights of the record's squared errors, as in :func:`fohw.fit`.
@@ -456,7 +457,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
     # warnings are not the joint fit's business (its result has its own status).
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", (ConvergenceWarning, RankDeficiencyWarning))
-        time_fit = fit(model, u, y, sample_weight=sample_weight, n_starts=n_starts,
+        time_fit = fit(model, u, y, sample_weight=sample_weight, order_grid=1, n_starts=n_starts,
                        max_nfev=max_nfev, tol=tol)
         spec_fit = fit_impedance(model, f, z, weight=weight, n_starts=n_starts,
                                  max_nfev=max_nfev, tol=tol, **options)
