@@ -15,7 +15,7 @@ the measured modulus, real and imaginary parts stacked:
 impedance data, whose errors grow with ``|Z|``): every frequency counts by its relative error,
 the quantity :func:`fohw.model.circuit.impedance_error` reports.
 
-The joint fit (:func:`fit_joint`) stacks the record's simulation error and the spectrum's
+The joint fit (:func:`fit_record_and_impedance`) stacks the record's simulation error and the spectrum's
 residual, each divided by its own noise level,
 ``r = [sqrt(w) (y - yhat) / sigma_time, r_spectrum / sigma_spectrum]``: the Gaussian likelihood of
 two independent parts with their own variances. By default each ``sigma`` is the RMS residual
@@ -40,12 +40,12 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
-from ..model.circuit import EquivalentCircuit, _combos, _element
+from ..model.circuit import EquivalentCircuit, make_element, scan_combinations
 from ..results import Status
 from ._common import bounded_least_squares
 from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian, rank_rcond
 
-__all__ = ["fit_impedance", "fit_joint", "spectrum_residual", "WEIGHTS"]
+__all__ = ["fit_impedance", "fit_record_and_impedance", "spectrum_residual", "WEIGHTS"]
 
 #: The weightings of the spectrum's residual: ``"relative"`` (divided by ``|Z|``, default),
 #: ``"unit"`` (ohms, unweighted); an array of one positive weight per frequency also works.
@@ -208,12 +208,12 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     for kind, g in zip(kinds, grids):
         for tau, alpha in g:
             if (kind, tau, alpha) not in units:
-                e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
+                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
                 units[(kind, tau, alpha)] = e.impedance(f, dt)
     names = base_names + [f"{'sigma' if kind == 'warburg' else 'R'}{e}"
                           for e, kind in enumerate(kinds, start=1)]
     found = []
-    for combo in _combos(kinds, grids, fixed):
+    for combo in scan_combinations(kinds, grids, fixed):
         cols = base_cols + [units[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
         target = z - offset
         free = []
@@ -390,7 +390,7 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
 
 
 @thin_solves
-def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="relative",
+def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=None, weight="relative",
               discrete=False, capacity=None, ocv_slope=0.0, n_starts=3, max_nfev=200, tol=1e-10):
     """Fit an :class:`fohw.EquivalentCircuit` to a time record and an impedance spectrum at once.
 
@@ -515,7 +515,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
                 f"{rms_spec:.4g}."]
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} evaluations; raise `max_nfev`.")
-    status, message = _finish("fit_joint", status, messages, rank_note)
+    status, message = _finish("fit_record_and_impedance", status, messages, rank_note)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=n, message=message, nfev=int(ls.nfev),
                      jacobian="exact (record), finite differences (spectrum)",

@@ -50,7 +50,7 @@ from .kernels import causal_product, series_divide
 from .parameters import Parameter, Parameters
 
 __all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS",
-           "impedance_error", "CURRENT_SIGNS", "SIGN_T"]
+           "impedance_error", "CURRENT_SIGNS", "SIGN_T", "make_element", "scan_combinations"]
 
 
 def _omega(f):
@@ -421,7 +421,8 @@ def _placeholder(kind, tau):
     return Warburg(0.0, 0.5)
 
 
-def _element(kind, R, tau, alpha):
+def make_element(kind, R, tau, alpha):
+    """The element of ``kind`` ("rc", "zarc" or "warburg") with these values."""
     if kind == "rc":
         return RC(R, tau)
     if kind == "zarc":
@@ -814,7 +815,7 @@ class EquivalentCircuit(Model):
             if f"alpha{k}" in fixed:
                 g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
             grids.append(g)
-        n_combos = sum(1 for _ in itertools.islice(_combos(self.kinds, grids, fixed),
+        n_combos = sum(1 for _ in itertools.islice(scan_combinations(self.kinds, grids, fixed),
                                                    MAX_GRID_STARTS + 1))
         if n_combos > MAX_GRID_STARTS:
             raise ParameterError(
@@ -1095,7 +1096,7 @@ def _check_rest(initial):
                              "column u[:, 1].")
 
 
-def _combos(kinds, grids, fixed):
+def scan_combinations(kinds, grids, fixed):
     """The combinations of grid points the scan visits, generated without the skipped ones.
 
     Same-kind elements are interchangeable: their time constants (Warburg: orders) increase
@@ -1130,7 +1131,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     for kind, g in zip(kinds, grids):
         for tau, alpha in g:
             if (kind, tau, alpha) not in responses:
-                e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
+                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
                 responses[(kind, tau, alpha)] = e.unit_response(i, dt)
     keys = list(responses)
     cols = np.column_stack(base + [responses[k] for k in keys]) * sw[:, None]
@@ -1146,7 +1147,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     names = base_names + [f"R{e + 1}" if kinds[e] != "warburg" else f"sigma{e + 1}"
                           for e in range(len(kinds))]
     found, negative = [], []
-    for combo in _combos(kinds, grids, fixed):
+    for combo in scan_combinations(kinds, grids, fixed):
         idx = list(range(nb)) + [index[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
         free = [j for j, n in zip(idx, names) if n not in fixed]
         fix = [(j, fixed[n]) for j, n in zip(idx, names) if n in fixed]
