@@ -40,7 +40,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
-from ..model.circuit import EquivalentCircuit, make_element, scan_combinations
+from ..model.circuit import EquivalentCircuit, check_spectrum, make_element, scan_combinations
 from ..results import Status
 from ._common import bounded_least_squares
 from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian, rank_rcond
@@ -50,29 +50,6 @@ __all__ = ["fit_impedance", "fit_record_and_impedance", "spectrum_residual", "WE
 #: The weightings of the spectrum's residual: ``"relative"`` (divided by ``|Z|``, default),
 #: ``"unit"`` (ohms, unweighted); an array of one positive weight per frequency also works.
 WEIGHTS = ("relative", "unit")
-
-
-def _check_spectrum(f, z):
-    f = check_array(f, "f", min_length=1)
-    bad = np.flatnonzero(f <= 0)
-    if bad.size:
-        raise ParameterError(f"`f` must be positive frequencies [Hz]; got {float(f[bad[0]])!r} at "
-                             f"index {int(bad[0])}.")
-    try:
-        z = np.asarray(z, dtype=np.complex128).ravel()
-    except (TypeError, ValueError):
-        raise ParameterError(f"`z` must be an array of complex impedances [ohm]; got "
-                             f"{type(z).__name__}.") from None
-    if z.shape != f.shape:
-        raise ParameterError(f"`z` must have one value per frequency; got {z.shape[0]} values for "
-                             f"{f.shape[0]} frequencies.")
-    bad = np.flatnonzero(~np.isfinite(z) | (z == 0))
-    if bad.size:
-        k = int(bad[0])
-        raise ParameterError(f"`z` must be finite and non-zero at every frequency; got {z[k]!r} at "
-                             f"index {k} (f = {f[k]:g} Hz), {bad.size} such value(s) in all. Drop "
-                             "those frequencies.")
-    return f, z
 
 
 def _spectrum_weight(weight, z):
@@ -173,27 +150,14 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     dt = model.dt if discrete else None
     grids = []
     for k, kind in enumerate(kinds, start=1):
-        if kind == "warburg":
-            taus = [None]
-        else:
+        lo = hi = None
+        if kind != "warburg":
             lo, hi = params[f"tau{k}"].bounds
             lo, hi = max(lo, band[0]), min(hi, band[1])
             if lo > hi:
                 lo = hi = min(max(math.sqrt(band[0] * band[1]), params[f"tau{k}"].bounds[0]),
                               params[f"tau{k}"].bounds[1])
-            taus = np.geomspace(lo, hi, model.n_tau) if model.n_tau > 1 else [math.sqrt(lo * hi)]
-        if kind == "rc":
-            alphas = [1.0]
-        else:
-            lo, hi = params[f"alpha{k}"].bounds
-            alphas = (np.linspace(max(lo, 0.2), hi, model.n_alpha) if model.n_alpha > 1 else
-                      [hi if kind == "zarc" else 0.5 * (lo + hi)])
-        g = [(t, a) for t in taus for a in alphas]
-        if f"tau{k}" in fixed:
-            g = [(fixed[f"tau{k}"], a) for a in sorted({a for _, a in g})]
-        if f"alpha{k}" in fixed:
-            g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
-        grids.append(g)
+        grids.append(model.element_grid(k, params, fixed, (lo, hi)))
     # Linear columns: R0 (1), b (the capacitor's unit), each element's unit impedance.
     base_names, base_cols = ["R0"], [np.ones(f.size, dtype=complex)]
     offset = np.zeros(f.size, dtype=complex)
@@ -329,7 +293,7 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     {'a': 0.0, 'R0': 0.02, 'R1': 0.004, 'tau1': 2.0, 'R2': 0.01, 'tau2': 80.0, 'alpha2': 0.55}
     """
     _check_circuit(model)
-    f, z = _check_spectrum(f, z)
+    f, z = check_spectrum(f, z)
     w = _spectrum_weight(weight, z)
     n_starts = check_int(n_starts, "n_starts", minimum=1)
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
@@ -436,7 +400,7 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
     own variance; see the module's docstring for what it implies and how to change it.
     """
     _check_circuit(model)
-    f, z = _check_spectrum(f, z)
+    f, z = check_spectrum(f, z)
     w = _spectrum_weight(weight, z)
     u = model.check_input(u)
     y = check_array(y, "y")
