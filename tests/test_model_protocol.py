@@ -297,6 +297,20 @@ def test_lr_test_of_a_fixed_against_a_free_order(case):
     assert t.pvalue == pytest.approx(0.5 * scipy.stats.chi2.sf(t.statistic, 1), rel=1e-12)
 
 
+def test_lr_test_corrects_for_correlated_residuals_and_gives_a_verdict(case):
+    # Every kind's test reports the statistic corrected from both fits' residuals (a FitResult
+    # keeps them) beside the white-noise one, and reads it beside a held-back record.
+    truth = case.true.parameters[case.order].value
+    null = fohw.fit(_with(case.start, case.order, value=truth, fixed=True), case.u, case.y)
+    t = fohw.lr_test(null, case.fit)
+    assert t.correction.startswith("sandwich: factor") and 0 <= t.pvalue_corrected <= 1
+    assert t.verdict in ("not significant", "significant; not validated (no held-back record)")
+    half = case.y.size // 2
+    held = fohw.lr_test(null, case.fit, validation=(case.u[half:], case.y[half:]))
+    assert len(held.validation) == 2 and np.all(np.isfinite(held.validation))
+    assert held.verdict in fohw.analysis.order_verdict.VERDICTS
+
+
 def test_lr_test_refuses_fits_to_two_records(case):
     # issue 34 cases 22/23: fits to two different records gave LR 34 260, p = 0.
     other = _case(case.factory, seed=3)
