@@ -357,6 +357,10 @@ def test_select_between_a_right_and_a_wrong_candidate(case):
     assert sel.rows[1]["fit"] > sel.rows[0]["fit"]
     assert sel.rows[1]["lr_pvalue"] < 1e-6 and "vs wrong" in sel.rows[1]["lr_reference"]
     assert math.isnan(sel.rows[0]["lr_pvalue"])
+    assert sel.rows[1]["lr_pvalue_corrected"] < 0.05
+    assert sel.rows[1]["order_verdict"] == ("significant and validates"
+                                            if sel.rows[1]["fit"] >= sel.rows[0]["fit"] + 0.5
+                                            else "significant but does not validate (model error)")
     assert isinstance(sel.best, fohw.FitResult) and sel.best.n_samples == case.y.size
     assert "right" in sel.to_markdown()
 
