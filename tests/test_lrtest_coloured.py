@@ -65,9 +65,22 @@ def test_sandwich_factor_is_the_score_variance_ratio_of_an_ar1():
     e_f = ar1(rng, n, 1.0)
     stat = 10.0
     for g, kappa in ((np.ones(n), 19.0), (rng.standard_normal(n), 1.0)):
-        _, text = corrected_statistic(e_f + 0.01 * g, e_f, stat)
+        value, text = corrected_statistic(e_f, e_f, stat, direction=g)
         got = float(text.split("factor ")[1].split(",")[0])
         assert got == pytest.approx(kappa, rel=0.25), (kappa, got)
+        assert value == pytest.approx(stat / got, rel=1e-3) and "score direction" in text
+        # without a direction, the difference of the residuals stands in for it
+        _, fallback = corrected_statistic(e_f + 0.01 * g, e_f, stat)
+        assert "fits' difference" in fallback
+        assert float(fallback.split("factor ")[1].split(",")[0]) == pytest.approx(got, rel=1e-6)
+    # Two tested directions: the mean of the two ratios when they are orthogonal.
+    slow, white = np.ones(n), rng.standard_normal(n)
+    _, both = corrected_statistic(e_f, e_f, stat, direction=np.c_[slow, white - white.mean()])
+    one = [float(corrected_statistic(e_f, e_f, stat, direction=g)[1].split("factor ")[1]
+                 .split(",")[0]) for g in (slow, white - white.mean())]
+    assert float(both.split("factor ")[1].split(",")[0]) == pytest.approx(np.mean(one), rel=0.02)
+    with pytest.raises(fohw.ParameterError, match="`direction` must be finite"):
+        corrected_statistic(e_f, e_f, stat, direction=np.ones(n - 1))
     # Bartlett: n_eff of the full fit's residuals
     value, text = corrected_statistic(e_f + 0.01, e_f, stat, correction="bartlett")
     assert value == pytest.approx(stat * effective_samples(e_f) / n, rel=1e-12)
@@ -125,7 +138,7 @@ def test_lagged_test_reports_white_and_corrected_p_values():
     assert "Not corrected for correlated residuals" in str(bare) and bare.verdict == ""
     t = fohw.lr_test(r0, rc, u=u, y=y)
     assert t.pvalue == bare.pvalue and t.statistic == bare.statistic
-    assert t.correction.startswith("sandwich: factor")
+    assert t.correction.startswith("sandwich: factor") and "score direction" in t.correction
     kappa = float(t.correction.split("factor ")[1].split(",")[0])
     assert kappa > 2                       # AR(1) noise, pole 0.9: the residuals are correlated
     assert t.statistic_corrected == pytest.approx(t.statistic / kappa, rel=1e-3)

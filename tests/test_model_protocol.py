@@ -302,9 +302,13 @@ def test_lr_test_corrects_for_correlated_residuals_and_gives_a_verdict(case):
     # keeps them) beside the white-noise one, and reads it beside a held-back record.
     truth = case.true.parameters[case.order].value
     null = fohw.fit(_with(case.start, case.order, value=truth, fixed=True), case.u, case.y)
-    t = fohw.lr_test(null, case.fit)
+    t = fohw.lr_test(null, case.fit)       # without the record: along the fits' difference
     assert t.correction.startswith("sandwich: factor") and 0 <= t.pvalue_corrected <= 1
+    assert "fits' difference" in t.correction
     assert t.verdict in ("not significant", "significant; not validated (no held-back record)")
+    scored = fohw.lr_test(null, case.fit, u=case.u, y=case.y)   # with it: the score direction
+    assert "along the score direction" in scored.correction, scored.correction
+    assert 0 <= scored.pvalue_corrected <= 1
     half = case.y.size // 2
     held = fohw.lr_test(null, case.fit, validation=(case.u[half:], case.y[half:]))
     assert len(held.validation) == 2 and np.all(np.isfinite(held.validation))

@@ -606,7 +606,7 @@ def _identify(args):
 
 
 def _print_order_test(args, res, u, y):
-    """The order test corrected for correlated residuals, and its verdict (issue 36).
+    """The order test corrected for correlated residuals, and its verdict.
 
     Only where ``summary()`` prints the white-noise test (an ``output_error`` chain's fit);
     the integer class is refitted on the record. Not with ``--json``.

@@ -33,7 +33,7 @@ from the restricted fit with its noise variance, both classes refitted on each).
 
 Every reference assumes white residuals. A free run's residuals are usually correlated (by
 the noise and by model error), so ``n`` overstates the information and the test rejects far
-too often (33 % at 5 % on integer-order records with AR(1) output noise, pole 0.9). Every
+too often (30 % at 5 % on integer-order records with AR(1) output noise, pole 0.9). Every
 test therefore also reports a statistic corrected from the two fits' residuals
 (``correction=``, default ``"sandwich"``; :func:`fohw.lr_statistic.corrected_statistic`,
 compared in docs/order_test.md) and its p-value from the same reference, beside the
@@ -60,7 +60,7 @@ import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import
 
 from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
-from ..estimators.fit import fit
+from ..estimators.fit import fit, free_jacobian
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..lr_statistic import (
     CORRECTIONS,
@@ -88,7 +88,7 @@ from .profile_interval import (
 )
 
 __all__ = ["LRTest", "lr_test", "order_test", "davies_bound", "chi_bar_squared_sf",
-           "cancelled_orders", "REFERENCES", "CORRECTIONS"]
+           "cancelled_orders", "REFERENCES", "CORRECTIONS", "score_direction"]
 
 #: ``reference=`` spellings.
 REFERENCES = ("auto", "mixture", "davies", "bootstrap")
@@ -223,7 +223,54 @@ def criterion_residuals(result, u, y):
         return y - result.predict(u, y)
 
 
-def _corrected(stat, e_r, e_f, correction, n_effective, pvalue_of):
+def score_direction(restricted, full, u):
+    """The score direction of the sandwich correction, or None where there is none.
+
+    The sensitivities of ``full``'s free run to the tested parameters at the null (its model
+    at the restricted estimate, the tested parameters at their restricted values: orders 0),
+    the other free parameters' sensitivities projected out, by
+    :func:`fohw.estimators.fit.free_jacobian` (the kind's exact Jacobian, or finite
+    differences); rows over the criterion's samples. None without the record ``u``, for an
+    equation-error lagged fit (its criterion is not the free run), a lagged fit without a
+    model (several inputs) or with an order not identified under the null (the mixed class),
+    or when the Jacobian cannot be computed.
+    """
+    if u is None:
+        return None
+    try:
+        if is_fit(full):
+            values = {name: p.value for name, p in restricted.parameters.items()}
+            tested = [n for n in full.parameters.free_names if restricted.parameters[n].fixed]
+            model, n_init = full.model, 0
+        else:
+            if full.method != "output_error" or full.model is None or restricted.model is None:
+                return None
+            if null_orders(full.structure.orders)[2]:
+                return None
+            model, shared = full.model, restricted.model.parameters
+            tested = list(full.orders)
+            if any(n not in shared and n not in tested for n in model.parameters):
+                return None
+            values = {n: (shared[n].value if n in shared else 0.0) for n in model.parameters}
+            n_init = int(full.options.get("n_init", 0))
+        null = model.with_parameters(values)
+        names = list(null.parameters.free_names)
+        if not tested or any(n not in names for n in tested):
+            return None
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            _, jac, _ = free_jacobian(null, u)
+        jac = np.asarray(jac, dtype=float)[n_init:]
+        idx = [names.index(n) for n in tested]
+        T, X = jac[:, idx], np.delete(jac, idx, axis=1)
+        if X.shape[1]:
+            T = T - X @ np.linalg.lstsq(X, T, rcond=None)[0]
+        return T if np.all(np.isfinite(T)) and np.any(T) else None
+    except (ParameterError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return None
+
+
+def _corrected(stat, e_r, e_f, correction, n_effective, pvalue_of, direction=None):
     """``(statistic, pvalue, text)`` of the correction for correlated residuals."""
     if n_effective is not None:
         return stat, pvalue_of(stat), "the n_effective given scales the statistic"
@@ -233,7 +280,10 @@ def _corrected(stat, e_r, e_f, correction, n_effective, pvalue_of):
         return math.nan, math.nan, ("needs both fits' residuals: the lagged kind's results keep "
                                     "none, pass u=, y=")
     try:
-        value, text = corrected_statistic(e_r, e_f, stat, correction=correction)
+        if direction is not None and direction.shape[0] != np.shape(e_f)[0]:
+            direction = None
+        value, text = corrected_statistic(e_r, e_f, stat, correction=correction,
+                                          direction=direction)
     except ParameterError as exc:
         return math.nan, math.nan, f"none: {exc}"
     return value, pvalue_of(value), text
@@ -419,9 +469,10 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         stat_c, p_c, text = (math.nan, math.nan, "none: the bootstrap records have white "
                              "noise; use reference='mixture' or 'davies' for a corrected test")
     else:
+        direction = score_direction(restricted, full, u) if correction == "sandwich" else None
         stat_c, p_c, text = _corrected(stat, criterion_residuals(restricted, u, y),
                                        criterion_residuals(full, u, y), correction,
-                                       n_effective, pvalue_of)
+                                       n_effective, pvalue_of, direction)
     crit_name = "free-run RSS" if full.method == "output_error" else "one-step RSS"
     test = LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
                   criterion=_criterion_text(crit_name, n_effective, n_criterion),
@@ -598,8 +649,9 @@ def _lr_fits(restricted, full, reference, u, y, n_effective, correction):
     e_f = full.residuals
     if u is not None and again.sse < full.sse * (1 - 1e-6):
         e_f = again.residuals                  # the refit's, whose SSE the statistic uses
+    direction = score_direction(restricted, full, u) if correction == "sandwich" else None
     stat_c, p_c, text = _corrected(stat, restricted.residuals, e_f, correction, n_effective,
-                                   pvalue_of)
+                                   pvalue_of, direction)
     rp = restricted.parameters
     return LRTest(statistic=stat, df=df, pvalue=pvalue, distribution=distribution,
                   criterion=_criterion_text("free-run RSS", n_effective, full.n_samples),

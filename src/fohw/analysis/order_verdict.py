@@ -1,4 +1,4 @@
-"""The order verdict: the corrected order test read beside held-back validation (issue 36).
+"""The order verdict: the corrected order test read beside held-back validation.
 
 A likelihood-ratio test says whether the fractional orders lower the estimation criterion by
 more than chance would; on measured records, model error colours the residuals and the
