@@ -237,3 +237,38 @@ def test_verdict_on_an_order_near_zero_that_buys_a_tenth_of_a_point():
     assert full.alpha < 0.01 and t.pvalue < 1e-10 and t.pvalue_corrected < 0.01
     assert abs(t.validation[1] - t.validation[0]) < 0.5
     assert t.verdict == "significant but does not validate (model error)"
+
+
+def test_score_direction_of_the_lagged_kind_is_its_exact_jacobian_at_the_null():
+    # An offset, an operating point and a basis of degree 2 (theta not rank one): the direction
+    # comes from the structure's own exact sensitivities at [restricted.linear, 0, ...], which
+    # reproduce the restricted fit's free run; checked against finite differences in alpha.
+    from fohw.analysis.lrtest import score_direction
+
+    data = fohw.datasets.paper_example(300, random_state=1)
+    u, y = data.u + 2.0, data.y + 1.0
+    kw = dict(na=2, nb=2, f_basis=2, g_basis=1, offset=True, operating_point="mean",
+              method="output_error")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        r0 = fohw.identify(u, y, orders=0, **kw)
+        rc = fohw.identify(u, y, orders="commensurate", **kw)
+    g = score_direction(r0, rc, u)
+    assert g is not None and g.shape == (300, 1)
+    t = fohw.lr_test(r0, rc, u=u, y=y)
+    assert "along the score direction" in t.correction
+    # d y / d alpha at the null by a forward difference of the structure's free run
+    from fohw.model.simulation import simulate
+
+    s, u0 = rc.structure, rc.operating_point[0]
+    base = np.r_[0.0, r0.nonlinear]
+    step = 1e-6
+    y_a = simulate(s, u - u0, params=np.r_[r0.linear, base + np.r_[step, np.zeros(base.size - 1)]])
+    y_0 = simulate(s, u - u0, params=np.r_[r0.linear, base])
+    fd = (y_a - y_0) / step
+    from fohw.model.sensitivity import simulation_jacobian
+
+    _, S = simulation_jacobian(s, r0.linear, base, u - u0)
+    X = np.delete(S, len(s.linear_names), axis=1)
+    fd = fd - X @ np.linalg.lstsq(X, fd, rcond=None)[0]
+    np.testing.assert_allclose(g[:, 0], fd, rtol=0, atol=1e-3 * np.max(np.abs(fd)))

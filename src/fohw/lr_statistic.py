@@ -29,7 +29,7 @@ their size and power):
     heteroscedasticity-and-autocorrelation-consistent (Newey--West) variance of the score
     ``g' e`` over its white-noise value; with ``q > 1`` tested parameters, the mean
     eigenvalue ``tr((G'G)^-1 sum_k w_k rho_e(k) G_k' G) / q`` (a Satterthwaite-type scale).
-    Without the direction (no record, a kind without a model to differentiate, an order
+    Without the direction (no record, a lagged fit of several inputs, an order
     not identified under the null, an equation-error fit), ``g`` is replaced by the
     difference of the two fits' residuals ``d = e_r - e_f``, which the text says: a weaker
     approximation (``d`` is ``g`` to first order only; with AR(1) noise of sd 1.0 it halved

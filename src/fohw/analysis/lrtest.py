@@ -226,48 +226,67 @@ def criterion_residuals(result, u, y):
 def score_direction(restricted, full, u):
     """The score direction of the sandwich correction, or None where there is none.
 
-    The sensitivities of ``full``'s free run to the tested parameters at the null (its model
-    at the restricted estimate, the tested parameters at their restricted values: orders 0),
-    the other free parameters' sensitivities projected out, by
-    :func:`fohw.estimators.fit.free_jacobian` (the kind's exact Jacobian, or finite
-    differences); rows over the criterion's samples. None without the record ``u``, for an
-    equation-error lagged fit (its criterion is not the free run), a lagged fit without a
-    model (several inputs) or with an order not identified under the null (the mixed class),
-    or when the Jacobian cannot be computed.
+    The sensitivities of ``full``'s free run to the tested parameters at the null (the
+    restricted estimate, the tested parameters at their restricted values: orders 0), the other
+    free parameters' sensitivities projected out; rows over the criterion's samples. A
+    FitResult's through :func:`fohw.estimators.fit.free_jacobian` (the kind's exact Jacobian,
+    or finite differences); the lagged kind's through the exact
+    :func:`fohw.model.sensitivity.simulation_jacobian` of ``full``'s structure at
+    ``[restricted.linear, 0, restricted.nonlinear]``, checked to reproduce the restricted
+    fit's free run. None without the record ``u``; for an equation-error lagged fit (its
+    criterion is not the free run), several inputs, an order not identified under the null
+    (the mixed class); or when the Jacobian cannot be computed.
     """
     if u is None:
         return None
     try:
-        if is_fit(full):
-            values = {name: p.value for name, p in restricted.parameters.items()}
-            tested = [n for n in full.parameters.free_names if restricted.parameters[n].fixed]
-            model, n_init = full.model, 0
-        else:
-            if full.method != "output_error" or full.model is None or restricted.model is None:
-                return None
-            if null_orders(full.structure.orders)[2]:
-                return None
-            model, shared = full.model, restricted.model.parameters
-            tested = list(full.orders)
-            if any(n not in shared and n not in tested for n in model.parameters):
-                return None
-            values = {n: (shared[n].value if n in shared else 0.0) for n in model.parameters}
-            n_init = int(full.options.get("n_init", 0))
-        null = model.with_parameters(values)
-        names = list(null.parameters.free_names)
-        if not tested or any(n not in names for n in tested):
-            return None
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            _, jac, _ = free_jacobian(null, u)
-        jac = np.asarray(jac, dtype=float)[n_init:]
-        idx = [names.index(n) for n in tested]
+            if is_fit(full):
+                values = {name: p.value for name, p in restricted.parameters.items()}
+                tested = [n for n in full.parameters.free_names
+                          if restricted.parameters[n].fixed]
+                null = full.model.with_parameters(values)
+                names = list(null.parameters.free_names)
+                if not tested or any(n not in names for n in tested):
+                    return None
+                _, jac, _ = free_jacobian(null, u)
+                idx = [names.index(n) for n in tested]
+                jac = np.asarray(jac, dtype=float)
+            else:
+                jac, idx = _lagged_jacobian(restricted, full, u)
+                if jac is None:
+                    return None
         T, X = jac[:, idx], np.delete(jac, idx, axis=1)
         if X.shape[1]:
             T = T - X @ np.linalg.lstsq(X, T, rcond=None)[0]
         return T if np.all(np.isfinite(T)) and np.any(T) else None
     except (ParameterError, ValueError, ArithmeticError, np.linalg.LinAlgError):
         return None
+
+
+def _lagged_jacobian(restricted, full, u):
+    """``(jacobian rows over the criterion, tested columns)`` of a lagged output-error pair."""
+    from ..model.sensitivity import simulation_jacobian
+
+    s = full.structure
+    if (full.method != "output_error" or s.n_inputs != 1 or null_orders(s.orders)[2]
+            or restricted.structure.layout.names != s.layout.names):
+        return None, None
+    n_orders = len(s.orders.free)
+    params = np.r_[np.zeros(n_orders), np.asarray(restricted.nonlinear, dtype=float)]
+    if params.shape[0] != len(s.nonlinear_names):
+        return None, None
+    u0, y0 = full.operating_point
+    u = np.asarray(u, dtype=float)
+    yhat, jac = simulation_jacobian(s, np.asarray(restricted.linear, dtype=float), params,
+                                    u - u0 if u0 else u, y0=y0)
+    own = np.asarray(restricted.simulate(u, initial="fitted"), dtype=float) - y0
+    if not np.max(np.abs(yhat - own)) <= 1e-6 * max(float(np.max(np.abs(own))), 1e-300):
+        return None, None               # (e.g. levels of the past the structure does not hold)
+    n_init = int(full.options.get("n_init", 0))
+    first = len(s.linear_names)
+    return np.asarray(jac, dtype=float)[n_init:], list(range(first, first + n_orders))
 
 
 def _corrected(stat, e_r, e_f, correction, n_effective, pvalue_of, direction=None):
