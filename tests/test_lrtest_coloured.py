@@ -157,15 +157,17 @@ def test_order_test_with_the_record_refits_the_integer_class():
     u, y = record(4, alpha=0.5, n=400)
     _, rc = pair(u[:300], y[:300])
     quick = rc.order_test()                # no record: the chain's integer fit, white only
-    assert math.isnan(quick.pvalue_corrected) and "result.order_test(u, y)" in quick.correction
-    assert "result.order_test(u, y)" in rc.summary()
-    t = rc.order_test(u[:300], y[:300], validation=(u[300:], y[300:]))
+    assert math.isnan(quick.pvalue_corrected) and "fohw.order_test(result, u, y)" in quick.correction
+    assert "fohw.order_test(result, u, y)" in rc.summary()
+    t = fohw.order_test(rc, u[:300], y[:300], validation=(u[300:], y[300:]))
     assert t.statistic == pytest.approx(quick.statistic, rel=1e-4)
     assert t.pvalue_corrected < 1e-6 and len(t.validation) == 2 and t.margin == 0.5
     assert t.validation[1] > t.validation[0] + 0.5
     assert t.verdict == "significant and validates" and "Verdict: significant and" in str(t)
     with pytest.raises(fohw.ParameterError, match="`validation` needs the estimation record"):
-        rc.order_test(validation=(u[300:], y[300:]))
+        fohw.order_test(rc, validation=(u[300:], y[300:]))
+    with pytest.raises(fohw.ParameterError, match="is fohw.order_test\\(result, u, y"):
+        rc.order_test(u[:300], y[:300])
 
 
 # ---- must show (issue 36): size and power under AR(1) output noise, by output error ---------------
@@ -214,7 +216,7 @@ def test_verdict_when_the_estimation_dynamics_do_not_hold_on_the_held_back_part(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
         full = fohw.identify(u[:400], y_est, orders="commensurate", **KW)
-    t = full.order_test(u[:400], y_est, validation=(u[400:], y_val))
+    t = fohw.order_test(full, u[:400], y_est, validation=(u[400:], y_val))
     assert t.pvalue_corrected < 1e-10 and t.validation[1] < t.validation[0] - 5
     assert t.verdict == "significant but does not validate (model error)"
 
@@ -233,7 +235,7 @@ def test_verdict_on_an_order_near_zero_that_buys_a_tenth_of_a_point():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
         full = fohw.identify(u[:400], y[:400], orders="commensurate", **KW)
-    t = full.order_test(u[:400], y[:400], validation=(u[400:], y[400:]))
+    t = fohw.order_test(full, u[:400], y[:400], validation=(u[400:], y[400:]))
     assert full.alpha < 0.01 and t.pvalue < 1e-10 and t.pvalue_corrected < 0.01
     assert abs(t.validation[1] - t.validation[0]) < 0.5
     assert t.verdict == "significant but does not validate (model error)"

@@ -616,7 +616,9 @@ def _print_order_test(args, res, u, y):
     if args.json or res.order_test() is None:
         return
     try:
-        test = res.order_test(u, y)
+        from .analysis.lrtest import order_test as order_test_with_record
+
+        test = order_test_with_record(res, u, y)
     except FohwError as exc:
         print(f"Order test corrected for correlated residuals: not computed ({exc})")
         return

@@ -56,11 +56,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy  # submodules (scipy.stats, ...) load on first use: import time
 
+from ._validation import check_array, check_int
 from .exceptions import ParameterError
 from .model.orders import Orders
 from .model.structure import Structure
 
-__all__ = ["LRTest", "order_test", "chi_bar_squared_sf", "null_orders", "cancelled_orders",
+__all__ = ["LRTest", "order_test", "effective_samples", "chi_bar_squared_sf", "null_orders",
+           "cancelled_orders",
            "mixture", "statistic", "order_notes", "check_result", "criterion", "order_bounds",
            "LIKELIHOOD_METHODS", "CORRECTIONS", "corrected_statistic", "autocorrelation"]
 
@@ -343,7 +345,7 @@ def order_test(full):
     under the null (the mixed class) gets no p-value here (NaN): Davies' bound and the
     bootstrap need the record (:func:`lr_test` with ``u``, ``y``). The result keeps no
     residuals, so the test is not corrected for their correlation here (``pvalue_corrected``
-    NaN): ``result.order_test(u, y)`` refits the integer class and gives it, and the verdict.
+    NaN): ``fohw.order_test(result, u, y)`` refits the integer class and gives it, and the verdict.
 
     Returns
     -------
@@ -375,7 +377,7 @@ def order_test(full):
     return LRTest(statistic=stat, df=df, pvalue=float(pvalue), distribution=distribution,
                   criterion="free-run RSS", n=n, rss_restricted=rss_r, rss_full=rss_f,
                   boundary=boundary, unidentified=unidentified, note=" ".join(notes),
-                  correction="it needs both fits' residuals: result.order_test(u, y) with "
+                  correction="it needs both fits' residuals: fohw.order_test(result, u, y) with "
                              "the estimation record")
 
 
@@ -495,8 +497,6 @@ def corrected_statistic(residuals_restricted, residuals_full, statistic_white, *
         raise ParameterError("the full fit's residuals are constant: their autocorrelation "
                              "is undefined.")
     if correction == "bartlett":
-        from .analysis.metrics import effective_samples
-
         n_eff = effective_samples(e_f)
         return stat * n_eff / n, f"bartlett: n_eff = {n_eff:.4g} of {n} samples"
     rho_e = autocorrelation(e_f, n // 4)
@@ -515,3 +515,55 @@ def corrected_statistic(residuals_restricted, residuals_full, statistic_white, *
         kappa = _sandwich_factor(rho_e, d[:, None], lag) if np.any(d) else 1.0
     kappa = max(kappa, 1.0 / n)
     return stat / kappa, f"sandwich: factor {kappa:.4g}, lags up to {lag}, along {along}"
+
+
+def effective_samples(residuals, max_lag=None):
+    """Bartlett's effective sample size ``n / (1 + 2 sum_{k>=1} rho_k)`` of correlated residuals.
+
+    A likelihood-ratio statistic ``n log(RSS_r / RSS_f)`` and a profile interval assume white
+    residuals; with correlated ones (a free run's usually are) ``n`` overstates the
+    information. This estimate can be passed as ``n_effective`` to :func:`fohw.lr_test` and
+    :func:`fohw.profile_interval` for a more honest, still approximate, statistic.
+
+    Parameters
+    ----------
+    residuals : array_like, shape (n,)
+        At least 4 finite samples, not all equal.
+    max_lag : int, optional
+        Lags summed; default: up to the first non-positive autocorrelation (Geyer's initial
+        positive sequence, a common truncation), at most ``n // 4``.
+
+    Returns
+    -------
+    float
+        Between 1 and ``n`` (white residuals give about ``n``).
+
+    Notes
+    -----
+    ``rho_k`` is the sample autocorrelation at lag ``k`` (the mean removed, the biased
+    estimator ``sum_t r_t r_{t+k} / sum_t r_t^2``), computed by FFT with zero padding (a
+    linear, not circular, correlation). For an AR(1) with coefficient ``phi`` the sum gives
+    ``n (1 - phi) / (1 + phi)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fohw.lr_statistic import effective_samples
+    >>> e = np.random.default_rng(0).standard_normal(20_000)
+    >>> x = np.convolve(e, np.ones(10) / 10)[:20_000]     # a moving average: n_eff ~ n / 10
+    >>> 1500 < effective_samples(x) < 2500
+    True
+    """
+    r = check_array(residuals, "residuals", min_length=4)
+    if np.ptp(r) == 0:
+        raise ParameterError(f"`residuals` are constant ({float(r[0])!r} at all {r.size} samples): their "
+                             "autocorrelation is undefined.")
+    n = r.shape[0]
+    acf = autocorrelation(r, n - 1)
+    limit = n // 4 if max_lag is None else check_int(max_lag, "max_lag", minimum=1)
+    total = 0.0
+    for k in range(1, min(limit, n - 1) + 1):
+        if max_lag is None and acf[k] <= 0:
+            break
+        total += acf[k]
+    return float(min(max(n / (1.0 + 2.0 * total), 1.0), n))

@@ -717,16 +717,16 @@ class IdentificationResult(ResultPresentation):
         which fits the integer class it contains (``details["integer_sse"]``), the
         white-noise test without refitting; None otherwise (use :func:`fohw.lr_test` with
         both fits). An order not identified under the null (the mixed class) has no p-value
-        here (NaN). With the estimation record ``u, y``: the integer class refitted, the test
-        corrected for correlated residuals beside the white-noise one, and with
-        ``validation=(u_val, y_val)`` the verdict (``correction``, ``validation``, ``level``,
-        ``margin``: :func:`fohw.analysis.lrtest.order_test`).
+        here (NaN). With the estimation record (the integer class refitted, the test corrected
+        for correlated residuals beside the white-noise one, the verdict against a held-back
+        record): :func:`fohw.order_test` ``(result, u, y, validation=(u_val, y_val))``.
         """
         if u is None and y is None and not kwargs:
             return order_test(self)
-        from .analysis.lrtest import order_test as with_record
-
-        return with_record(self, u, y, **kwargs)
+        # the refit lives with the tests (fohw.analysis), above this layer
+        raise ParameterError("result.order_test() takes no record; the test with the record "
+                             "(the integer class refitted, the corrected statistic, the verdict) "
+                             "is fohw.order_test(result, u, y, validation=(u_val, y_val)).")
 
 
 def _rebuild(cls, values):
