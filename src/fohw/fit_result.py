@@ -21,6 +21,7 @@ import numpy as np
 from .exceptions import ParameterError
 from .model.base import Model
 from .model.parameters import Parameters
+from .model.simulation import record_list, simulate
 from .results import IdentificationResult, Status
 
 __all__ = ["FitResult"]
@@ -161,7 +162,13 @@ class FitResult(metaclass=abc.ABCMeta):
                 for n, s in self.standard_errors().items()}
 
     def simulate(self, u, *, initial=None):
-        """The fitted model's free run for ``u`` (:meth:`fohw.Model.simulate`)."""
+        """The fitted model's free run for ``u`` (:meth:`fohw.Model.simulate`).
+
+        ``u`` may be a :class:`fohw.Record` (its input, at its sampling time, checked against
+        the model's) or a list of Records (a list of outputs): as :func:`fohw.simulate`.
+        """
+        if record_list(u) is not None:
+            return simulate(self.model, u, initial=initial)
         return self.model.simulate(u, initial=initial)
 
     # --- reading -----------------------------------------------------------------------------
