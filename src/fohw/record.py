@@ -14,7 +14,8 @@ import numpy as np
 from ._validation import check_array, check_same_length, check_scalar
 from .exceptions import DimensionError, ParameterError
 
-__all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "check_sampling",
+__all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "describe_data",
+           "check_sampling",
            "UNIFORM_RTOL"]
 
 
@@ -410,6 +411,17 @@ def record_info(records):
             "time_unit": first.time_unit, "dt": first.dt,
             "records": [{"name": r.name, "n_samples": r.n_samples, "t0": r.t0,
                          "uniform": r.uniform, "dt": r.dt} for r in records]}
+
+
+def describe_data(info):
+    """One line of what the data were (:func:`record_info`), as ``summary()`` prints it."""
+    inputs = ", ".join(f"{n} [{u}]" if u else n
+                       for n, u in zip(info["input_names"], info["input_units"]))
+    out = f"{info['output_name']} [{info['output_unit']}]" if info["output_unit"] else \
+        info["output_name"]
+    dt = "" if info.get("dt") is None else \
+        f", dt = {info['dt']:g} {info.get('time_unit', '')}".rstrip()
+    return f"data: {len(info['records'])} record(s); input {inputs}; output {out}{dt}"
 
 
 def model_dt(model):
