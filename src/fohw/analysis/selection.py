@@ -52,7 +52,7 @@ from ..exceptions import (
     SimulationDivergedError,
 )
 from ..model.base import Model
-from ..model.simulation import check_record_sampling, record_list
+from ..model.simulation import check_record_sampling
 from ..record import Record, check_sampling, record_data
 from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
@@ -705,7 +705,8 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     >>> [r["status"] for r in sel.rows], sel.best_row["na"]
     (['ok', 'ok'], 2)
     """
-    if record_list(u) is not None and y is not None and candidates is None:
+    if candidates is None and (isinstance(y, Mapping) or (
+            isinstance(y, (list, tuple)) and y and isinstance(y[0], (Mapping, Model)))):
         y, candidates = None, y                       # select_structure(record, candidates)
     records, u, y = record_data(u, y, what="u")
     if records is None and y is None:
