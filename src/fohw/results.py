@@ -491,8 +491,6 @@ class IdentificationResult(ResultPresentation):
         extra = ({} if self.structure.output_map is None
                  else {"output_map_params": {k: float(v) for k, v in
                                              self.output_map_params.items()}})
-        if self.data:                         # what the record was (fohw.identify of a Record)
-            extra["data"] = _setting_to_json(dict(self.data))
         return {
             "method": self.method, "structure": self.structure.to_dict(),
             "theta": _array_to_dict(self.theta), "orders": dict(self.orders),
@@ -506,6 +504,7 @@ class IdentificationResult(ResultPresentation):
             "input_range": None if self.input_range is None else list(self.input_range),
             "options": {k: v for k, v in settings.items() if v is not ...},
             "details": {str(k): _detail_to_json(v) for k, v in self.details.items()},
+            "data": _setting_to_json(dict(self.data)),   # what the record was (names, units)
         } | extra
 
     @classmethod
@@ -521,7 +520,7 @@ class IdentificationResult(ResultPresentation):
         names = {f.name for f in dataclasses.fields(cls)}
         if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
             names.discard("output_map_params")
-        if isinstance(d, Mapping) and "data" not in d:                # written only for records
+        if isinstance(d, Mapping) and "data" not in d:         # files written before issue 35
             names.discard("data")
         if not isinstance(d, Mapping) or set(d) != names:
             missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import collections
 import csv
+import dataclasses
 import difflib
 import inspect
 import io
@@ -53,7 +54,7 @@ from ..exceptions import (
 )
 from ..model.base import Model
 from ..model.simulation import check_record_sampling
-from ..record import Record, check_sampling, record_data
+from ..record import Record, check_sampling, record_data, record_info
 from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
@@ -770,6 +771,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
+    if records is not None and selection.best is not None and \
+            selection.best is not selection.results[selection.best_index]:   # refitted on it
+        selection.best = dataclasses.replace(selection.best, data=record_info(records))
     if selection.best is None:
         warn_nothing_selected("select_structure", rows)
     return selection
