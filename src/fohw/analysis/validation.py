@@ -247,8 +247,11 @@ class Validation:
             One Axes receives the outputs only; two receive the outputs and the errors
             (default: a new figure with both).
         dt : float, optional
-            Sampling time: the horizontal axis is then time in its unit (default: the model's
-            :attr:`dt` when it is not 1), else the sample index.
+            Sampling time: the horizontal axis is then time in its unit (default:
+            :attr:`dt`, the record's when :func:`compare` was given a :class:`fohw.Record`,
+            labelled ``time [unit]`` with its :attr:`time_unit`; else the model's when it is
+            not 1), else the sample index (``sample k``). A record's name and unit label the
+            output axis.
 
         Returns
         -------
