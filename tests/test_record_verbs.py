@@ -301,3 +301,48 @@ def test_the_command_line_plots_against_the_files_time(tmp_path, monkeypatch, ca
     assert ax.get_xlabel() == "time"            # the file gives the step (Ts), not its unit
     assert ax.get_lines()[0].get_xdata()[-1] == 4.0 * 1023
     assert figures[0].axes[0].get_ylabel() == "yEst"
+
+
+class ZohLag(fohw.Model):
+    """``tau x' + x = gain u`` with the input held between instants: exact at any step."""
+
+    kind = "TestRecordVerbsZohLag"
+
+    def __init__(self, gain=1.0, tau=1.0):
+        self.gain, self.tau = float(gain), float(tau)
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("gain", self.gain),
+                                fohw.Parameter("tau", self.tau, bounds=(1e-3, 1e3))])
+
+    def with_parameters(self, values):
+        v = self.parameters.with_values(values).valuesdict()
+        return ZohLag(v["gain"], v["tau"])
+
+    def simulate(self, u, *, initial=None):
+        return self.simulate_at(u, np.arange(np.shape(u)[0], dtype=float))
+
+    def simulate_at(self, u, t, *, intersample="zoh"):
+        u = self.check_input(u)
+        x = np.zeros(u.size)
+        for k in range(1, u.size):
+            a = math.exp(-(t[k] - t[k - 1]) / self.tau)
+            x[k] = a * x[k - 1] + (1 - a) * self.gain * u[k - 1]
+        return x
+
+
+def test_a_kind_that_simulates_on_instants_runs_a_non_uniform_record():
+    # A step held from t = 0: x(t) = gain (1 - exp(-t / tau)) at every instant, whatever the
+    # steps (the exact zero-order-hold solution), through fohw.simulate and compare.
+    t = np.cumsum(np.r_[0.0, np.random.default_rng(3).uniform(0.05, 0.4, 59)])
+    model = ZohLag(2.0, 1.5)
+    rec = fohw.Record(u=np.ones(t.size), y=2.0 * (1 - np.exp(-t / 1.5)), t=t, time_unit="s")
+    assert not rec.uniform
+    np.testing.assert_allclose(fohw.simulate(model, rec), rec.y, rtol=1e-12, atol=1e-15)
+    v = fohw.compare(model, rec)
+    assert v.rmse < 1e-12 and v.fit > 99.999
+    assert "ZohLag is an output-error model" in " ".join(v.notes)
+    fig = v.plot()
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+    np.testing.assert_array_equal(fig.axes[0].get_lines()[0].get_xdata(), t)
