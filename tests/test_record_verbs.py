@@ -346,3 +346,12 @@ def test_a_kind_that_simulates_on_instants_runs_a_non_uniform_record():
     fig = v.plot()
     assert fig.axes[-1].get_xlabel() == "time [s]"
     np.testing.assert_array_equal(fig.axes[0].get_lines()[0].get_xdata(), t)
+
+
+def test_the_command_line_simulates_only_at_the_files_step(tmp_path, capsys):
+    # The file says Ts = 4 (the cascaded tanks); the paper's model runs at dt = 1.
+    fohw.save_model(fohw.datasets.paper_model(), tmp_path / "m.json")
+    assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input", "@cascaded_tanks",
+                 "--column", "uEst", "--output", str(tmp_path / "y.txt")]) == 2
+    assert "sampled every 4 (its Ts) but" in capsys.readouterr().err
+    assert not (tmp_path / "y.txt").exists()

@@ -920,12 +920,16 @@ def _simulate(args):
     import numpy as np
 
     from .model.initial import initial_state, simulate_from
-    from .model.simulation import equation_noise, generic_model, simulate
+    from .model.simulation import equation_noise, generic_model, own_dt, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
-    data, names, _ = read_table(args.input, _decimal(args))
+    data, names, file_dt = read_table(args.input, _decimal(args))
     other = generic_model(loaded)
+    step = own_dt(loaded)
+    if file_dt is not None and step is not None and abs(file_dt - step) > 1e-12 * file_dt:
+        raise UsageError(f"{args.input} is sampled every {file_dt:g} (its Ts) but {args.model} "
+                         f"has dt = {step:g}: fohw does not change a sampling time silently.")
     if other is not None and args.initial is not None:   # a model (or fit) of another kind
         raise UsageError(f"--initial is for the lagged HammersteinWiener kind; {args.model} "
                          f"holds a {type(other).__name__}, simulated from its own initial state.")
