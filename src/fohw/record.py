@@ -424,19 +424,6 @@ def describe_data(info):
     return f"data: {len(info['records'])} record(s); input {inputs}; output {out}{dt}"
 
 
-def model_dt(model):
-    """The sampling time a model keeps as a setting, or ``None`` for one that runs in samples."""
-    try:
-        config = model.config()
-    except Exception:                           # noqa: BLE001 - a setting no file holds
-        config = None
-    if config is not None:
-        return float(model.dt) if "dt" in config else None
-    from .model.base import Model
-
-    return None if type(model).dt is Model.dt else float(model.dt)
-
-
 def check_sampling(records, dt, *, what="the model's dt"):
     """Refuse records sampled at another step than ``dt`` (``None``: a model in samples).
 
