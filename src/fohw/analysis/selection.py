@@ -727,8 +727,9 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         if records is not None and u is None:
             return _select_records(records, models, validation, hold_out, score, refit,
                                    executor, progress, envelope, common)
-        return _select_models(u, y, models, validation, score, refit, executor, progress,
-                              envelope, common)
+        selection = _select_models(u, y, models, validation, score, refit, executor,
+                                   progress, envelope, common)
+        return _with_record_info(selection, records)
     if records is not None and u is None:
         raise ParameterError(
             f"`u` holds {len(records)} records: several experiments are fitted by fohw.fit, so "
@@ -771,11 +772,17 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
+    _with_record_info(selection, records)
+    if selection.best is None:
+        warn_nothing_selected("select_structure", rows)
+    return selection
+
+
+def _with_record_info(selection, records):
+    """The refitted winner keeps what the record was (names, units, sampling)."""
     if records is not None and selection.best is not None and \
             selection.best is not selection.results[selection.best_index]:   # refitted on it
         selection.best = dataclasses.replace(selection.best, data=record_info(records))
-    if selection.best is None:
-        warn_nothing_selected("select_structure", rows)
     return selection
 
 
