@@ -14,18 +14,23 @@ joint Cramér–Rao bound of several records, whose information is the sum of th
 (independent experiments: the log-likelihoods add).
 """
 
+import importlib
 import math
 import warnings
 
 import matplotlib
 import numpy as np
 import pytest
-from test_model_protocol import KINDS, _case, _lagged, _with
 
 import fohw
 from fohw.cli import main
 
 matplotlib.use("Agg")
+
+# The protocol tests' kinds, from the module pytest already loaded (``--import-mode=importlib``
+# names it ``tests.test_model_protocol``; a second copy would register its kind twice).
+_protocol = importlib.import_module("tests.test_model_protocol")
+KINDS, _case, _lagged, _with = _protocol.KINDS, _protocol._case, _protocol._lagged, _protocol._with
 
 FORMS = ("arrays", "record", "dataframe")
 
