@@ -520,7 +520,7 @@ class IdentificationResult(ResultPresentation):
         names = {f.name for f in dataclasses.fields(cls)}
         if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
             names.discard("output_map_params")
-        if isinstance(d, Mapping) and "data" not in d:         # files written before issue 35
+        if isinstance(d, Mapping) and "data" not in d:         # files written before records
             names.discard("data")
         if not isinstance(d, Mapping) or set(d) != names:
             missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)
