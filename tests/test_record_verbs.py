@@ -328,7 +328,7 @@ class ZohLag(fohw.Model):
     def simulate(self, u, *, initial=None):
         return self.simulate_at(u, np.arange(np.shape(u)[0], dtype=float))
 
-    def simulate_at(self, u, t, *, intersample="zoh"):
+    def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
         u = self.check_input(u)
         x = np.zeros(u.size)
         for k in range(1, u.size):
@@ -360,3 +360,21 @@ def test_the_command_line_simulates_only_at_the_files_step(tmp_path, capsys):
                  "--column", "uEst", "--output", str(tmp_path / "y.txt")]) == 2
     assert "sampled every 4 (its Ts) but" in capsys.readouterr().err
     assert not (tmp_path / "y.txt").exists()
+
+
+def test_profile_interval_and_lr_test_check_a_record_on_instants_by_the_fits_digest():
+    # The fit's fingerprint holds the instants and how the model ran between them (hold,
+    # refine): the same record passes, the same samples with another hold are another record.
+    rng = np.random.default_rng(4)
+    t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.4, 79)])
+    u = np.repeat(rng.standard_normal(16), 5)
+    y = ZohLag(2.0, 1.5).simulate_at(u, t) + 0.01 * rng.standard_normal(t.size)
+    rec = fohw.Record(u=u, y=y, t=t, intersample="foh")
+    res = fohw.fit(ZohLag(1.0, 1.0), rec)
+    pi = fohw.profile_interval(res, "tau", u=rec, n_grid=5)
+    assert pi.lower < 1.5 < pi.upper
+    held = fohw.Record(u=u, y=y, t=t, intersample="zoh")
+    with pytest.raises(fohw.ParameterError, match="not the data `result` was fitted to"):
+        fohw.profile_interval(res, "tau", u=held)
+    fixed = fohw.fit(_with(ZohLag(1.0, 1.0), "tau", value=1.0, fixed=True), rec)
+    assert fohw.lr_test(fixed, res, u=rec).pvalue < 1e-6

@@ -446,11 +446,12 @@ def check_sampling(records, dt, *, what="the model's dt"):
     different systems.
     """
     for k, r in enumerate(records):
-        if r.uniform and r.dt is not None and dt is not None and abs(r.dt - dt) > 1e-12 * r.dt:
+        if r.uniform and r.dt is not None and dt is not None and \
+                abs(r.dt - dt) > UNIFORM_RTOL * r.dt:
             name = f" {r.name!r}" if r.name else (f" {k}" if len(records) > 1 else "")
             raise ParameterError(
-                f"the record{name} is sampled every {r.dt:g} {r.time_unit}".rstrip()
-                + f" but {what} = {dt:g}; use dt={r.dt:g} (the record's sampling time): "
+                f"the record{name} is sampled every {r.dt!r} {r.time_unit}".rstrip()
+                + f" but {what} = {dt!r}; use dt={r.dt!r} (the record's sampling time): "
                 "fohw does not change it silently.")
 
 

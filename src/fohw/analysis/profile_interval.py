@@ -37,6 +37,7 @@ from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
 from ..lr_statistic import LIKELIHOOD_METHODS, check_result, criterion, order_bounds
+from ..model.irregular import DEFAULT_REFINE
 from ..model.orders import Orders
 from ..model.simulation import record_list, simulate_record
 from ..record import check_sampling, record_data
@@ -131,10 +132,19 @@ def records_digest(result, records):
         raise ParameterError(f"the records have {sum(sizes)} samples, but the fit's "
                              f"sample_weight {weight.size}: they are not the data it was fitted to.")
     warmup = int(result.options.get("warmup") or 0)
+    refine = result.options.get("refine")
     bounds = np.cumsum([0] + sizes)
-    parts = [SimpleNamespace(u=result.model.check_input(r.u), y=r.y, t=r.t, warmup=warmup,
-                             weight=None if weight is None else weight[bounds[k]:bounds[k + 1]])
-             for k, r in enumerate(records)]
+    parts = []
+    for k, r in enumerate(records):
+        # as fohw.fit runs it: between the samples for instants or a first-order hold, with
+        # the fine step of the record's own instants under a warm-up
+        t = r.t if r.t is not None or r.intersample == "zoh" else r.time
+        step = None if t is None or not warmup else \
+            float(np.median(np.diff(t))) / (refine or DEFAULT_REFINE)
+        parts.append(SimpleNamespace(
+            u=result.model.check_input(r.u), y=r.y, t=t, warmup=warmup,
+            intersample=r.intersample, refine=refine, step=step,
+            weight=None if weight is None else weight[bounds[k]:bounds[k + 1]]))
     return data_digest_of(parts, result.model.dt)
 
 

@@ -259,19 +259,20 @@ def check_record_sampling(model, record):
     """
     dt = own_dt(model)
     named = f" {record.name!r}" if record.name else ""
+    # 1e-6: fohw.record.UNIFORM_RTOL (a layer above the model's), the tolerance fohw.fit uses
     if record.t is None and record.dt is not None and dt is not None \
-            and abs(record.dt - dt) > 1e-12 * record.dt:
+            and abs(record.dt - dt) > 1e-6 * record.dt:
         raise ParameterError(
-            f"the record{named} is sampled every {record.dt:g} {record.time_unit}".rstrip()
-            + f" but the model has dt = {dt:g}; use a model at dt={record.dt:g} (the record's "
+            f"the record{named} is sampled every {record.dt!r} {record.time_unit}".rstrip()
+            + f" but the model has dt = {dt!r}; use a model at dt={record.dt!r} (the record's "
             "sampling time): fohw does not change it silently.")
-    if record.t is None:
-        return None
+    if record.t is None and record.intersample == "zoh":
+        return None                     # held between uniform samples: the kind's simulate
     other = generic_model(model)
     simulate_at = getattr(other, "simulate_at", None)
     if simulate_at is None:
         raise ParameterError(
-            f"the record{named} has non-uniform time stamps and a "
+            f"the record{named} has non-uniform time stamps (or a first-order hold) and a "
             f"{type(other or model).__name__} has no simulator between samples (`simulate_at`); "
             "resample the record to a uniform grid (e.g. numpy.interp at t[0] + k*dt) or use a "
             "kind that simulates on time stamps.")
@@ -281,8 +282,9 @@ def check_record_sampling(model, record):
 def simulate_record(model, record, **kwargs):
     """:func:`simulate` on a :class:`fohw.Record`: its input, at its sampling.
 
-    The sampling is checked by :func:`check_record_sampling`; non-uniform instants are run by
-    the kind's ``simulate_at`` with the record's ``intersample``, from rest.
+    The sampling is checked by :func:`check_record_sampling`; non-uniform instants (and a
+    first-order hold) are run by the kind's ``simulate_at`` with the record's ``intersample``,
+    from rest, as :func:`fohw.fit` runs them.
     """
     simulate_at = check_record_sampling(model, record)
     if simulate_at is not None:
@@ -291,7 +293,7 @@ def simulate_record(model, record, **kwargs):
             raise ParameterError(f"{', '.join(given)}: not taken on time stamps (the kind's "
                                  "simulate_at runs from rest, noise-free).")
         u = generic_model(model).check_input(record.u)
-        return np.asarray(simulate_at(u, np.asarray(record.t), intersample=record.intersample),
+        return np.asarray(simulate_at(u, np.asarray(record.time), intersample=record.intersample),
                           dtype=float)
     return simulate(model, record.u, **kwargs)
 
