@@ -77,6 +77,7 @@ from ..lr_statistic import (
     statistic,
 )
 from ..lr_statistic import order_test as order_test_without_record
+from ..model.simulation import record_list
 from .order_verdict import LEVEL, MARGIN, check_level_margin, validation_fits, verdict
 from .profile_interval import (
     check_data,
@@ -354,12 +355,14 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         order is on the boundary under the null, Davies' bound when an order is not identified
         there (the mixed class). ``"mixture"`` is refused for an unidentified order.
     u, y : array_like, optional
-        The record both were fitted to (results keep no data): needed by the bootstrap and by
-        Davies' bound unless ``full`` is a ``"varpro"`` fit of one free order (its scan is the
-        profile). When given, they are checked against both fits' ``J``. For two FitResults,
-        checked against their fingerprint, and ``full`` is refitted from its own and the
-        restricted estimate (:func:`fohw.fit` with ``start=``), so its SSE never ends above
-        the restricted one (without them a full fit above it gives 0 and a warning).
+        The record both were fitted to (results keep no data), or a :class:`fohw.Record` as
+        ``u`` (``y`` omitted); for two FitResults also the list of Records they were fitted
+        to. Needed by the bootstrap and by Davies' bound unless ``full`` is a ``"varpro"``
+        fit of one free order (its scan is the profile). When given, they are checked
+        against both fits' ``J``. For two FitResults, checked against their fingerprint,
+        and ``full`` is refitted from its own and the restricted estimate (:func:`fohw.fit`
+        with ``start=``), so its SSE never ends above the restricted one (without them a
+        full fit above it gives 0 and a warning).
     n_bootstrap : int
         Bootstrap records (default 199).
     random_state : None, int or Generator
@@ -549,6 +552,8 @@ def settings_differ(restricted_model, full_model, u=None):
             keys = [k for k in dict.fromkeys([*rc, *fc]) if rc.get(k) != fc.get(k)]
             return "their config() differ in " + "; ".join(
                 f"{k!r} ({_short(rc.get(k))} and {_short(fc.get(k))})" for k in keys)
+    if record_list(u) is not None:          # records: the first one's input shows a setting
+        u = record_list(u)[0].u
     if u is not None:
         with np.errstate(all="ignore"):
             try:
