@@ -648,7 +648,12 @@ def _print_order_test(args, res, u, y):
     """
     from .exceptions import FohwError
 
-    if args.json or res.order_test() is None:
+    if args.json:
+        return
+    try:
+        if res.order_test() is None:
+            return
+    except FohwError:           # a method with no likelihood (rls, migd, ...): no test to print
         return
     try:
         from .analysis.lrtest import order_test as order_test_with_record

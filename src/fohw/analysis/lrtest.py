@@ -60,7 +60,7 @@ import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import
 
 from .._parallel import TaskError, run_tasks
 from .._validation import check_int, check_random_state
-from ..estimators.fit import fit, free_jacobian
+from ..estimators.fit import fit, free_jacobian, prepare_data, records_jacobian
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..lr_statistic import (
     CORRECTIONS,
@@ -249,9 +249,16 @@ def score_direction(restricted, full, u):
                           if restricted.parameters[n].fixed]
                 null = full.model.with_parameters(values)
                 names = list(null.parameters.free_names)
-                if not tested or any(n not in names for n in tested):
-                    return None
-                _, jac, _ = free_jacobian(null, u)
+                if not tested or any(n not in names for n in tested) or \
+                        getattr(full, "n_per_record", 0):
+                    return None     # (per-record values: no single model to differentiate)
+                if record_list(u) is None:
+                    _, jac, _ = free_jacobian(null, u)
+                else:                   # records: run as the fit ran them
+                    experiments, _ = prepare_data(null, u, None, None,
+                                                  int(full.options.get("warmup") or 0),
+                                                  full.options.get("refine"))
+                    _, jac, _ = records_jacobian(null, experiments)
                 idx = [names.index(n) for n in tested]
                 jac = np.asarray(jac, dtype=float)
             else:

@@ -26,18 +26,16 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
-from ..estimators.fit import check_record, data_digest, data_digest_of, fit
+from ..estimators.fit import check_record, data_digest, data_digest_of, fit, prepare_data
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
 from ..lr_statistic import LIKELIHOOD_METHODS, check_result, criterion, order_bounds
-from ..model.irregular import DEFAULT_REFINE
 from ..model.orders import Orders
 from ..model.simulation import record_list, simulate_record
 from ..record import check_sampling, record_data
@@ -131,21 +129,13 @@ def records_digest(result, records):
     if weight is not None and weight.size != sum(sizes):
         raise ParameterError(f"the records have {sum(sizes)} samples, but the fit's "
                              f"sample_weight {weight.size}: they are not the data it was fitted to.")
-    warmup = int(result.options.get("warmup") or 0)
-    refine = result.options.get("refine")
     bounds = np.cumsum([0] + sizes)
-    parts = []
-    for k, r in enumerate(records):
-        # as fohw.fit runs it: between the samples for instants or a first-order hold, with
-        # the fine step of the record's own instants under a warm-up
-        t = r.t if r.t is not None or r.intersample == "zoh" else r.time
-        step = None if t is None or not warmup else \
-            float(np.median(np.diff(t))) / (refine or DEFAULT_REFINE)
-        parts.append(SimpleNamespace(
-            u=result.model.check_input(r.u), y=r.y, t=t, warmup=warmup,
-            intersample=r.intersample, refine=refine, step=step,
-            weight=None if weight is None else weight[bounds[k]:bounds[k + 1]]))
-    return data_digest_of(parts, result.model.dt)
+    weights = None if weight is None else [weight[bounds[k]:bounds[k + 1]]
+                                           for k in range(len(records))]
+    experiments, _ = prepare_data(result.model, list(records), None, weights,
+                                  int(result.options.get("warmup") or 0),
+                                  result.options.get("refine"))
+    return data_digest_of(experiments, result.model.dt)
 
 
 def _free_run_sse(model, u, y, weight, warmup=0):

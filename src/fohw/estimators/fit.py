@@ -47,8 +47,8 @@ from ..record import UNIFORM_RTOL, as_records
 from ..results import Status
 from ._common import bounded_least_squares
 
-__all__ = ["fit", "free_jacobian", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
-           "PENALTY", "FD_RCOND"]
+__all__ = ["fit", "prepare_data", "data_digest_of", "records_jacobian", "free_jacobian",
+           "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE", "PENALTY", "FD_RCOND"]
 
 #: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model, summed
 #: over the start models: a kind's :meth:`~fohw.Model.starts` may return several).
@@ -209,8 +209,12 @@ def _record_info(records):
 SHARED_FIELDS = ("input_names", "input_units", "output_name", "output_unit", "time_unit")
 
 
-def _experiments(model, u, y, sample_weight, warmup, refine=None):
-    """The data of a fit as experiments, with the record check of each; and their info."""
+def prepare_data(model, u, y, sample_weight, warmup, refine=None):
+    """The data of a fit as experiments, with the record check of each; and their info.
+
+    Arrays ``u, y`` or a Record or a list of Records (``y`` None), as :func:`fit` takes them;
+    :func:`data_digest_of` of the experiments is the fit's ``data_digest``.
+    """
     records = as_records(u, y, what="u")
     if records is None:
         if y is None:
@@ -329,6 +333,37 @@ def free_jacobian(model, u, *, exact=True):
         y_up = model.with_parameters(params.with_free(up)).simulate(u)
         y_down = model.with_parameters(params.with_free(down)).simulate(u)
         cols.append((np.asarray(y_up) - np.asarray(y_down)) / (up[j] - down[j]))
+    jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
+    return yhat, jac, "finite differences"
+
+
+def records_jacobian(model, experiments, *, exact=True):
+    """``(yhat, J, how)`` of :func:`free_jacobian` over the experiments of :func:`prepare_data`.
+
+    Each record run as :func:`fit` runs it (warm-up, instants, hold); rows stacked record by
+    record. Central differences where the kind gives no exact Jacobian on a record.
+    """
+    params = model.parameters
+    t = params.tie_matrix()
+    outs = [e.jacobian(model, exact) for e in experiments]
+    if all(o is not None for o in outs):
+        return (np.concatenate([o[0] for o in outs]),
+                np.vstack([np.asarray(o[1], dtype=float) @ t for o in outs]), "exact")
+    x = params.free_values()
+    lo, hi = params.free_bounds()
+
+    def run(v):
+        m = model.with_parameters(params.with_free(v))
+        return np.concatenate([e.simulate(m) for e in experiments])
+
+    yhat = run(x)
+    cols = []
+    for j in range(x.size):
+        step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
+        up, down = x.copy(), x.copy()
+        up[j] = min(x[j] + step, hi[j])
+        down[j] = max(x[j] - step, lo[j])
+        cols.append((run(up) - run(down)) / (up[j] - down[j]))
     jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
     return yhat, jac, "finite differences"
 
@@ -460,7 +495,7 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     See :class:`fohw.Model` for a kind written in a dozen lines and fitted with this function.
     """
     refine = None if refine is None else check_int(refine, "refine", minimum=1)
-    experiments, info = _experiments(model, u, y, sample_weight,
+    experiments, info = prepare_data(model, u, y, sample_weight,
                                      check_int(warmup, "warmup", minimum=0), refine)
     data = _Data(experiments)
     y, weight = data.y, data.weight
