@@ -43,6 +43,7 @@ import numpy as np
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
 from .._validation import check_array, check_inputs, check_same_length
+from ..estimators._common import joint_levels_note
 from ..estimators.fit import fit
 from ..estimators.problem import split_inputs
 from ..exceptions import (
@@ -158,18 +159,20 @@ def unidentifiable(res, u_est):
     ``m >= L`` columns, so with a constant (the operating point, or the static gain of the
     linear block) its columns are linearly dependent on the levels the data visit: a polynomial
     of degree ``>= L`` (e.g. degree 2 or 3 on a two-level input) is then anything between the
-    levels, and its extrapolation is arbitrary; (2) a free order of the mixed class went to 0
+    levels, and its extrapolation is arbitrary (several inputs: the rank of every input basis
+    on the *joint* levels the inputs visit, :func:`fohw.estimators._common.joint_levels_note`);
+    (2) a free order of the mixed class went to 0
     with its terms cancelling their order-0 partners
     (:func:`fohw.analysis.lrtest.cancelled_orders`): a near-duplicate column pair.
     """
     reasons = []
     f_basis = res.structure.f_basis
     u_est = np.asarray(u_est, dtype=float)
-    if u_est.ndim == 2:                       # several inputs: each basis on its own input
-        for i, part in enumerate(f_basis.parts):
-            why = unidentifiable_input(part, u_est[:, i], f" of input {f_basis.inputs[i]!r}")
-            if why:
-                reasons.append(why)
+    if u_est.ndim == 2:         # several inputs: the joint levels (a per-input count misses
+        # two inputs moved together: four levels each, four joint levels)
+        why = joint_levels_note(res.structure, u_est - np.asarray(res.operating_point[0], float))
+        if why:
+            reasons.append(why)
     else:
         why = unidentifiable_input(f_basis, u_est, "")
         if why:
@@ -209,6 +212,22 @@ def free_run_check(res, u, reference, envelope, *, initial="fitted"):
     if found is not None:
         return None, "implausible", implausible_message(found, envelope)
     return ysim, "ok", ""
+
+
+def own_run_check(res, u, reference, envelope):
+    """``(ysim, status, reason)`` of a fit's free run on its own estimation input ``u``.
+
+    The check every fit makes of itself (:func:`fohw.identify`): from the fit's own initial
+    state and, for ``past="estimate"``, also from rest (a model that explodes from its
+    operating point is unstable, whatever its fitted levels hide), inside the envelope of
+    ``reference``.
+    """
+    got = free_run_check(res, u, reference, envelope)
+    if got[1] == "ok" and res.structure.past == "estimate":
+        rest = free_run_check(res, u, reference, envelope, initial="rest")
+        if rest[1] != "ok":
+            return None, rest[1], f"from rest (the operating point): {rest[2]}"
+    return got
 
 
 def _where(status, reason, score_from):
@@ -272,6 +291,10 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
                 yest, status, reason = free_run_check(res, u_est, reference, envelope)
                 if status != "ok":                    # estimation input
                     row.update(status=status, reason=f"on the estimation input: {reason}")
+            if status == "ok" and res.structure.past == "estimate":   # and from rest on it
+                _, status, reason = own_run_check(res, u_est, reference, envelope)
+                if status != "ok":
+                    row.update(status=status, reason=f"on the estimation input {reason}")
         except Exception as exc:
             row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}")
         why = unidentifiable(res, u_est)
@@ -1001,7 +1024,13 @@ def _pick(selection, cands, u, y, refit, envelope):
 
     def refit_one(index):
         best = identify(u, y, **cands[index])
-        return (best, *free_run_check(best, u, y, envelope)[1:])
+        scored = selection.results[index]
+        if scored is not None and (best.method != scored.method
+                                   or best.structure != scored.structure):
+            return best, "failed", (f"the refit is not the fit that was scored (the refit: "
+                                    f"method {best.method!r}, {best.structure.describe()}; "
+                                    f"scored: {scored.method!r}, {scored.structure.describe()})")
+        return (best, *own_run_check(best, u, y, envelope)[1:])
 
     def finish(row, best):
         row["refit_status"] = best.status.name
