@@ -299,3 +299,38 @@ def test_fit_at_a_bound_is_converged_and_names_it():
     assert res.parameters["a"].value == 0.9
     assert res.status == fohw.Status.CONVERGED, res.message
     assert "a = 0.9 (its upper bound)" in res.message
+
+
+# ---- item 7: rank candidates the way they will be validated ------------------------------------
+
+def _lag_record(seed, y0, n=400):
+    """A first-order plant that did not start at rest (at ``y0``; the state is unknown)."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0, 1, n // 20), 20)
+    y = np.empty(n)
+    yk = y0
+    for k in range(n):
+        if k:
+            yk = 0.95 * yk + 0.2 * u[k - 1]
+        y[k] = yk
+    return u, y + 0.02 * rng.standard_normal(n)
+
+
+def test_select_structure_ranks_by_the_initial_state_it_will_be_validated_from():
+    ue, ye = _lag_record(0, 6.0)
+    uv, yv = _lag_record(1, 1.0)
+    grid = [{"past": "rest"}, {"past": "estimate"}]
+    kw = dict(na=1, nb=1, f_basis=1, g_basis=1, orders=0, method="output_error")
+    for initial, n_values in (("estimate", 2), (("estimate", 3), 5)):
+        sel = _quiet(fohw.select_structure, ue, ye, grid, validation=(uv, yv),
+                     validate_initial=initial, **kw)
+        for row, res in zip(sel.rows, sel.results):
+            # the score is the validation the user will run (compare with a fitted initial
+            # state), and the table says how many values that fits on the held-back output
+            check = _quiet(fohw.compare, res, uv, yv, initial=initial)
+            assert row["status"] == "ok" and row["n_initial"] == n_values
+            assert row["fit"] == pytest.approx(check.fit, rel=1e-10)
+        assert sel.best_row["past"] == "estimate" and "| n_initial |" in sel.to_markdown()
+        assert f"{n_values} values" in sel.validation
+    with pytest.raises(fohw.ParameterError, match="validate_initial"):
+        fohw.select_structure(ue, ye, grid, validation=(uv, yv), validate_initial="rest", **kw)

@@ -230,6 +230,28 @@ def own_run_check(res, u, reference, envelope):
     return got
 
 
+def _held_back_from_estimate(res, u_est, u_sim, y_score, score_from, reference, envelope,
+                             initial, row):
+    """``(ysim, status, reason)`` of a candidate validated from a fitted initial state.
+
+    The estimation part from the fit's own state, the held-back part alone from its initial
+    state fitted to its output (``initial``: ``"estimate"`` or ``("estimate", n)``,
+    :meth:`IdentificationResult.initial_state`), the way it will be validated when the state
+    a record starts from is unknown. ``row["n_initial"]``: how many values that fits on the
+    held-back output.
+    """
+    u_val = u_sim[score_from:] if score_from else u_sim
+    state = res.initial_state(u_val, y_score, initial)
+    row["n_initial"] = int(state.n_estimated)
+    yest, status, reason = free_run_check(res, u_est, reference, envelope)
+    if status != "ok":
+        return None, status, reason
+    yval, status, reason = free_run_check(res, u_val, reference, envelope, initial=state)
+    if status != "ok":
+        return None, status, f"on the held-back part from its fitted initial state: {reason}"
+    return (np.r_[yest, yval] if score_from else yval), "ok", ""
+
+
 def _where(status, reason, score_from):
     """Say on which part a free run failed (the held-back part continues the estimation part)."""
     if not score_from or status not in ("diverged", "nan", "implausible"):
@@ -243,7 +265,7 @@ def _where(status, reason, score_from):
 
 @thin_solves
 def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, reference=None,
-                   envelope=ENVELOPE):
+                   envelope=ENVELOPE, validate_initial=None):
     """One candidate: fit on the estimation part, free-run over ``u_sim``, score the tail.
 
     Module level (it is pickled for process and dask executors). Never raises: a failure is
@@ -252,13 +274,15 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, referenc
     t0 = time.perf_counter()
     try:
         return _score(u_est, y_est, u_sim, y_score, score_from, candidate,
-                      np.r_[y_est, y_score] if reference is None else reference, envelope, t0)
+                      np.r_[y_est, y_score] if reference is None else reference, envelope, t0,
+                      validate_initial)
     except Exception as exc:                    # noqa: BLE001 - one candidate never loses the others
         return _blank_row(status="failed", reason=f"scoring: {type(exc).__name__}: {exc}",
                           seconds=time.perf_counter() - t0), None
 
 
-def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envelope, t0):
+def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envelope, t0,
+           validate_initial=None):
     from ..estimators.identify import identify
 
     row = _blank_row()
@@ -284,9 +308,15 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
         try:       # the simulator raises on any non-finite output, so ysim is finite
             # the held-back part continues the estimation part's free run from its fitted
             # past; a separate record starts at rest (the estimation levels are not its own)
-            ysim, status, reason = free_run_check(res, u_sim, reference, envelope,
-                                                  initial="fitted" if score_from else "rest")
-            row.update(status=status, reason=_where(status, reason, score_from))
+            if validate_initial is None:
+                ysim, status, reason = free_run_check(res, u_sim, reference, envelope,
+                                                      initial="fitted" if score_from else "rest")
+            else:
+                ysim, status, reason = _held_back_from_estimate(
+                    res, u_est, u_sim, y_score, score_from, reference, envelope,
+                    validate_initial, row)
+            row.update(status=status, reason=(_where(status, reason, score_from)
+                                              if validate_initial is None else reason))
             if status == "ok" and not score_from:     # a separate validation record: and the
                 yest, status, reason = free_run_check(res, u_est, reference, envelope)
                 if status != "ok":                    # estimation input
@@ -448,6 +478,8 @@ class Selection:
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
+        if columns is None and any("n_initial" in r for r in self.rows):
+            cols.insert(cols.index("fit") + 1, "n_initial")
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
             cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
         if columns is None:        # rows without an in_range, ... column leave it out
@@ -624,7 +656,8 @@ def check_candidates(own, common):
 
 
 def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None, score="fit",
-                     refit=True, executor=None, progress=None, envelope=ENVELOPE, **common):
+                     refit=True, executor=None, progress=None, envelope=ENVELOPE,
+                     validate_initial=None, **common):
     """Choose a model structure by free-run simulation on data the fits never saw.
 
     Parameters
@@ -677,6 +710,15 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         run (on the estimation input or the held-back part) that goes more than ``envelope``
         times the measured output's range (max - min of every output given) outside that
         range is ``"implausible"``, not scored and never picked. None switches the test off.
+    validate_initial : None, "estimate" or ("estimate", n), optional
+        How the held-back part's free run starts. None (default): it continues the estimation
+        part's run (or, for a separate record, starts at rest). ``"estimate"``: it is simulated
+        alone from its initial state fitted to its own output (the levels ``u_past, y_past``;
+        ``("estimate", n)`` also ``n`` past outputs), as ``fohw.compare(...,
+        initial="estimate")`` will validate it: rank candidates this way when the state a
+        record starts from is unknown (docs/real_data.md), with ``past="estimate"``
+        candidates among them. Rows then have ``n_initial``, the values fitted on the
+        held-back output. Identify keyword candidates only.
     **common
         Keywords of :func:`fohw.identify` shared by every candidate (a candidate's own value
         wins), e.g. ``offset=True, operating_point="mean", dt=4.0``.
@@ -729,6 +771,10 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         if method is not None:
             raise ParameterError(f"`method` is for identify keyword candidates; model "
                                  f"candidates are fitted by fohw.fit; got method={method!r}.")
+        if validate_initial is not None:
+            raise ParameterError("`validate_initial` is for identify keyword candidates (the "
+                                 "lagged kind, whose results fit a record's initial state); "
+                                 f"got validate_initial={validate_initial!r} with models.")
         return _select_models(u, y, models, validation, score, refit, executor, progress,
                               envelope, common)
     u, names = split_inputs(u)
@@ -750,7 +796,14 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
                              "no candidate can be ranked by its fit %. Hold back a part where "
                              "the output moves (`validation`), or rank by score='rmse'.")
     reference = np.r_[y, y_score] if score_from == 0 else y     # every measured output
-    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, reference, factor) for c in cands]
+    validate_initial = _check_validate_initial(validate_initial)
+    if validate_initial is not None:
+        n = 2 + (0 if isinstance(validate_initial, str) else validate_initial[1])
+        described = described.replace("; free run from sample 0", "")
+        described += (f"; the held-back part simulated alone from its initial state fitted to "
+                      f"its output (initial={validate_initial!r}: {n} values)")
+    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, reference, factor, validate_initial)
+             for c in cands]
     t0 = time.perf_counter()
     outcomes = run_tasks(_fit_and_score, tasks, executor=executor, progress=progress,
                          label="select_structure")
@@ -771,6 +824,18 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     if selection.best is None:
         warn_nothing_selected("select_structure", rows)
     return selection
+
+
+def _check_validate_initial(value):
+    """``validate_initial`` as None, ``"estimate"`` or ``("estimate", n)``, else a ParameterError."""
+    if value is None or (isinstance(value, str) and value == "estimate"):
+        return value
+    if (isinstance(value, (tuple, list)) and len(value) == 2 and value[0] == "estimate"
+            and isinstance(value[1], numbers.Integral) and not isinstance(value[1], bool)
+            and value[1] >= 0):
+        return ("estimate", int(value[1]))
+    raise ParameterError("`validate_initial` must be None, 'estimate' or ('estimate', n) with "
+                         f"an integer n >= 0; got {value!r}.")
 
 
 def model_candidates(candidates):
