@@ -396,13 +396,6 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
-    at_bound = [f"{n} = {v:.6g} (its {'lower' if v <= lo else 'upper'} bound)"
-                for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi]
-    if at_bound and status not in (Status.FAILED, Status.IMPLAUSIBLE):
-        messages.append("At a bound" + (", where the criterion's gradient points outside the "
-                                        "bounds (a minimum within them)"
-                                        if status == Status.CONVERGED else "")
-                        + f": {', '.join(at_bound)}.")
     absurd = free_run_problem(yhat, y)
     if absurd:
         status = Status.IMPLAUSIBLE
@@ -427,6 +420,13 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         else:
             covariance = sse / (n_used - len(names)) * inverse
     message = " ".join(messages)
+    at_bound = [f"{n} = {v:.6g} (its {'lower' if v <= lo else 'upper'} bound)"
+                for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi]
+    if at_bound:
+        message += (" At a bound" + (", where the criterion's gradient points outside the "
+                                     "bounds (a minimum within them)"
+                                     if status == Status.CONVERGED else "")
+                    + f": {', '.join(at_bound)}.")
     if status == Status.RANK_DEFICIENT:
         warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
                       stacklevel=2)

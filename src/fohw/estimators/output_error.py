@@ -544,11 +544,16 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     # (nor a class rank deficient whatever its orders, e.g. a duplicated basis function: the
     # single start reports it without a search drifting along the null space)
     if not np.any(builder.y):
-        raise ParameterError(
-            "method='output_error' needs an output that moves: `y` is zero everywhere (after "
-            "the operating point is removed), so the free-run criterion cannot tell any two "
-            "models apart and there is no simulation-error estimate. Check the record, or "
-            "use an equation-error method (method='varpro') to see its rank deficiency.")
+        # The simulation-error minimum is known: the zero model simulates y = 0 exactly. It is
+        # the estimate (not another method's), and the record identifies no parameter.
+        details["simulation_sse"] = 0.0
+        return finish(builder, method="output_error", linear=np.zeros(s.n_linear),
+                      params=_mid_params(s, lower, upper), status=Status.RANK_DEFICIENT,
+                      nit=0, nfev=0, options=record, details=details,
+                      operating_point=operating_point,
+                      message="the output is zero (after the operating point is removed): the "
+                              "zero model (every coefficient 0) simulates it exactly, with "
+                              "simulation error 0, and the record identifies no parameter.")
     held_note = ""
     if options.start is None and s.orders.free:
         chain = _Chain(builder, options, executor)
