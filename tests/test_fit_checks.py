@@ -253,19 +253,20 @@ def _integer_plant(seed, output_noise):
     return u, y + output_noise * rng.standard_normal(n)
 
 
-@pytest.mark.parametrize("seed, output_noise", [(6, 0.0), (11, 0.6)])
-def test_output_error_at_its_bound_with_a_zero_projected_gradient_is_converged(seed,
-                                                                                output_noise):
+@pytest.mark.parametrize("seed, output_noise, orders, nb", [
+    (6, 0.0, "commensurate", 1), (11, 0.6, "commensurate", 1), (3, 0.0, "per_lag", 2)])
+def test_output_error_at_its_bound_with_a_zero_projected_gradient_is_converged(
+        seed, output_noise, orders, nb):
     u, y = _integer_plant(seed, output_noise)
+    kw = dict(na=1, nb=nb, f_basis=1, g_basis=1, past="estimate", method="output_error")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", fohw.DataWarning)     # levels: estimated (past=)
-        res = fohw.identify(u, y, na=1, nb=1, f_basis=1, g_basis=1, past="estimate",
-                            method="output_error")
+        res = fohw.identify(u, y, orders=orders, **kw)
     assert res.status == fohw.Status.CONVERGED, res.message
-    assert res.orders["alpha"] == 0.0 and "alpha ended at the lower bound 0" in res.message
+    for name, value in res.orders.items():          # every order on its bound 0, named
+        assert value == 0.0 and f"{name} ended at the lower bound 0" in res.message
     # the estimate is the nested integer model's fit, which the record favours
-    integer = _quiet(fohw.identify, u, y, na=1, nb=1, f_basis=1, g_basis=1, past="estimate",
-                     method="output_error", orders=0)
+    integer = _quiet(fohw.identify, u, y, orders=0, **kw)
     assert res.details["simulation_sse"] <= integer.details["simulation_sse"] * (1 + 1e-9)
 
 
