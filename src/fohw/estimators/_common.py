@@ -232,7 +232,9 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
     criterion ``J`` (Eq. 41) is computed here at the final estimate; a rank-deficient
     information matrix (``rank_factor``, or a factorisation of ``Phi`` made here) turns the
     status into ``RANK_DEFICIENT`` with a :class:`RankDeficiencyWarning` naming the dependent
-    columns; a run that did not converge warns :class:`ConvergenceWarning`.
+    columns; a run that did not converge warns :class:`ConvergenceWarning`, and so does an
+    estimate whose free run on its own estimation input is absurd
+    (:func:`own_free_run_problem`): its status is then ``IMPLAUSIBLE``, whatever the method.
 
     ``options`` are the run's settings; the histories, the profile and ``details`` (other
     method-specific outputs: ``simulation_sse``, ``start``) go to the result's ``details``.

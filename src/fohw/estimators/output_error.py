@@ -539,10 +539,9 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     lower, upper = bounds
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     details = {} if options.start is None else {"start": "the given start"}
-    # (a zero output has no free-run criterion to rank starts by: the single start below
-    # reports it rank deficient)
-    # (nor a class rank deficient whatever its orders, e.g. a duplicated basis function: the
-    # single start reports it without a search drifting along the null space)
+    # A start that is rank deficient (a duplicated basis function, two inputs moved together)
+    # is never handed back as the estimate (issue 36): its dependent columns are held and the
+    # rest searched (held_columns), in the default chain as on a single start.
     if not np.any(builder.y):
         # The simulation-error minimum is known: the zero model simulates y = 0 exactly. It is
         # the estimate (not another method's), and the record identifies no parameter.
