@@ -179,6 +179,10 @@ def test_unidentifiable_names_the_joint_levels_of_several_inputs():
     res = _quiet(fohw.identify, u, y, **dict(TWO, method="varpro", orders=0))
     why = unidentifiable(res, u)
     assert "4 joint levels" in why and "u1.x, u1.x^2, u2.x, u2.x^2" in why
+    # the levels in the data's units, whatever operating point the model removed
+    moved = _quiet(fohw.identify, u, y, **dict(TWO, method="varpro", orders=0,
+                                               operating_point="initial"))
+    assert "((0, 0), (0.4, 1), (0.8, 0.7), (1, 0.3))" in unidentifiable(moved, u)
     # four joint levels of a linear map on each input: identified
     lin = _quiet(fohw.identify, u, y, **dict(TWO, method="varpro", orders=0, f_basis=1))
     assert unidentifiable(lin, u) == ""

@@ -170,7 +170,8 @@ def unidentifiable(res, u_est):
     u_est = np.asarray(u_est, dtype=float)
     if u_est.ndim == 2:         # several inputs: the joint levels (a per-input count misses
         # two inputs moved together: four levels each, four joint levels)
-        why = joint_levels_note(res.structure, u_est - np.asarray(res.operating_point[0], float))
+        u0 = np.asarray(res.operating_point[0], dtype=float)
+        why = joint_levels_note(res.structure, u_est - u0, u0)
         if why:
             reasons.append(why)
     else:

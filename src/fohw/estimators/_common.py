@@ -343,7 +343,7 @@ def own_free_run_problem(builder, linear, params, operating_point=(0.0, 0.0)):
     return ""
 
 
-def joint_levels_note(structure, u):
+def joint_levels_note(structure, u, u0=0.0):
     """Why the input maps are not identified on the joint levels ``u`` visits ("" if they are).
 
     The rows of ``u`` (one per sample: every input at once) take ``L`` distinct values, the
@@ -352,7 +352,9 @@ def joint_levels_note(structure, u):
     the input maps is zero at every sample (every lag, every order): not identified whatever
     the dynamics. With a constant beside them (an offset, or the static gain of order-0
     terms) the test is the rank of ``[1, F]``. Two inputs each at four levels can visit only
-    four joint levels (moved together), which a per-input count does not see.
+    four joint levels (moved together), which a per-input count does not see. ``u`` are the
+    deviations the model sees (from the operating point ``u0``, added back to show the levels
+    in the data's units).
     """
     u = np.asarray(u, dtype=float)
     rows = u.reshape(u.shape[0], -1)
@@ -366,8 +368,9 @@ def joint_levels_note(structure, u):
         F = np.asarray(f_basis.evaluate(levels if u.ndim == 2 else levels[:, 0]), float).T
     if not np.all(np.isfinite(F)):
         return ""
+    data = levels + np.broadcast_to(np.asarray(u0, dtype=float).ravel(), levels.shape[1:])
     shown = ", ".join("(" + ", ".join(f"{v:.4g}" for v in row) + ")" if row.size > 1
-                      else f"{row[0]:.4g}" for row in levels[:6]) + (", …" if n_levels > 6 else "")
+                      else f"{row[0]:.4g}" for row in data[:6]) + (", …" if n_levels > 6 else "")
     what = "joint levels of the inputs" if rows.shape[1] > 1 else "levels of the input"
     rank = int(np.linalg.matrix_rank(F)) if n_levels else 0
     n_cols, extra = m, ""

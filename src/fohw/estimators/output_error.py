@@ -585,7 +585,7 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
                            options.start is None else params0)
     if held is not None:
         names = [n for n, h in zip(s.linear_names, held) if h]
-        joint = joint_levels_note(s, builder.u)
+        joint = joint_levels_note(s, builder.u, operating_point[0])
         held_note = (f" The start is rank deficient on this record: {', '.join(names)} "
                      "depend on the other columns, so they were held at their start values "
                      "and the simulation error was minimised over the rest (a reduced class "
