@@ -81,25 +81,26 @@ def implausible_message(found, envelope=ENVELOPE, what="the measured output"):
             "input, so it is not scored.")
 
 
-def free_run_problem(simulated, measured, envelope=ENVELOPE):
+def free_run_problem(simulated, measured, envelope=ENVELOPE, where=None):
     """Why a fit's free run on its own estimation input is absurd (a sentence), or "".
 
     Not finite (the first such sample), or outside the envelope of the measured output
-    (:func:`implausible_sample`, the test :func:`fohw.compare` applies). ``simulated`` None
-    means the simulator stopped (its reason is the caller's).
+    (:func:`implausible_sample`, the test :func:`fohw.compare` applies). ``where(k)`` names
+    sample ``k`` (default ``"sample k = {k}"``; several records: which record's sample).
     """
+    where = where or (lambda k: f"sample k = {k}")
     ysim = np.asarray(simulated, dtype=float)
     bad = np.flatnonzero(~np.isfinite(ysim))
     if bad.size:
         k = int(bad[0])
         return (f"The fitted model's free run on its own estimation input leaves the finite "
-                f"numbers at sample k = {k} (y[k] = {ysim[k]!r}).")
+                f"numbers at {where(k)} (y[k] = {ysim[k]!r}).")
     found = implausible_sample(ysim, measured, envelope)
     if found is None:
         return ""
     k, value, (low, high) = found
     return (f"The fitted model's free run on its own estimation input is implausible from "
-            f"sample k = {k}: y[k] = {value:.6g}, outside [{low:.6g}, {high:.6g}] (the "
+            f"{where(k)}: y[k] = {value:.6g}, outside [{low:.6g}, {high:.6g}] (the "
             f"measured output's range widened by {envelope:g} times its span on each side, "
             "the envelope fohw.compare uses), so the model is unstable or absurd on the data "
             "it was fitted to.")

@@ -600,8 +600,30 @@ def _identify(args):
     res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
     _print_warnings(caught)
     _print_identified(args, res, check)
+    _print_order_test(args, res, u, y)
     _save_identified(args, res, check)
     return 0
+
+
+def _print_order_test(args, res, u, y):
+    """The order test corrected for correlated residuals, and its verdict.
+
+    Only where ``summary()`` prints the white-noise test (an ``output_error`` chain's fit);
+    the integer class is refitted on the record. Not with ``--json``.
+    """
+    from .exceptions import FohwError
+
+    if args.json or res.order_test() is None:
+        return
+    try:
+        test = res.order_test(u, y)
+    except FohwError as exc:
+        print(f"Order test corrected for correlated residuals: not computed ({exc})")
+        return
+    print(f"Order test corrected for correlated residuals ({test.correction}): "
+          f"LR = {test.statistic_corrected:.4g}, p = {test.pvalue_corrected:.4g} "
+          f"(white residuals: p = {test.pvalue:.4g}). Verdict: {test.verdict or 'none'} "
+          "(fohw select holds a part back to validate it).")
 
 
 def _method_options(args):

@@ -715,16 +715,23 @@ class IdentificationResult(ResultPresentation):
         """
         return initial_state(self, u, y, initial)
 
-    def order_test(self):
-        """The likelihood-ratio test of the free orders against orders 0, without refitting.
+    def order_test(self, u=None, y=None, **kwargs):
+        """The likelihood-ratio test of the free orders against orders 0 (and its verdict).
 
-        For an ``"output_error"`` fit by the default chain of starts, which fits the integer
-        class it contains (``details["integer_sse"]``); None otherwise (use
-        :func:`fohw.lr_test` with both fits). An order not identified under the null (the
-        mixed class) has no p-value here (NaN): :func:`fohw.lr_test` with the record gives
-        Davies' bound or a bootstrap. See :func:`fohw.lr_statistic.order_test`.
+        Without the record: for an ``"output_error"`` fit by the default chain of starts,
+        which fits the integer class it contains (``details["integer_sse"]``), the
+        white-noise test without refitting; None otherwise (use :func:`fohw.lr_test` with
+        both fits). An order not identified under the null (the mixed class) has no p-value
+        here (NaN). With the estimation record ``u, y``: the integer class refitted, the test
+        corrected for correlated residuals beside the white-noise one, and with
+        ``validation=(u_val, y_val)`` the verdict (``correction``, ``validation``, ``level``,
+        ``margin``: :func:`fohw.analysis.lrtest.order_test`).
         """
-        return order_test(self)
+        if u is None and y is None and not kwargs:
+            return order_test(self)
+        from .analysis.lrtest import order_test as with_record
+
+        return with_record(self, u, y, **kwargs)
 
 
 def _rebuild(cls, values):

@@ -56,6 +56,7 @@ from ..model.base import Model
 from ..record import Record
 from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
+from .order_verdict import verdict
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
 __all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
@@ -67,7 +68,7 @@ SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
 #: The columns of :attr:`Selection.rows` besides the candidate's own keywords.
 COLUMNS = ("candidate", "status", "fit", "rmse", "fit_estimation", "aic", "bic", "n_params",
            "estimated_orders", "in_range", "fit_status", "refit_status", "seconds", "reason",
-           "lr_pvalue", "lr_reference")
+           "lr_pvalue", "lr_reference", "lr_pvalue_corrected", "order_verdict")
 
 #: Every row ``status``: ``"ok"`` (scored), ``"diverged"``, ``"nan"``, ``"implausible"`` (the
 #: free run on the estimation input or the held-back part was not scored: it grew without
@@ -389,7 +390,10 @@ class Selection:
         of Self & Liang for orders on the boundary; NaN for the mixed class unless Davies'
         bound is cheap, a ``"varpro"`` fit of one order; :func:`lr_columns`),
         ``lr_reference`` (the reference distribution and the nested candidate, or why the
-        p-value was not computed).
+        p-value was not computed), ``lr_pvalue_corrected`` (the same test corrected for the
+        correlation of the residuals, :func:`fohw.lr_test`'s default ``correction``) and
+        ``order_verdict`` (that p-value read beside the held-back ``fit`` of the candidate
+        and of its nested one: :mod:`fohw.analysis.order_verdict`).
     best : IdentificationResult, FitResult or None
         The winner refitted on all the data given as estimation data (a
         :class:`fohw.FitResult` for model candidates). ``None`` means nothing
@@ -474,7 +478,8 @@ class Selection:
     def to_markdown(self, top=None, columns=None):
         """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them).
 
-        The default columns include ``lr_pvalue`` when some row has one.
+        The default columns include ``lr_pvalue``, ``lr_pvalue_corrected`` and
+        ``order_verdict`` when some row has a p-value.
         """
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
@@ -482,7 +487,8 @@ class Selection:
         if columns is None and any("n_initial" in r for r in self.rows):
             cols.insert(cols.index("fit") + 1, "n_initial")
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
-            cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
+            at = cols.index("estimated_orders") + 1
+            cols[at:at] = ["lr_pvalue", "lr_pvalue_corrected", "order_verdict"]
         if columns is None:        # rows without an in_range, ... column leave it out
             cols = [c for c in cols if any(c in r for r in self.rows)]
         rows = self.ranked()[:top]
@@ -818,7 +824,7 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
             row, res = outcome
         rows.append(dict(c, candidate=_label(mine), **row))
         results.append(res)
-    lr_columns(rows, results, cands)
+    lr_columns(rows, results, cands, u_est, y_est)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
@@ -872,7 +878,8 @@ def _model_row(**changes):
     return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
                      bic=np.nan, n_params=0, estimated_orders="", fit_status="",
                      refit_status="", seconds=np.nan, reason="", lr_pvalue=np.nan,
-                     lr_reference=""), **changes)
+                     lr_reference="", lr_pvalue_corrected=np.nan, order_verdict=""),
+                **changes)
 
 
 def model_free_run(model, u, reference, envelope):
@@ -962,6 +969,7 @@ def model_lr_columns(rows, results):
             warnings.simplefilter("always")
             test = lr_test(results[j], full)
         rows[i]["lr_pvalue"] = test.pvalue
+        _verdict_columns(rows, i, j, test)
         rows[i]["lr_reference"] = (f"{test.distribution}, {test.criterion} vs "
                                    f"{rows[j]['candidate']} ({test.hypothesis})"
                                    + "".join(f"; {w.message}" for w in caught))
@@ -1042,7 +1050,14 @@ def _cheap_davies(full):
             and len(full.orders) == 1 and full.structure.past == "rest")
 
 
-def lr_columns(rows, results, cands):
+def _verdict_columns(rows, i, j, test):
+    """``lr_pvalue_corrected`` and ``order_verdict`` of row ``i`` tested against row ``j``."""
+    rows[i]["lr_pvalue_corrected"] = test.pvalue_corrected
+    rows[i]["order_verdict"] = verdict(test.pvalue_corrected, rows[j].get("fit", np.nan),
+                                       rows[i].get("fit", np.nan))
+
+
+def lr_columns(rows, results, cands, u=None, y=None):
     """Fill ``lr_pvalue`` and ``lr_reference`` of every row (in place).
 
     A row whose fit has free orders is tested by :func:`fohw.lr_test` against its nested
@@ -1053,9 +1068,11 @@ def lr_columns(rows, results, cands):
     an order that is not identified under the null (the mixed class), Davies' (1987) bound
     only when it is cheap (a ``"varpro"`` fit of one order keeps the profile), else NaN and
     ``lr_reference`` says so. No nested candidate in the grid: NaN and an empty reference.
+    With the estimation part ``u, y``, the corrected p-value and the verdict too.
     """
     for row in rows:
         row["lr_pvalue"], row["lr_reference"] = np.nan, ""
+        row["lr_pvalue_corrected"], row["order_verdict"] = np.nan, ""
     fitted = [(i, r) for i, r in enumerate(results) if r is not None]
     for i, full in fitted:
         if not full.structure.orders.free:
@@ -1076,11 +1093,15 @@ def lr_columns(rows, results, cands):
                 "reference='davies' or 'bootstrap', u=, y=)")
             continue
         try:
-            test = lr_test(results[nested], full)
+            try:                    # the record gives the residuals the correction needs
+                test = lr_test(results[nested], full, u=u, y=y)
+            except ParameterError:
+                test = lr_test(results[nested], full)
         except (ParameterError, ValueError, ArithmeticError) as exc:
             rows[i]["lr_reference"] = f"not computed {against}: {str(exc).split('. ')[0]}"
             continue
         rows[i]["lr_pvalue"] = test.pvalue
+        _verdict_columns(rows, i, nested, test)
         rows[i]["lr_reference"] = f"{test.distribution}, {test.criterion} {against}"
 
 
