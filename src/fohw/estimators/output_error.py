@@ -540,7 +540,7 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     details = {} if options.start is None else {"start": "the given start"}
     # A start that is rank deficient (a duplicated basis function, two inputs moved together)
-    # is never handed back as the estimate (issue 36): its dependent columns are held and the
+    # is never handed back as the estimate: its dependent columns are held and the
     # rest searched (held_columns), in the default chain as on a single start.
     if not np.any(builder.y):
         # The simulation-error minimum is known: the zero model simulates y = 0 exactly. It is
