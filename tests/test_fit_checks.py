@@ -66,7 +66,7 @@ class Lag(fohw.Model):
         return y
 
 
-def test_fit_whose_free_run_leaves_the_envelope_is_failed_naming_the_sample():
+def test_fit_whose_free_run_leaves_the_envelope_is_implausible_naming_the_sample():
     # An unstable plant (a = 1.03) seen for 100 samples; the record's last 150 samples (an
     # output held at 0) are held back from the criterion (weight 0) but simulated. The fit
     # matches the first part, and its free run grows ~1.03^150 = 84 times past it: outside the
