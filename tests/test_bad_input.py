@@ -369,7 +369,7 @@ API = [
      fohw.DataFileError, "field 'method' must be one of fohw's methods"),
     ("load_result", "'status': \"yes\"",
      lambda t: fohw.load_result(_result_file(t, status="yes")),
-     fohw.DataFileError, "field 'status' must be one of [-2, -1, 0, 1, 2]"),
+     fohw.DataFileError, "field 'status' must be one of [-3, -2, -1, 0, 1, 2]"),
     ("load_result", "a NaN in theta",
      lambda t: fohw.load_result(_result_file(t, theta_0=float("nan"))),
      fohw.DataFileError, "field 'theta' holds a non-finite value (nan at entry 0)"),

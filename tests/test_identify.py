@@ -296,9 +296,13 @@ def test_rls_class_and_method_share_the_alpha0_default(data2000):
     u, y = data2000.u[:300], data2000.y[:300]
     est = fohw.MultiInnovationRLS(alpha_bounds=(1.0, 2.0), estimate_alpha=False, **STRUCT)
     assert est.fit(u, y).alpha_ == 1.5
-    res = fohw.identify(u, y, method="rls", alpha_bounds=(1.0, 2.0), estimate_alpha=False,
-                        **STRUCT)
+    # alpha held at 1.5 (the truth is 0.6): the recursive estimate is unstable in free run on
+    # its own input, so it is FAILED, not NOT_TESTED (issue 36)
+    with pytest.warns(fohw.ConvergenceWarning, match="free run on its own estimation input"):
+        res = fohw.identify(u, y, method="rls", alpha_bounds=(1.0, 2.0), estimate_alpha=False,
+                            **STRUCT)
     assert res.alpha == 1.5 and res.options["alpha0"] == 1.5
+    assert res.status == fohw.Status.IMPLAUSIBLE
     np.testing.assert_array_equal(res.theta, est.theta_)
 
 
@@ -334,9 +338,14 @@ def test_an_order_ending_at_0_with_past_levels_simulates_as_fitted():
         warnings.simplefilter("ignore", fohw.DataWarning)
         # The issue's call started output_error from the varpro estimate; since issue 26 the
         # default is a chain of starts, so the reproducer names that start to take its path.
-        start = fohw.identify(e.u, e.y, method="varpro", **kw)
-        res = fohw.identify(e.u, e.y, method="output_error", start=start, **kw)
-    assert res.status == fohw.Status.CONVERGED
+        # Issue 36: the varpro start and the fit both explode from rest (the operating point,
+        # the tanks at their mean levels) through the y^3 feedback; their fitted levels hide
+        # it on this record, so they are IMPLAUSIBLE, not CONVERGED, saying so.
+        with pytest.warns(fohw.ConvergenceWarning, match="from rest"):
+            start = fohw.identify(e.u, e.y, method="varpro", **kw)
+        with pytest.warns(fohw.ConvergenceWarning, match="from rest"):
+            res = fohw.identify(e.u, e.y, method="output_error", start=start, **kw)
+    assert res.status == fohw.Status.IMPLAUSIBLE
     assert 0.0 <= res.orders["alpha_b1"] < 1e-8 and res.alpha_at_bound
     assert "alpha_b1 ended at" in res.message and "order 0 is another model" in res.message
     sse = float(np.sum((e.y - res.simulate(e.u, initial="fitted")) ** 2))

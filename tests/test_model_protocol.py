@@ -166,6 +166,15 @@ def test_simulate(case):
             fohw.simulate(case.true, case.u, noise_std=0.1)  # the lagged kind's keyword
 
 
+def test_simulate_reproduces_the_fit_criterion(case):
+    # Issue 36: the fit's own free run is the model it reports; its SSE on the estimation
+    # record is the criterion the fit minimised (sum of squared free-run errors), to rounding.
+    for ysim in (case.fit.simulate(case.u), fohw.simulate(case.fit, case.u)):
+        sse = float(np.sum((case.y - np.asarray(ysim)) ** 2))
+        assert sse == pytest.approx(case.fit.sse, rel=1e-10, abs=0.0)
+        assert np.array_equal(case.y - np.asarray(ysim), case.fit.residuals)
+
+
 def test_fit_recovers_the_truth_within_three_standard_errors(case):
     assert case.fit.status == fohw.Status.CONVERGED, case.fit.message
     se = case.fit.standard_errors()

@@ -602,7 +602,7 @@ def docs_select_example():
     with open(path, encoding="utf-8") as f:
         text = f.read()
     blocks = [b.split("```", 1)[0] for b in text.split("```python\n")[1:]]
-    (block,) = [b for b in blocks if "fohw.select_structure(" in b]
+    (block,) = [b for b in blocks if "fohw.select_structure(bench." in b]
     return block
 
 

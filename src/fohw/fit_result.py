@@ -51,8 +51,9 @@ class FitResult(metaclass=abc.ABCMeta):
         estimate; ``None`` when the Jacobian is rank deficient (:attr:`status`
         ``RANK_DEFICIENT``; the message names the parameters).
     status : Status
-        ``CONVERGED``, ``MAX_ITER``, ``FAILED`` (stuck at its start, or a fitted model whose
-        free run is not finite) or ``RANK_DEFICIENT``.
+        ``CONVERGED``, ``MAX_ITER``, ``FAILED`` (stuck at its start), ``IMPLAUSIBLE`` (the
+        fitted model's free run on its own input is not finite or leaves the envelope
+        :func:`fohw.compare` uses) or ``RANK_DEFICIENT``.
     sse : float
         Sum of squared simulation errors ``sum (y - yhat)^2`` over the record.
     n_samples : int

@@ -42,6 +42,11 @@ class Status(enum.IntEnum):
     successes, zero is "ran out of iterations", negative values are failures.
     """
 
+    #: The fitted model's free run on its own estimation input leaves the finite numbers or
+    #: the envelope :func:`fohw.compare` uses (from the fit's initial state, or from rest for
+    #: estimated past levels): the model is unstable or absurd on the data it was fitted to,
+    #: whatever its criterion; the message names the sample.
+    IMPLAUSIBLE = -3
     #: The regressors (or the Jacobian) are rank deficient at the estimate: some parameters
     #: are not identifiable from this record; the message names them.
     RANK_DEFICIENT = -2

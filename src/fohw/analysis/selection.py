@@ -44,6 +44,7 @@ import numpy as np
 from .._parallel import TaskError, run_tasks
 from .._threads import thin_solves
 from .._validation import check_array, check_inputs, check_same_length
+from ..estimators._common import joint_levels_note
 from ..estimators.fit import fit
 from ..estimators.problem import split_inputs
 from ..exceptions import (
@@ -161,18 +162,21 @@ def unidentifiable(res, u_est):
     ``m >= L`` columns, so with a constant (the operating point, or the static gain of the
     linear block) its columns are linearly dependent on the levels the data visit: a polynomial
     of degree ``>= L`` (e.g. degree 2 or 3 on a two-level input) is then anything between the
-    levels, and its extrapolation is arbitrary; (2) a free order of the mixed class went to 0
+    levels, and its extrapolation is arbitrary (several inputs: the rank of every input basis
+    on the *joint* levels the inputs visit, :func:`fohw.estimators._common.joint_levels_note`);
+    (2) a free order of the mixed class went to 0
     with its terms cancelling their order-0 partners
     (:func:`fohw.analysis.lrtest.cancelled_orders`): a near-duplicate column pair.
     """
     reasons = []
     f_basis = res.structure.f_basis
     u_est = np.asarray(u_est, dtype=float)
-    if u_est.ndim == 2:                       # several inputs: each basis on its own input
-        for i, part in enumerate(f_basis.parts):
-            why = unidentifiable_input(part, u_est[:, i], f" of input {f_basis.inputs[i]!r}")
-            if why:
-                reasons.append(why)
+    if u_est.ndim == 2:         # several inputs: the joint levels (a per-input count misses
+        # two inputs moved together: four levels each, four joint levels)
+        u0 = np.asarray(res.operating_point[0], dtype=float)
+        why = joint_levels_note(res.structure, u_est - u0, u0)
+        if why:
+            reasons.append(why)
     else:
         why = unidentifiable_input(f_basis, u_est, "")
         if why:
@@ -214,6 +218,44 @@ def free_run_check(res, u, reference, envelope, *, initial="fitted"):
     return ysim, "ok", ""
 
 
+def own_run_check(res, u, reference, envelope):
+    """``(ysim, status, reason)`` of a fit's free run on its own estimation input ``u``.
+
+    The check every fit makes of itself (:func:`fohw.identify`): from the fit's own initial
+    state and, for ``past="estimate"``, also from rest (a model that explodes from its
+    operating point is unstable, whatever its fitted levels hide), inside the envelope of
+    ``reference``.
+    """
+    got = free_run_check(res, u, reference, envelope)
+    if got[1] == "ok" and res.structure.past == "estimate":
+        rest = free_run_check(res, u, reference, envelope, initial="rest")
+        if rest[1] != "ok":
+            return None, rest[1], f"from rest (the operating point): {rest[2]}"
+    return got
+
+
+def _held_back_from_estimate(res, u_est, u_sim, y_score, score_from, reference, envelope,
+                             initial, row):
+    """``(ysim, status, reason)`` of a candidate validated from a fitted initial state.
+
+    The estimation part from the fit's own state, the held-back part alone from its initial
+    state fitted to its output (``initial``: ``"estimate"`` or ``("estimate", n)``,
+    :meth:`IdentificationResult.initial_state`), the way it will be validated when the state
+    a record starts from is unknown. ``row["n_initial"]``: how many values that fits on the
+    held-back output.
+    """
+    u_val = u_sim[score_from:] if score_from else u_sim
+    state = res.initial_state(u_val, y_score, initial)
+    row["n_initial"] = int(state.n_estimated)
+    yest, status, reason = free_run_check(res, u_est, reference, envelope)
+    if status != "ok":
+        return None, status, reason
+    yval, status, reason = free_run_check(res, u_val, reference, envelope, initial=state)
+    if status != "ok":
+        return None, status, f"on the held-back part from its fitted initial state: {reason}"
+    return (np.r_[yest, yval] if score_from else yval), "ok", ""
+
+
 def _where(status, reason, score_from):
     """Say on which part a free run failed (the held-back part continues the estimation part)."""
     if not score_from or status not in ("diverged", "nan", "implausible"):
@@ -227,7 +269,7 @@ def _where(status, reason, score_from):
 
 @thin_solves
 def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, reference=None,
-                   envelope=ENVELOPE):
+                   envelope=ENVELOPE, validate_initial=None):
     """One candidate: fit on the estimation part, free-run over ``u_sim``, score the tail.
 
     Module level (it is pickled for process and dask executors). Never raises: a failure is
@@ -236,13 +278,15 @@ def _fit_and_score(u_est, y_est, u_sim, y_score, score_from, candidate, referenc
     t0 = time.perf_counter()
     try:
         return _score(u_est, y_est, u_sim, y_score, score_from, candidate,
-                      np.r_[y_est, y_score] if reference is None else reference, envelope, t0)
+                      np.r_[y_est, y_score] if reference is None else reference, envelope, t0,
+                      validate_initial)
     except Exception as exc:                    # noqa: BLE001 - one candidate never loses the others
         return _blank_row(status="failed", reason=f"scoring: {type(exc).__name__}: {exc}",
                           seconds=time.perf_counter() - t0), None
 
 
-def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envelope, t0):
+def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envelope, t0,
+           validate_initial=None):
     from ..estimators.identify import identify
 
     row = _blank_row()
@@ -268,13 +312,23 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
         try:       # the simulator raises on any non-finite output, so ysim is finite
             # the held-back part continues the estimation part's free run from its fitted
             # past; a separate record starts at rest (the estimation levels are not its own)
-            ysim, status, reason = free_run_check(res, u_sim, reference, envelope,
-                                                  initial="fitted" if score_from else "rest")
-            row.update(status=status, reason=_where(status, reason, score_from))
+            if validate_initial is None:
+                ysim, status, reason = free_run_check(res, u_sim, reference, envelope,
+                                                      initial="fitted" if score_from else "rest")
+            else:
+                ysim, status, reason = _held_back_from_estimate(
+                    res, u_est, u_sim, y_score, score_from, reference, envelope,
+                    validate_initial, row)
+            row.update(status=status, reason=(_where(status, reason, score_from)
+                                              if validate_initial is None else reason))
             if status == "ok" and not score_from:     # a separate validation record: and the
                 yest, status, reason = free_run_check(res, u_est, reference, envelope)
                 if status != "ok":                    # estimation input
                     row.update(status=status, reason=f"on the estimation input: {reason}")
+            if status == "ok" and res.structure.past == "estimate":   # and from rest on it
+                _, status, reason = own_run_check(res, u_est, reference, envelope)
+                if status != "ok":
+                    row.update(status=status, reason=f"on the estimation input {reason}")
         except Exception as exc:
             row.update(status="failed", reason=f"simulation: {type(exc).__name__}: {exc}")
         why = unidentifiable(res, u_est)
@@ -432,6 +486,8 @@ class Selection:
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
+        if columns is None and any("n_initial" in r for r in self.rows):
+            cols.insert(cols.index("fit") + 1, "n_initial")
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
             at = cols.index("estimated_orders") + 1
             cols[at:at] = ["lr_pvalue", "lr_pvalue_corrected", "order_verdict"]
@@ -610,7 +666,7 @@ def check_candidates(own, common):
 
 def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None, score="fit",
                      refit=True, executor=None, progress=None, envelope=ENVELOPE,
-                     hold_out="end", **common):
+                     hold_out="end", validate_initial=None, **common):
     """Choose a model structure by free-run simulation on data the fits never saw.
 
     Parameters
@@ -676,6 +732,15 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         (``validation`` a fraction of the records, or an int number of records), simulated
         from rest (not with ``per_record``, whose values belong to the fitted records). The
         pooled held-back samples are scored (one fit %, one RMSE). Not used for one record.
+    validate_initial : None, "estimate" or ("estimate", n), optional
+        How the held-back part's free run starts. None (default): it continues the estimation
+        part's run (or, for a separate record, starts at rest). ``"estimate"``: it is simulated
+        alone from its initial state fitted to its own output (the levels ``u_past, y_past``;
+        ``("estimate", n)`` also ``n`` past outputs), as ``fohw.compare(...,
+        initial="estimate")`` will validate it: rank candidates this way when the state a
+        record starts from is unknown (docs/real_data.md), with ``past="estimate"``
+        candidates among them. Rows then have ``n_initial``, the values fitted on the
+        held-back output. Identify keyword candidates only.
     **common
         Keywords of :func:`fohw.identify` shared by every candidate (a candidate's own value
         wins), e.g. ``offset=True, operating_point="mean", dt=4.0``.
@@ -730,6 +795,10 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         if method is not None:
             raise ParameterError(f"`method` is for identify keyword candidates; model "
                                  f"candidates are fitted by fohw.fit; got method={method!r}.")
+        if validate_initial is not None:
+            raise ParameterError("`validate_initial` is for identify keyword candidates (the "
+                                 "lagged kind, whose results fit a record's initial state); "
+                                 f"got validate_initial={validate_initial!r} with models.")
         if records is not None and u is None:
             return _select_records(records, models, validation, hold_out, score, refit,
                                    executor, progress, envelope, common)
@@ -760,7 +829,14 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
                              "no candidate can be ranked by its fit %. Hold back a part where "
                              "the output moves (`validation`), or rank by score='rmse'.")
     reference = np.r_[y, y_score] if score_from == 0 else y     # every measured output
-    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, reference, factor) for c in cands]
+    validate_initial = _check_validate_initial(validate_initial)
+    if validate_initial is not None:
+        n = 2 + (0 if isinstance(validate_initial, str) else validate_initial[1])
+        described = described.replace("; free run from sample 0", "")
+        described += (f"; the held-back part simulated alone from its initial state fitted to "
+                      f"its output (initial={validate_initial!r}: {n} values)")
+    tasks = [(u_est, y_est, u_sim, y_score, score_from, c, reference, factor, validate_initial)
+             for c in cands]
     t0 = time.perf_counter()
     outcomes = run_tasks(_fit_and_score, tasks, executor=executor, progress=progress,
                          label="select_structure")
@@ -972,6 +1048,18 @@ def _select_records(records, models, validation, hold_out, score, refit, executo
     if selection.best is None:
         warn_nothing_selected("select_structure", rows)
     return selection
+
+
+def _check_validate_initial(value):
+    """``validate_initial`` as None, ``"estimate"`` or ``("estimate", n)``, else a ParameterError."""
+    if value is None or (isinstance(value, str) and value == "estimate"):
+        return value
+    if (isinstance(value, (tuple, list)) and len(value) == 2 and value[0] == "estimate"
+            and isinstance(value[1], numbers.Integral) and not isinstance(value[1], bool)
+            and value[1] >= 0):
+        return ("estimate", int(value[1]))
+    raise ParameterError("`validate_initial` must be None, 'estimate' or ('estimate', n) with "
+                         f"an integer n >= 0; got {value!r}.")
 
 
 def model_candidates(candidates):
@@ -1240,7 +1328,13 @@ def _pick(selection, cands, u, y, refit, envelope):
 
     def refit_one(index):
         best = identify(u, y, **cands[index])
-        return (best, *free_run_check(best, u, y, envelope)[1:])
+        scored = selection.results[index]
+        if scored is not None and (best.method != scored.method
+                                   or best.structure != scored.structure):
+            return best, "failed", (f"the refit is not the fit that was scored (the refit: "
+                                    f"method {best.method!r}, {best.structure.describe()}; "
+                                    f"scored: {scored.method!r}, {scored.structure.describe()})")
+        return (best, *own_run_check(best, u, y, envelope)[1:])
 
     def finish(row, best):
         row["refit_status"] = best.status.name

@@ -8,13 +8,16 @@ import numpy as np
 import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .. import _linalg
+from .._plausible import free_run_problem
 from ..exceptions import (
     ConvergenceWarning,
     DimensionError,
     EstimationDivergedError,
     ParameterError,
     RankDeficiencyWarning,
+    SimulationDivergedError,
 )
+from ..model.simulation import simulate_predictor
 from ..results import IdentificationResult, Status, recover_model
 
 __all__: list[str] = []
@@ -229,7 +232,9 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
     criterion ``J`` (Eq. 41) is computed here at the final estimate; a rank-deficient
     information matrix (``rank_factor``, or a factorisation of ``Phi`` made here) turns the
     status into ``RANK_DEFICIENT`` with a :class:`RankDeficiencyWarning` naming the dependent
-    columns; a run that did not converge warns :class:`ConvergenceWarning`.
+    columns; a run that did not converge warns :class:`ConvergenceWarning`, and so does an
+    estimate whose free run on its own estimation input is absurd
+    (:func:`own_free_run_problem`): its status is then ``IMPLAUSIBLE``, whatever the method.
 
     ``options`` are the run's settings; the histories, the profile and ``details`` (other
     method-specific outputs: ``simulation_sse``, ``start``) go to the result's ``details``.
@@ -256,6 +261,7 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
             message += (" No standard errors: in the units of the data the variances of "
                         "some parameters are beyond the range of doubles (rescale u and y, "
                         "e.g. to an RMS near 1, to have them).")
+    absurd = own_free_run_problem(builder, linear, params, operating_point)
     if rank_factor is None:
         rank_factor = _linalg.factor(Phi, with_q=False)
     if rank_factor.rank < rank_factor.n_columns:
@@ -268,7 +274,10 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         covariance = noise_variance = None
         warnings.warn(f"fohw.identify({method!r}): {note}", RankDeficiencyWarning,
                       stacklevel=stacklevel)
-    elif status in (Status.MAX_ITER, Status.FAILED):
+    if absurd:                         # never CONVERGED: a model absurd on its own data
+        status = Status.IMPLAUSIBLE
+        message = f"{message} {absurd}"
+    if status in (Status.MAX_ITER, Status.FAILED, Status.IMPLAUSIBLE):
         warnings.warn(f"fohw.identify({method!r}" + (f", schedule={schedule!r}" if schedule else "")
                       + f"): {message}", ConvergenceWarning, stacklevel=stacklevel)
     n_theta = structure.layout.n_params
@@ -297,6 +306,84 @@ def finish(builder, *, method, linear, params, status, nit, nfev, message, alpha
         options=dict(options or {}), covariance=covariance, noise_variance=noise_variance,
         details=out, output_map_params=({} if structure.output_map is None else dict(zip(
             structure.output_map.names, structure.output_map_params(params).tolist()))))
+
+
+def own_free_run_problem(builder, linear, params, operating_point=(0.0, 0.0)):
+    """Why the fitted predictor's free run on its own estimation input is absurd, or "".
+
+    The run from the fit's own initial state (the estimated levels of ``past="estimate"``,
+    else rest) and, for ``past="estimate"``, also from rest (the levels at the operating
+    point: a model that explodes from there is unstable): each must stay finite and inside
+    the envelope :func:`fohw.compare` uses (:func:`fohw._plausible.free_run_problem`), judged
+    against the measured output. The sentence names the sample.
+    """
+    s = builder.structure
+    runs = [("", np.asarray(params, dtype=float))]
+    if s.past == "estimate":
+        rest = runs[0][1].copy()
+        n_free = len(s.orders.free)
+        rest[n_free:n_free + 2] = 0.0
+        runs.append((" (from rest: the past levels at the operating point, not the fitted "
+                     "ones)", rest))
+    y0 = float(operating_point[1]) if s.output_map is not None else 0.0
+    for what, p in runs:
+        try:
+            with np.errstate(all="ignore"):
+                if s.output_map is None:
+                    ysim = simulate_predictor(s, linear, p, builder.u)
+                else:
+                    ysim = simulate_predictor(s, linear, p, builder.u,
+                                              operating_point=(0.0, y0)) - y0
+        except SimulationDivergedError as exc:
+            return (f"The fitted model's free run on its own estimation input{what} diverges: "
+                    f"{exc}")
+        why = free_run_problem(ysim, builder.y)
+        if why:
+            return why.replace("estimation input", "estimation input" + what, 1)
+    return ""
+
+
+def joint_levels_note(structure, u, u0=0.0):
+    """Why the input maps are not identified on the joint levels ``u`` visits ("" if they are).
+
+    The rows of ``u`` (one per sample: every input at once) take ``L`` distinct values, the
+    *joint* levels; the input bases of all inputs together have ``M`` columns. Evaluated on
+    the levels they form an ``L x M`` matrix; where its rank is below ``M`` a combination of
+    the input maps is zero at every sample (every lag, every order): not identified whatever
+    the dynamics. With a constant beside them (an offset, or the static gain of order-0
+    terms) the test is the rank of ``[1, F]``. Two inputs each at four levels can visit only
+    four joint levels (moved together), which a per-input count does not see. ``u`` are the
+    deviations the model sees (from the operating point ``u0``, added back to show the levels
+    in the data's units).
+    """
+    u = np.asarray(u, dtype=float)
+    rows = u.reshape(u.shape[0], -1)
+    levels = np.unique(rows, axis=0)
+    n_levels = levels.shape[0]
+    f_basis = structure.f_basis
+    m = len(f_basis)
+    if n_levels > 4 * m + 8:               # far more levels than columns: full rank in practice
+        return ""
+    with np.errstate(all="ignore"):
+        F = np.asarray(f_basis.evaluate(levels if u.ndim == 2 else levels[:, 0]), float).T
+    if not np.all(np.isfinite(F)):
+        return ""
+    data = levels + np.broadcast_to(np.asarray(u0, dtype=float).ravel(), levels.shape[1:])
+    shown = ", ".join("(" + ", ".join(f"{v:.4g}" for v in row) + ")" if row.size > 1
+                      else f"{row[0]:.4g}" for row in data[:6]) + (", …" if n_levels > 6 else "")
+    what = "joint levels of the inputs" if rows.shape[1] > 1 else "levels of the input"
+    rank = int(np.linalg.matrix_rank(F)) if n_levels else 0
+    n_cols, extra = m, ""
+    if rank == m:
+        rank = int(np.linalg.matrix_rank(np.c_[np.ones(n_levels), F]))
+        if rank > m:
+            return ""
+        n_cols, extra = m + 1, " and a constant (an offset, or the static gain of order-0 terms)"
+    return (f"the record visits only {n_levels} {what} ({shown}), on which the input maps' "
+            f"{m} columns ({', '.join(f_basis.names)}){extra} have rank {rank} of {n_cols}: a "
+            "combination of them takes the same value at every sample, so it is not identified "
+            f"whatever the dynamics (use input bases of fewer columns in all, or a record "
+            "whose inputs visit more joint levels)")
 
 
 def bound_note(name, lo, hi, at_lower, at_upper, value=None):

@@ -13,7 +13,9 @@ are the same for every kind:
    wrapper every fohw estimator runs) with the kind's exact Jacobian, or central finite
    differences when it has none;
 4. the status: a search that made no step from its start is ``FAILED``, one whose fitted model
-   does not simulate finitely on its own record is ``FAILED`` naming the sample, a
+   does not simulate plausibly on its own record (finite, inside the envelope
+   :func:`fohw.compare` uses) is ``IMPLAUSIBLE`` naming the sample; an estimate on a bound with a
+   zero projected gradient is ``CONVERGED``, the bound named, a
    rank-deficient Jacobian is ``RANK_DEFICIENT`` naming the parameters (through
    :mod:`fohw._linalg`), and the covariance ``s^2 (J^T J)^{-1}`` comes from the same
    factorisation.
@@ -33,6 +35,7 @@ import warnings
 import numpy as np
 
 from .. import _linalg
+from .._plausible import free_run_problem
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import (
     ConvergenceWarning,
@@ -56,7 +59,8 @@ MAX_SCAN = 20_000
 
 #: A free run beyond this many times the largest measured ``|y|`` is out of range: the search
 #: treats it as a penalty (a residual of ``PENALTY`` times ``max |y|`` at every sample, larger
-#: than any run inside the range), and a fitted model whose free run leaves it is ``FAILED``.
+#: than any run inside the range). A fitted model is judged by the envelope ``fohw.compare``
+#: uses (:func:`fohw._plausible.free_run_problem`): outside it, ``IMPLAUSIBLE``.
 ESCAPE = 1e3
 PENALTY = 1e4
 
@@ -380,8 +384,15 @@ def stationary(jac, r, x, lower, upper, rtol=1e-6):
     free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
     if not np.any(free):
         return True
-    q, _ = np.linalg.qr(jac[:, free])
-    pred = float(np.sum((q.T @ r) ** 2))
+    # The projection onto the columns' numerical range (equilibrated, singular values above
+    # the rank tolerance of _linalg): a plain QR of nearly dependent columns (estimated past
+    # levels beside a slow pole: condition 1e19) projects onto rounding noise as well.
+    a = jac[:, free]
+    norms = np.linalg.norm(a, axis=0)
+    norms[norms == 0] = 1.0
+    basis, sv, _ = np.linalg.svd(a / norms, full_matrices=False)
+    kept = sv > (sv[0] if sv.size else 0.0) * _linalg.rank_tolerance(*a.shape)
+    pred = float(np.sum((basis[:, kept].T @ r) ** 2))
     return pred <= rtol * float(r @ r)
 
 
@@ -699,13 +710,15 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
                         "simulation error, so the estimate is where it started, not a minimum.")
     all_names = list(names) + extra_names
     full_cov = None
-    bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > ESCAPE * y_scale))
-    if bad.size:
-        status = Status.FAILED
-        r = int(np.searchsorted(data.bounds, bad[0], side="right")) - 1
-        where = f"sample {int(bad[0] - data.bounds[r])}" + (f" of record {r}" if n_rec > 1 else "")
-        messages.append(f"The fitted model's free run on its own input leaves the range of the data "
-                        f"at {where} (|yhat| beyond {ESCAPE:g} max|y| or not finite).")
+
+    def where(k):
+        r = int(np.searchsorted(data.bounds, k, side="right")) - 1
+        return f"sample k = {int(k - data.bounds[r])}" + (f" of record {r}" if n_rec > 1 else "")
+
+    absurd = free_run_problem(yhat, y, where=where)
+    if absurd:
+        status = Status.IMPLAUSIBLE
+        messages.append(absurd)
         covariance = None
     else:
         note = None
@@ -738,10 +751,17 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
                   "standard_errors": None if full_cov is None else
                   [float(np.sqrt(full_cov[j, j])) for j in idx]}
     message = " ".join(messages)
+    at_bound = [f"{n} = {v:.6g} (its {'lower' if v <= lo else 'upper'} bound)"
+                for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi]
+    if at_bound:
+        message += (" At a bound" + (", where the criterion's gradient points outside the "
+                                     "bounds (a minimum within them)"
+                                     if status == Status.CONVERGED else "")
+                    + f": {', '.join(at_bound)}.")
     if status == Status.RANK_DEFICIENT:
         warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
                       stacklevel=2)
-    elif status in (Status.MAX_ITER, Status.FAILED):
+    elif status in (Status.MAX_ITER, Status.FAILED, Status.IMPLAUSIBLE):
         warnings.warn(f"fohw.fit({type(model).__name__}): {' '.join(messages[1:])}",
                       ConvergenceWarning, stacklevel=2)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,

@@ -42,9 +42,11 @@ from ._common import (
     bounds_record,
     check_enough_samples,
     finish,
+    joint_levels_note,
     kept_above_zero,
     rms_scale,
 )
+from .fit import stationary
 from .options import N_GRID, Anything, Integer, Method, MethodOptions
 from .profile import parameter_covariance
 from .starts import AGREEMENT_RTOL, Start, agreement, multi_start, nested_structure
@@ -194,7 +196,8 @@ class SimulationResidual:
         return np.column_stack(cols)
 
 
-def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None):
+def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_nfev=None,
+                     held=None):
     """Fit the linear and nonlinear parameters to minimise the free-run simulation error.
 
     Parameters
@@ -211,6 +214,11 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     max_nfev : int, optional
         Limit on residual evaluations, passed to :func:`scipy.optimize.least_squares`
         (Jacobian evaluations are not counted).
+    held : ndarray of bool, optional
+        Linear parameters held at their start values (:func:`held_columns`: the columns of the
+        information matrix that depend on the others on this record); the search runs over
+        the rest, a reduced class that simulates every model of the full one the record can
+        tell apart.
 
     Returns
     -------
@@ -246,7 +254,10 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
 
     residual, jacobian = crit.scaled(scale, y_scale)
     keep = kept_above_zero(s, n_lin, lower)
-    z, status, ls = bounded_least_squares(residual, x0 / scale, jac=jacobian,
+    fixed = np.zeros(x0.shape[0], dtype=bool)
+    if held is not None:
+        fixed[:n_lin] = held
+    z, status, ls = _least_squares_pinned(residual, jacobian, x0 / scale, fixed,
                                           lower=bound_lo / scale, upper=bound_hi / scale,
                                           keep=keep, max_nfev=max_nfev)
     pinned = keep & (x0 == bound_lo)
@@ -256,7 +267,7 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
         # searched from the nu -> 0+ model, not the one it was given, and ended above the
         # start (cascaded tanks, per-lag from its orders-0 fit: 86.8 -> 4227). Search again
         # with those orders held at 0 and keep the better of the two.
-        again = _least_squares_pinned(residual, jacobian, x0 / scale, pinned,
+        again = _least_squares_pinned(residual, jacobian, x0 / scale, pinned | fixed,
                                       lower=bound_lo / scale, upper=bound_hi / scale,
                                       keep=keep, max_nfev=max_nfev)
         if float(again[2].fun @ again[2].fun) < float(ls.fun @ ls.fun):
@@ -269,19 +280,29 @@ def fit_output_error(builder, linear0, params0, *, lower, upper, n_init=0, max_n
     escaped = np.array_equal(ls.fun, crit.penalty / y_scale)
     if escaped:
         status = Status.FAILED
-    # Stuck: the solver gave up on shrinking its trust region (xtol) without lowering the
-    # criterion from the start: the start is no minimum it found, only where it stopped.
-    stuck = (not escaped and ls.status == 3 and not sse < sse0 * (1.0 - 1e-9))
-    if stuck:
-        status = Status.FAILED
     # Standard errors from the exact sensitivity of the free run at the estimate (the
     # Jacobian of the output-noise bound, fohw.crb(noise="output")), at x with the orders put
     # on an active bound (the solver's last Jacobian is at its own x, ~1e-10 inside).
     try:
-        _, sens = simulation_jacobian(s, x[:n_lin], x[n_lin:], u)
+        ysim, sens = simulation_jacobian(s, x[:n_lin], x[n_lin:], u)
         jac = sens[window]
+        r_x = (y - ysim)[window]
     except SimulationDivergedError:
-        jac = ls.jac * y_scale / scale
+        jac, r_x = ls.jac * y_scale / scale, None
+    # Stuck: the solver gave up on shrinking its trust region (xtol) without lowering the
+    # criterion from the start, and the start is not stationary within the bounds: it is no
+    # minimum it found, only where it stopped. A start on a bound whose projected gradient
+    # is zero (the nested integer model at orders 0, when the data are integer-order) is a
+    # minimum: CONVERGED, and the bound is named (bound_note). An order on a lower bound of 0
+    # with estimated past levels (kept_above_zero) is the nested model there: the model jumps
+    # at 0, so its one-sided derivative says nothing, and the search above 0 found no lower
+    # criterion; the other parameters must be stationary.
+    smooth = ~(keep & (x - bound_lo <= 1e-8)) & ~fixed
+    stuck = (not escaped and ls.status == 3 and not sse < sse0 * (1.0 - 1e-9)
+             and (r_x is None or not stationary(jac[:, smooth], r_x, x[smooth],
+                                                bound_lo[smooth], bound_hi[smooth])))
+    if stuck:
+        status = Status.FAILED
     cov, s2 = parameter_covariance(jac, sse, m)
     active = ls.active_mask[n_lin:n_lin + n_free]
     how = (f"{crit.n_simulations} simulations, {crit.n_jacobians} of them with the exact "
@@ -389,10 +410,31 @@ def _start(builder, options, lower, upper):
     return np.array(linear0, dtype=float), np.array(params0, dtype=float), J0, "the given start"
 
 
-def local_search(builder, linear0, params0, lower, upper, n_init, max_nfev):
+def local_search(builder, linear0, params0, lower, upper, n_init, max_nfev, held=None):
     """One local search of the default chain (a task for an executor): :func:`fit_output_error`."""
     return fit_output_error(builder, linear0, params0, lower=lower, upper=upper, n_init=n_init,
-                            max_nfev=max_nfev)
+                            max_nfev=max_nfev, held=held)
+
+
+def held_columns(builder, params):
+    """``(mask, factor)``: the linear parameters whose columns depend on the others, or None.
+
+    The information matrix at ``params`` factorised by :func:`fohw._linalg.factor`; where it
+    is rank deficient the columns it names dependent are held at their start values by the
+    simulation-error search (:func:`fit_output_error`), which then runs over the rest instead
+    of drifting along the null space. ``mask`` is None at full rank.
+    """
+    fac = _linalg.factor(builder.matrix(params), with_q=False)
+    if fac.rank == fac.n_columns:
+        return None, fac
+    mask = np.zeros(fac.n_columns, dtype=bool)
+    mask[list(fac.dependent)] = True
+    return mask, fac
+
+
+def _mid_params(structure, lower, upper):
+    """The free orders in the middle of their bounds, the other nonlinear parameters 0."""
+    return np.r_[(lower + upper) / 2, np.zeros(structure.n_nonlinear - len(structure.orders.free))]
 
 
 class _Chain:
@@ -433,11 +475,16 @@ class _Chain:
         return self.nested[structure]
 
     def fit(self, builder, bounds):
-        """``(fit, start, searches, n_candidates)``, or None for a rank-deficient single start."""
+        """``(fit, start, searches, n_candidates)`` of one class.
+
+        A rank-deficient class is searched with its dependent columns held
+        (:func:`held_columns`), so every contained class is a start of the richer one.
+        """
         options, s = self.options, builder.structure
         lower, upper = bounds
         if s.orders.free:
             self.bounds = bounds
+            held, _ = held_columns(builder, _mid_params(s, lower, upper))
 
             def equation_error():
                 vp = separable_least_squares(builder, bounds=bounds,
@@ -447,16 +494,15 @@ class _Chain:
             chain = multi_start(builder, bounds, nested_fit=self.nested_fit,
                                 equation_error=equation_error, criterion=self.criterion(s),
                                 search=local_search,
-                                search_args=(options.n_init, options.max_nfev),
+                                search_args=(options.n_init, options.max_nfev, held),
                                 n_starts=options.n_starts,
                                 executor=self.executor if builder is self.builder else None)
             self.n_simulations += sum(f.nfev for _, f in chain.searches if f is not None)
             return chain.fit, chain.start, chain.searches, chain.n_candidates
         linear0, params0, _, origin = _start(builder, options, lower, upper)
-        if _linalg.factor(builder.matrix(params0), with_q=False).rank < s.n_linear:
-            return None
+        held, _ = held_columns(builder, params0)
         fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
-                               n_init=options.n_init, max_nfev=options.max_nfev)
+                               n_init=options.n_init, max_nfev=options.max_nfev, held=held)
         self.n_simulations += fit.nfev
         return fit, Start(origin, linear0, params0, fit.start_sse), [], 1
 
@@ -493,13 +539,22 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
     lower, upper = bounds
     record = dict(options.as_dict(), alpha_bounds=bounds_record(s, lower, upper))
     details = {} if options.start is None else {"start": "the given start"}
-    # (a zero output has no free-run criterion to rank starts by: the single start below
-    # reports it rank deficient)
-    # (nor a class rank deficient whatever its orders, e.g. a duplicated basis function: the
-    # single start reports it without a search drifting along the null space)
-    mid = np.r_[(lower + upper) / 2, np.zeros(s.n_nonlinear - len(s.orders.free))]
-    if (options.start is None and s.orders.free and np.any(builder.y)
-            and _linalg.factor(builder.matrix(mid), with_q=False).rank == s.n_linear):
+    # A start that is rank deficient (a duplicated basis function, two inputs moved together)
+    # is never handed back as the estimate: its dependent columns are held and the
+    # rest searched (held_columns), in the default chain as on a single start.
+    if not np.any(builder.y):
+        # The simulation-error minimum is known: the zero model simulates y = 0 exactly. It is
+        # the estimate (not another method's), and the record identifies no parameter.
+        details["simulation_sse"] = 0.0
+        return finish(builder, method="output_error", linear=np.zeros(s.n_linear),
+                      params=_mid_params(s, lower, upper), status=Status.RANK_DEFICIENT,
+                      nit=0, nfev=0, options=record, details=details,
+                      operating_point=operating_point,
+                      message="the output is zero (after the operating point is removed): the "
+                              "zero model (every coefficient 0) simulates it exactly, with "
+                              "simulation error 0, and the record identifies no parameter.")
+    held_note = ""
+    if options.start is None and s.orders.free:
         chain = _Chain(builder, options, executor)
         fit, first, searches, n_candidates = chain.fit(builder, bounds)
         linear0, params0, origin = first.linear, first.params, first.name
@@ -522,24 +577,27 @@ def output_error_result(builder, options, bounds, *, operating_point=(0.0, 0.0),
                       f"{AGREEMENT_RTOL:g} of the best criterion; {nfev} simulations in all.")
     else:
         linear0, params0, J0, origin = _start(builder, options, lower, upper)
-        Phi0 = builder.matrix(params0)
-        fac = _linalg.factor(Phi0, with_q=False)
-        if fac.rank < fac.n_columns:    # not identifiable: no fit (it would drift along the
-            return finish(builder, method="output_error", linear=linear0, params=params0,
-                          status=Status.RANK_DEFICIENT, nit=0, nfev=0, Phi=Phi0,  # null space)
-                          rank_factor=fac, options=record, details=details,
-                          operating_point=operating_point,
-                          message=f"no simulation-error fit: the start ({origin}) is rank "
-                                  "deficient.")
+        held, _ = held_columns(builder, params0)
         fit = fit_output_error(builder, linear0, params0, lower=lower, upper=upper,
-                               n_init=options.n_init, max_nfev=options.max_nfev)
+                               n_init=options.n_init, max_nfev=options.max_nfev, held=held)
         nfev, chain_note = fit.nfev, ""
+    held, _ = held_columns(builder, _mid_params(s, lower, upper) if s.orders.free and
+                           options.start is None else params0)
+    if held is not None:
+        names = [n for n, h in zip(s.linear_names, held) if h]
+        joint = joint_levels_note(s, builder.u, operating_point[0])
+        held_note = (f" The start is rank deficient on this record: {', '.join(names)} "
+                     "depend on the other columns, so they were held at their start values "
+                     "and the simulation error was minimised over the rest (a reduced class "
+                     "that simulates every model the record can tell apart)."
+                     + (f" Why: {joint}." if joint else ""))
     message = fit.message
     first = ", ".join(f"{n} = {v:.6g}" for n, v in zip(s.nonlinear_names, params0))
     message += (f" Started from {origin}" + (f" ({first})" if first else "")
                 + (f", its output-feedback block shrunk by {fit.start_shrink:.3g} to make it "
                    "stable." if fit.start_shrink < 1 else "."))
-    message += f" Simulation error criterion from sample {options.n_init} on." + chain_note
+    message += (f" Simulation error criterion from sample {options.n_init} on." + chain_note
+                + held_note)
     for j, name in enumerate(s.orders.free):
         if fit.at_lower[j] or fit.at_upper[j]:
             message += bound_note(name, lower[j], upper[j], fit.at_lower[j], fit.at_upper[j],
