@@ -488,6 +488,11 @@ def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", tota
     if isinstance(max_pending, bool) or not isinstance(max_pending, numbers.Integral) \
             or max_pending < 1:
         raise ParameterError(f"`max_pending` must be a positive integer; got {max_pending!r}.")
+    return _stream_tasks(fn, tasks, executor, progress, label, total, int(max_pending), ordered)
+
+
+def _stream_tasks(fn, tasks, executor, progress, label, total, max_pending, ordered):
+    """The generator of :func:`stream_tasks` (its arguments checked)."""
     bar = progress_bar(total, label, progress, counting=True)
     try:
         if executor is None:
@@ -496,7 +501,7 @@ def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", tota
                 bar.update(1)
                 yield i, value
             return
-        yield from _stream(fn, enumerate(tasks), executor, int(max_pending), ordered, bar)
+        yield from _stream(fn, enumerate(tasks), executor, max_pending, ordered, bar)
     finally:
         bar.close()
 

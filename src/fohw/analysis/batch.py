@@ -16,7 +16,7 @@ import time
 import warnings
 from dataclasses import dataclass
 
-from .._parallel import TaskError, stream_tasks
+from .._parallel import TaskError, as_executor, stream_tasks
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.base import Model
 from ..record import Record
@@ -220,7 +220,7 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     ------
     ParameterError
         ``model`` is not a :class:`fohw.Model`, ``read`` not a dict, ``out_dir`` not a folder,
-        or ``executor`` not an executor (before any record is read).
+        or ``executor`` not an executor (when called, before any record is read).
 
     See Also
     --------
@@ -250,9 +250,10 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     2 FitResult
     """
     out_dir = _check_call(model, read, out_dir)
-    read = dict(read or {})
+    executor = as_executor(executor)
     if total is None and hasattr(records, "__len__"):
         total = len(records)
+    read = dict(read or {})
     names = {}                               # index -> name, for the records in flight
 
     def tasks():
@@ -261,8 +262,13 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
             bad = _check_record(i, record)
             yield (i, None if bad else record, model, options, read, out_dir, bad)
 
-    stream = stream_tasks(_task, tasks(), executor=executor, progress=progress,
-                          label="fits", total=total, max_pending=max_pending, ordered=ordered)
+    stream = stream_tasks(_task, tasks(), executor=executor, progress=progress, label="fits",
+                          total=total, max_pending=max_pending, ordered=ordered)
+    return _items(stream, names)
+
+
+def _items(stream, names):
+    """The generator of :func:`stream_fits`: each task's outcome as a :class:`BatchItem`."""
     try:
         for i, value in stream:
             name = names.pop(i)
