@@ -44,10 +44,15 @@ def dask_client():
 def test_every_backend_gives_the_serial_fits_for_every_kind(factory, pools, request):
     cases = [_case(factory, seed) for seed in (1, 2)]
     start = cases[0].start
-    records = [(c.u, c.y) for c in cases]
-    alone = [fohw.fit(start, u, y, **FAST) for u, y in records]
+    dt = start.dt if "dt" in start.config() else None
+    pieces = [fohw.Record(c.u, c.y, dt=dt, name=f"seed {k}") for k, c in enumerate(cases)]
+    # a pair, a Record (its sampling goes along), two Records as one data set (fitted jointly)
+    records = [(cases[0].u, cases[0].y), pieces[1], pieces]
+    alone = [fohw.fit(start, cases[0].u, cases[0].y, **FAST), fohw.fit(start, pieces[1], **FAST),
+             fohw.fit(start, pieces, **FAST)]
     serial = list(fohw.stream_fits(records, start, **FAST))
-    assert [item.index for item in serial] == [0, 1]
+    assert [item.index for item in serial] == [0, 1, 2]
+    assert [item.name for item in serial] == ["records[0]", "seed 1", "records[2]"]
     assert all(item.ok and _same(item.result, fit) for item, fit in zip(serial, alone))
     backends = dict(pools)
     try:
@@ -56,7 +61,7 @@ def test_every_backend_gives_the_serial_fits_for_every_kind(factory, pools, requ
         pass
     for name, executor in backends.items():
         items = list(fohw.stream_fits(records, start, executor=executor, **FAST))
-        assert [item.index for item in items] == [0, 1], name
+        assert [item.index for item in items] == [0, 1, 2], name
         assert all(item.ok and _same(item.result, fit) for item, fit in zip(items, alone)), name
         listed = fohw.identify_many(records, model=start, executor=executor, **FAST)
         assert all(_same(r, fit) for r, fit in zip(listed, alone)), name
@@ -79,8 +84,11 @@ def test_a_failing_record_is_named_and_the_others_go_on(tmp_path, pools, backend
     assert [item.index for item in items] == list(range(6))
     assert [item.ok for item in items] == [True, False, True, False, True, False]
     reference = fohw.fit(c.start, c.u, c.y, **FAST)
-    for i in (0, 2, 4):                              # a path is read by the worker: same fit
-        assert _same(items[i].result, reference)
+    assert _same(items[0].result, reference)
+    from_file = fohw.fit(c.start, fohw.read_record(good), **FAST)    # its name and path go along
+    for i in (2, 4):                                 # a path is read by the worker: same fit
+        assert _same(items[i].result, from_file)
+        assert items[i].result.parameters == reference.parameters
     assert items[2].name == str(good)
     missing = items[1]
     assert isinstance(missing.error, FileNotFoundError) and missing.result is None
@@ -159,6 +167,12 @@ def test_the_lagged_identify_and_read_keywords(tmp_path, pools):
     (item,) = fohw.stream_fits([os.fspath(path)], executor=pools["processes"],
                                read={"u": "in", "y": "out"}, **s)
     np.testing.assert_array_equal(item.result.theta, fohw.identify(d.u, d.y, **s).theta)
+    # a Record's sampling time goes to identify; one that contradicts `dt` is its failure
+    rec = fohw.Record(d.u, d.y, dt=4.0)
+    (first,) = fohw.stream_fits([rec], **s)
+    assert first.result.dt == 4.0 == fohw.identify(d.u, d.y, dt=4.0, **s).dt
+    (second,) = fohw.stream_fits([rec], dt=2.0, **s)
+    assert "`dt` = 2.0 but the record says 4.0" in second.message
 
 
 def test_a_count_without_a_total(capsys, monkeypatch):

@@ -47,8 +47,8 @@ class BatchItem:
     index : int
         The record's place in ``records`` (from 0).
     name : str
-        What the record is: its file path, else its :attr:`fohw.Record.name`, else
-        ``records[index]``.
+        What the record is: its file path (given, or the Record's ``path``), else its
+        :attr:`fohw.Record.name`, else ``records[index]``.
     result : FitResult, IdentificationResult or None
         The fit; None when it failed, or when it was written to ``out_dir``.
     error : Exception or None
@@ -87,14 +87,20 @@ def _is_path(record):
 def _record_name(index, record):
     if _is_path(record):
         return os.fspath(record)
-    if isinstance(record, Record) and record.name:
-        return record.name
+    if isinstance(record, Record) and (record.path or record.name):
+        return record.path or record.name
     return f"records[{index}]"
+
+
+def _is_records(record):
+    """Several experiments of one system: a list of Records, fitted as one data set."""
+    return isinstance(record, (list, tuple)) and bool(record) and \
+        all(isinstance(r, Record) for r in record)
 
 
 def _check_record(index, record):
     """A ParameterError for a record that is neither a Record, a pair (u, y) nor a path."""
-    if isinstance(record, Record) or _is_path(record):
+    if isinstance(record, Record) or _is_path(record) or _is_records(record):
         return None
     try:
         _, _ = record
@@ -113,18 +119,16 @@ def _fit_record(index, record, model, options, read, out_dir):
             from ..io.text import read_record
 
             record = read_record(record, **read)
-        if isinstance(record, Record):
-            u, y = record.u, record.y
-        else:
-            u, y = record
         if model is None:
-            from ..estimators.identify import identify
-
-            result = identify(u, y, **options)
+            result = _identify(record, options)
         else:
             from ..estimators.fit import fit
 
-            result = fit(model, u, y, **options)
+            if isinstance(record, Record) or _is_records(record):
+                result = fit(model, record, **options)      # its sampling and names go along
+            else:
+                u, y = record
+                result = fit(model, u, y, **options)
     except Exception as exc:                 # one record never loses the others
         error = exc
     if out_dir is not None:
@@ -142,6 +146,28 @@ def _fit_record(index, record, model, options, read, out_dir):
         except Exception as exc:             # noqa: BLE001 - e.g. a full disk: reported
             result, error, path = None, exc, None
     return result, error, path, time.perf_counter() - start
+
+
+def _identify(record, options):
+    """:func:`fohw.identify` of one record (the lagged kind); a Record's ``dt`` goes along."""
+    from ..estimators.identify import identify
+
+    if _is_records(record):
+        raise ParameterError("fohw.identify fits one record; fit several experiments as one "
+                             "data set with a start model: stream_fits(records, model).")
+    if not isinstance(record, Record):
+        u, y = record
+        return identify(u, y, **options)
+    if record.t is not None:
+        raise ParameterError(f"record {record.name or record.path or ''!r} has non-uniform "
+                             "sampling instants; fohw.identify (the lagged kind) needs uniform "
+                             "samples: fit a kind that simulates on instants, with model=.")
+    if record.dt is not None:
+        if "dt" in options and options["dt"] != record.dt:
+            raise ParameterError(f"`dt` = {options['dt']!r} but the record says {record.dt!r}; "
+                                 "leave `dt` out to use the record's.")
+        options = dict(options, dt=record.dt)
+    return identify(record.u, record.y, **options)
 
 
 def _message(index, name, error):
@@ -175,13 +201,16 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
 
     Parameters
     ----------
-    records : iterable of Record, (u, y) or path
-        The records: :class:`fohw.Record` objects, pairs ``(u, y)`` of arrays, or paths of
-        text files that the worker reads with :func:`fohw.read_record` (nothing is read here).
-        Any iterable; a generator is read only as room frees up.
+    records : iterable of Record, (u, y), path or list of Record
+        The records: :class:`fohw.Record` objects (their sampling, names and units go with the
+        fit), pairs ``(u, y)`` of arrays, paths of text files that the worker reads with
+        :func:`fohw.read_record` (nothing is read here), or lists of Records (several
+        experiments of one unit, fitted jointly as :func:`fohw.fit` does). Any iterable; a
+        generator is read only as room frees up.
     model : Model, optional
         A start model of any kind: every record is fitted by :func:`fohw.fit` from it.
-        Default: :func:`fohw.identify` (the paper's lagged kind).
+        Default: :func:`fohw.identify` (the paper's lagged kind; a Record's ``dt`` is passed
+        as its ``dt``).
     executor : concurrent.futures.Executor or dask.distributed.Client, optional
         Where to run the fits: a ``ProcessPoolExecutor``, a ``ThreadPoolExecutor``, a dask
         client (or its ``get_executor()``); default serially in this process. The results do
