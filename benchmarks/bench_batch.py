@@ -21,6 +21,11 @@ resident memory is its own:
 * ``process/4``: the process pool on a quarter of the records: the parent's peak should not
   grow with the number of records.
 
+Throughput on a shared machine depends on what else runs, so the table also gives the CPU time
+per record summed over every process of the mode (the calling interpreter, which for dask
+also runs the scheduler, and the workers; not dask's nanny processes), measured after the
+workers are up: the number to extrapolate from.
+
 Every mode's fits are hashed in record order (every free value and the SSE, as ``repr``); the
 column ``same`` says whether the hash equals the serial run's. BLAS runs one thread per process.
 Needs ``pip install 'fohw[distributed]'`` for the dask mode (skipped without it).
@@ -76,6 +81,19 @@ def fingerprint(result):
     return repr([float(v) for v in values] + [float(result.sse)])
 
 
+def _cpu(who):
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _worker_cpu():
+    """CPU seconds of this (dask worker) process so far."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def _peak_mb(kb):
     return kb / 1024.0                     # ru_maxrss and VmHWM are in KiB on Linux
 
@@ -113,6 +131,8 @@ def run_mode(mode, n_records, n_samples, kind, workers):
         executor = pool
     else:
         executor = None
+    cpu0 = _cpu(resource.RUSAGE_SELF)
+    workers_cpu0 = sum(client.run(_worker_cpu).values()) if client is not None else 0.0
     t0 = time.perf_counter()
     for item in fohw.stream_fits(records(n_records, n_samples, kind), executor=executor,
                                  total=n_records, progress=False, **options):
@@ -124,6 +144,8 @@ def run_mode(mode, n_records, n_samples, kind, workers):
             digest.update(item.message.encode())
         busy += item.seconds
     wall = time.perf_counter() - t0
+    cpu = _cpu(resource.RUSAGE_SELF) - cpu0
+    workers_cpu = None
     if pool is not None:
         peaks = [_vmhwm_kb(pid) for pid in list(pool._processes)]
         pool.shutdown(wait=True)
@@ -131,14 +153,16 @@ def run_mode(mode, n_records, n_samples, kind, workers):
             worker_kb = max(peaks)
         else:
             worker_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        workers_cpu = _cpu(resource.RUSAGE_CHILDREN)        # the pool's workers, joined
     if client is not None:
+        workers_cpu = sum(client.run(_worker_cpu).values()) - workers_cpu0
         peaks = client.run(lambda: __import__("resource").getrusage(
             __import__("resource").RUSAGE_SELF).ru_maxrss)
         worker_kb = max(peaks.values())
         client.close()
         cluster.close()
     return {"mode": mode, "records": n_records, "wall": wall, "ok": ok, "failed": failed,
-            "busy": busy, "hash": digest.hexdigest(),
+            "busy": busy, "hash": digest.hexdigest(), "cpu": cpu, "workers_cpu": workers_cpu,
             "parent_mb": _peak_mb(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss),
             "worker_mb": None if worker_kb is None else _peak_mb(worker_kb)}
 
@@ -178,18 +202,20 @@ def main(argv=None):
             if args.kind == "tf" else "lagged kind, fohw.identify na=nb=1")
     print(f"{what}; N = {args.samples}; {args.workers} workers; load average "
           f"{os.getloadavg()[0]:.1f} at the end")
-    print("| mode | records | wall (s) | records/s | vs serial | fit time per record (ms) | "
-          "failed | peak RSS parent (MB) | peak RSS per worker (MB) | same fits |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print("| mode | records | wall (s) | records/s | vs serial | wall per fit, in the worker "
+          "(ms) | CPU per record, all processes (ms) | failed | peak RSS parent (MB) | "
+          "peak RSS per worker (MB) | same fits |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in rows:
         rate = r["records"] / r["wall"]
         ratio = rate / (serial["records"] / serial["wall"]) if serial else float("nan")
         same = "—" if serial is None or r["records"] != serial["records"] else \
             str(r["hash"] == serial["hash"])
         worker = "—" if r["worker_mb"] is None else f"{r['worker_mb']:.0f}"
+        cpu = r["cpu"] + (r["workers_cpu"] or 0.0)
         print(f"| {r['label']} | {r['records']} | {r['wall']:.1f} | {rate:.2f} | {ratio:.2f} | "
-              f"{1000 * r['busy'] / r['records']:.0f} | {r['failed']} | {r['parent_mb']:.0f} | "
-              f"{worker} | {same} |")
+              f"{1000 * r['busy'] / r['records']:.0f} | {1000 * cpu / r['records']:.0f} | "
+              f"{r['failed']} | {r['parent_mb']:.0f} | {worker} | {same} |")
     return 0
 
 

@@ -184,3 +184,25 @@ def test_a_count_without_a_total(capsys, monkeypatch):
     bar.update(1)
     bar.close()
     assert capsys.readouterr().err == "fits: 1 done (0 s)\n"
+
+
+MAIN_PID = os.getpid()
+
+
+def square_or_die(x):
+    """x**2, except x = 3 in a worker process, which it kills (os._exit)."""
+    if x == 3 and os.getpid() != MAIN_PID:
+        os._exit(3)
+    return x * x
+
+
+def test_a_record_that_kills_its_worker_loses_only_itself():
+    from fohw._parallel import TaskError, stream_tasks
+
+    with ProcessPoolExecutor(2) as pool:
+        out = list(stream_tasks(square_or_die, ((x,) for x in range(10)), executor=pool,
+                                max_pending=4))
+    assert [i for i, _ in out] == list(range(10))
+    lost = out[3][1]
+    assert isinstance(lost, TaskError) and "kills its worker" in lost.message
+    assert [v for i, v in out if i != 3] == [x * x for x in range(10) if x != 3]
