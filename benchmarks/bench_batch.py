@@ -22,9 +22,9 @@ resident memory is its own:
   grow with the number of records.
 
 Throughput on a shared machine depends on what else runs, so the table also gives the CPU time
-per record summed over every process of the mode (the calling interpreter, which for dask
-also runs the scheduler, and the workers; not dask's nanny processes), measured after the
-workers are up: the number to extrapolate from.
+per record of the calling interpreter (for dask it also runs the LocalCluster's scheduler) and
+of the workers together (not dask's nanny processes), measured after the workers are up: the
+numbers to extrapolate from.
 
 Every mode's fits are hashed in record order (every free value and the SSE, as ``repr``); the
 column ``same`` says whether the hash equals the serial run's. BLAS runs one thread per process.
@@ -203,19 +203,20 @@ def main(argv=None):
     print(f"{what}; N = {args.samples}; {args.workers} workers; load average "
           f"{os.getloadavg()[0]:.1f} at the end")
     print("| mode | records | wall (s) | records/s | vs serial | wall per fit, in the worker "
-          "(ms) | CPU per record, all processes (ms) | failed | peak RSS parent (MB) | "
-          "peak RSS per worker (MB) | same fits |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+          "(ms) | CPU per record: caller (ms) | CPU per record: workers (ms) | failed | "
+          "peak RSS caller (MB) | peak RSS per worker (MB) | same fits |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in rows:
         rate = r["records"] / r["wall"]
         ratio = rate / (serial["records"] / serial["wall"]) if serial else float("nan")
         same = "—" if serial is None or r["records"] != serial["records"] else \
             str(r["hash"] == serial["hash"])
         worker = "—" if r["worker_mb"] is None else f"{r['worker_mb']:.0f}"
-        cpu = r["cpu"] + (r["workers_cpu"] or 0.0)
+        workers_cpu = "—" if r["workers_cpu"] is None else \
+            f"{1000 * r['workers_cpu'] / r['records']:.1f}"
         print(f"| {r['label']} | {r['records']} | {r['wall']:.1f} | {rate:.2f} | {ratio:.2f} | "
-              f"{1000 * r['busy'] / r['records']:.0f} | {1000 * cpu / r['records']:.0f} | "
-              f"{r['failed']} | {r['parent_mb']:.0f} | {worker} | {same} |")
+              f"{1000 * r['busy'] / r['records']:.0f} | {1000 * r['cpu'] / r['records']:.1f} | "
+              f"{workers_cpu} | {r['failed']} | {r['parent_mb']:.0f} | {worker} | {same} |")
     return 0
 
 
