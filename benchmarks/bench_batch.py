@@ -1,7 +1,7 @@
 """Many records, one call: fohw.stream_fits serially, on a process pool and on dask, with peak memory.
 
     python benchmarks/bench_batch.py [--records 1000] [--samples 2000] [--workers 2]
-                                     [--kind tf|lagged] [--modes serial,process,dask,process/4]
+                                     [--kind tf|lagged] [--modes serial,process,dask,dask*25,process/4]
 
 Each record is a different plant of a fleet, simulated with its own seed and fitted on its own:
 
@@ -19,7 +19,8 @@ resident memory is its own:
   ``VmHWM`` in ``/proc`` just before shut-down, else ``RUSAGE_CHILDREN`` after it; dask workers:
   their own ``ru_maxrss``, asked with ``client.run``);
 * ``process/4``: the process pool on a quarter of the records: the parent's peak should not
-  grow with the number of records.
+  grow with the number of records;
+* ``dask*25``: dask with 25 records per task (``chunksize=25``).
 
 Throughput on a shared machine depends on what else runs, so the table also gives the CPU time
 per record of the calling interpreter (for dask it also runs the LocalCluster's scheduler) and
@@ -51,9 +52,13 @@ import fohw  # noqa: E402
 DT = 0.05
 
 
+MAKING = [0.0]                 # CPU seconds spent making the records, in the caller
+
+
 def records(n_records, n_samples, kind):
     """The fleet, one record at a time: ``(u, y)`` of plant ``k`` (seed ``k``)."""
     for k in range(n_records):
+        start = time.process_time()
         rng = np.random.default_rng(k)
         u = np.repeat(rng.standard_normal(n_samples // 10 + 1), 10)[:n_samples]
         if kind == "tf":
@@ -63,6 +68,7 @@ def records(n_records, n_samples, kind):
             plant = fohw.HammersteinWiener([rng.uniform(0.1, 0.4)], [rng.uniform(0.5, 1.5)],
                                            [1.0], [1.0], rng.uniform(0.3, 0.8))
         y = plant.simulate(u) + 0.01 * rng.standard_normal(n_samples)
+        MAKING[0] += time.process_time() - start
         yield u, y
 
 
@@ -109,7 +115,7 @@ def _vmhwm_kb(pid):
     return None
 
 
-def run_mode(mode, n_records, n_samples, kind, workers):
+def run_mode(mode, n_records, n_samples, kind, workers, chunksize=1):
     """One mode in this interpreter: wall time, fits, hash and peak memory (a dict)."""
     options = fit_options(kind)
     digest, ok, failed, busy = hashlib.sha256(), 0, 0, 0.0
@@ -135,7 +141,8 @@ def run_mode(mode, n_records, n_samples, kind, workers):
     workers_cpu0 = sum(client.run(_worker_cpu).values()) if client is not None else 0.0
     t0 = time.perf_counter()
     for item in fohw.stream_fits(records(n_records, n_samples, kind), executor=executor,
-                                 total=n_records, progress=False, **options):
+                                 total=n_records, progress=False, chunksize=chunksize,
+                                 **options):
         if item.ok:
             ok += 1
             digest.update(fingerprint(item.result).encode())
@@ -163,6 +170,7 @@ def run_mode(mode, n_records, n_samples, kind, workers):
         cluster.close()
     return {"mode": mode, "records": n_records, "wall": wall, "ok": ok, "failed": failed,
             "busy": busy, "hash": digest.hexdigest(), "cpu": cpu, "workers_cpu": workers_cpu,
+            "making": MAKING[0],
             "parent_mb": _peak_mb(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss),
             "worker_mb": None if worker_kb is None else _peak_mb(worker_kb)}
 
@@ -173,17 +181,21 @@ def main(argv=None):
     ap.add_argument("--samples", type=int, default=2000)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--kind", choices=["tf", "lagged"], default="tf")
-    ap.add_argument("--modes", default="serial,process,dask,process/4")
+    ap.add_argument("--modes", default="serial,process,dask,dask*25,process/4",
+                    help="comma-separated: serial, process, dask; '/4' on a quarter of the "
+                    "records, '*K' with K records per task (chunksize)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--chunksize", type=int, default=1, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
         print(json.dumps(run_mode(args.child, args.records, args.samples, args.kind,
-                                  args.workers)))
+                                  args.workers, args.chunksize)))
         return 0
     rows = []
     for mode in args.modes.split(","):
         n = args.records // 4 if mode.endswith("/4") else args.records
-        child = mode.split("/")[0]
+        child, _, chunk = mode.split("/")[0].partition("*")
+        chunk = int(chunk or 1)
         if child == "dask":
             try:
                 import distributed  # noqa: F401
@@ -191,7 +203,8 @@ def main(argv=None):
                 print("dask: skipped (pip install 'fohw[distributed]')", file=sys.stderr)
                 continue
         cmd = [sys.executable, __file__, "--child", child, "--records", str(n), "--samples",
-               str(args.samples), "--workers", str(args.workers), "--kind", args.kind]
+               str(args.samples), "--workers", str(args.workers), "--kind", args.kind,
+               "--chunksize", str(chunk)]
         out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
         row = json.loads(out.strip().splitlines()[-1])
         row["label"] = mode
@@ -203,9 +216,10 @@ def main(argv=None):
     print(f"{what}; N = {args.samples}; {args.workers} workers; load average "
           f"{os.getloadavg()[0]:.1f} at the end")
     print("| mode | records | wall (s) | records/s | vs serial | wall per fit, in the worker "
-          "(ms) | CPU per record: caller (ms) | CPU per record: workers (ms) | failed | "
+          "(ms) | CPU per record: caller (ms) | of which making the record (ms) | "
+          "CPU per record: workers (ms) | failed | "
           "peak RSS caller (MB) | peak RSS per worker (MB) | same fits |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in rows:
         rate = r["records"] / r["wall"]
         ratio = rate / (serial["records"] / serial["wall"]) if serial else float("nan")
@@ -216,7 +230,8 @@ def main(argv=None):
             f"{1000 * r['workers_cpu'] / r['records']:.1f}"
         print(f"| {r['label']} | {r['records']} | {r['wall']:.1f} | {rate:.2f} | {ratio:.2f} | "
               f"{1000 * r['busy'] / r['records']:.0f} | {1000 * r['cpu'] / r['records']:.1f} | "
-              f"{workers_cpu} | {r['failed']} | {r['parent_mb']:.0f} | {worker} | {same} |")
+              f"{1000 * r['making'] / r['records']:.1f} | {workers_cpu} | {r['failed']} | "
+              f"{r['parent_mb']:.0f} | {worker} | {same} |")
     return 0
 
 

@@ -98,6 +98,11 @@ def test_a_failing_record_is_named_and_the_others_go_on(tmp_path, pools, backend
     assert isinstance(items[5].error, fohw.ParameterError)
     assert "`records[5]` must be a Record, a pair (u, y) or a file path; got int" in \
         items[5].message
+    # several records per task: the same outcomes, one item per record
+    chunked = list(fohw.stream_fits(records, c.start, executor=executor, chunksize=4, **FAST))
+    assert [(it.index, it.name, it.message) for it in chunked] == \
+        [(it.index, it.name, it.message) for it in items]
+    assert all(_same(a.result, b.result) for a, b in zip(chunked, items) if a.ok)
     # identify_many: the same outcomes as a list, a bad record refused before anything runs
     out = fohw.identify_many(records[:5], model=c.start, executor=executor, **FAST)
     assert [isinstance(r, Exception) for r in out] == [False, True, False, True, False]

@@ -11,6 +11,7 @@ list of the same outcomes.
 
 from __future__ import annotations
 
+import numbers
 import os
 import time
 import warnings
@@ -191,7 +192,7 @@ def _check_call(model, read, out_dir):
 
 
 def stream_fits(records, model=None, *, executor=None, progress=None, read=None, out_dir=None,
-                ordered=True, max_pending=None, total=None, **options):
+                ordered=True, max_pending=None, chunksize=1, total=None, **options):
     """Fit every record on its own, on any executor, yielding each outcome as it comes.
 
     A generator: the records are read one at a time, at most ``max_pending`` are in flight,
@@ -230,8 +231,14 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
         Yield in the order of ``records`` (default), or as the fits end (False: a slow record
         does not hold back the others).
     max_pending : int, optional
-        Records in flight (submitted and not yet yielded); default four per worker of the
+        Tasks in flight (submitted and not yet yielded); default four per worker of the
         executor where it says how many it has, else 64.
+    chunksize : int, optional
+        Records per task (default 1). Each task costs the executor and this process some time
+        whatever it does (dask's scheduler: about a millisecond); for fits of tens of
+        milliseconds on many workers, a few dozen records per task keep that cost from
+        bounding the throughput (``docs/performance.md``). A task lost by the executor loses
+        the records of its chunk.
     total : int, optional
         The number of records, for the progress bar, when ``records`` has no ``len``.
     **options
@@ -249,7 +256,8 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     ------
     ParameterError
         ``model`` is not a :class:`fohw.Model`, ``read`` not a dict, ``out_dir`` not a folder,
-        or ``executor`` not an executor (when called, before any record is read).
+        ``executor`` not an executor, or ``max_pending`` or ``chunksize`` not a positive
+        integer (when called, before any record is read).
 
     See Also
     --------
@@ -282,41 +290,56 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     executor = as_executor(executor)
     if total is None and hasattr(records, "__len__"):
         total = len(records)
+    if isinstance(chunksize, bool) or not isinstance(chunksize, numbers.Integral) or \
+            chunksize < 1:
+        raise ParameterError(f"`chunksize` must be a positive integer; got {chunksize!r}.")
     read = dict(read or {})
-    names = {}                               # index -> name, for the records in flight
+    chunks = {}                      # task number -> [(index, name)] of the records in flight
+
+    def task(number, chunk):
+        chunks[number] = [(j, name) for j, name, _, _ in chunk]
+        return [(j, r, b) for j, _, r, b in chunk], model, options, read, out_dir
 
     def tasks():
+        chunk, number = [], 0
         for i, record in enumerate(records):
-            names[i] = _record_name(i, record)
             bad = _check_record(i, record)
-            yield (i, None if bad else record, model, options, read, out_dir, bad)
+            chunk.append((i, _record_name(i, record), None if bad else record, bad))
+            if len(chunk) == chunksize:
+                yield task(number, chunk)
+                chunk, number = [], number + 1
+        if chunk:
+            yield task(number, chunk)
 
+    if total is not None:
+        total = -(-total // chunksize)
     stream = stream_tasks(_task, tasks(), executor=executor, progress=progress, label="fits",
                           total=total, max_pending=max_pending, ordered=ordered)
-    return _items(stream, names)
+    return _items(stream, chunks)
 
 
-def _items(stream, names):
-    """The generator of :func:`stream_fits`: each task's outcome as a :class:`BatchItem`."""
+def _items(stream, chunks):
+    """The generator of :func:`stream_fits`: each record's outcome as a :class:`BatchItem`."""
     try:
-        for i, value in stream:
-            name = names.pop(i)
-            if isinstance(value, TaskError):       # the executor lost it (pickling, a worker)
-                yield BatchItem(i, name, error=value.exception,
-                                message=_message(i, name, value.exception) + f" ({value.message})")
-                continue
-            result, error, path, seconds = value
-            yield BatchItem(i, name, result=result, error=error,
-                            message="" if error is None else _message(i, name, error),
-                            path=path, seconds=seconds)
+        for task, value in stream:
+            for k, (i, name) in enumerate(chunks.pop(task)):
+                if isinstance(value, TaskError):     # the executor lost it (pickling, a worker)
+                    yield BatchItem(i, name, error=value.exception,
+                                    message=_message(i, name, value.exception) +
+                                    f" ({value.message})")
+                    continue
+                result, error, path, seconds = value[k]
+                yield BatchItem(i, name, result=result, error=error,
+                                message="" if error is None else _message(i, name, error),
+                                path=path, seconds=seconds)
     finally:
         stream.close()
 
 
-def _task(index, record, model, options, read, out_dir, bad):
-    if bad is not None:
-        return None, bad, None, 0.0
-    return _fit_record(index, record, model, options, read, out_dir)
+def _task(chunk, model, options, read, out_dir):
+    """One task: the records of a chunk, each read and fitted on its own."""
+    return [(None, bad, None, 0.0) if bad is not None else
+            _fit_record(i, record, model, options, read, out_dir) for i, record, bad in chunk]
 
 
 def identify_many(records, *, executor=None, progress=None, model=None, read=None, **kwargs):
