@@ -178,6 +178,9 @@ def test_the_lagged_identify_and_read_keywords(tmp_path, pools):
     assert first.result.dt == 4.0 == fohw.identify(d.u, d.y, dt=4.0, **s).dt
     (second,) = fohw.stream_fits([rec], dt=2.0, **s)
     assert "`dt` = 2.0 but the record says 4.0" in second.message
+    t = np.cumsum(np.random.default_rng(1).uniform(0.5, 1.5, d.u.size))
+    (third,) = fohw.stream_fits([fohw.Record(d.u, d.y, t=t)], **s)
+    assert "non-uniform sampling instants; fohw.identify (the lagged kind)" in third.message
 
 
 def test_a_count_without_a_total(capsys, monkeypatch):

@@ -162,7 +162,8 @@ def _identify(record, options):
     if record.t is not None:
         raise ParameterError(f"record {record.name or record.path or ''!r} has non-uniform "
                              "sampling instants; fohw.identify (the lagged kind) needs uniform "
-                             "samples: fit a kind that simulates on instants, with model=.")
+                             "samples: resample it (fohw.model.irregular.resample), or fit a "
+                             "kind that simulates on instants, with model=.")
     if record.dt is not None:
         if "dt" in options and options["dt"] != record.dt:
             raise ParameterError(f"`dt` = {options['dt']!r} but the record says {record.dt!r}; "
