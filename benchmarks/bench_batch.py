@@ -20,7 +20,11 @@ resident memory is its own:
   their own ``ru_maxrss``, asked with ``client.run``);
 * ``process/4``: the process pool on a quarter of the records: the parent's peak should not
   grow with the number of records;
-* ``dask*25``: dask with 25 records per task (``chunksize=25``).
+* ``dask*25``: dask with 25 records per task (``chunksize=25``);
+* ``+files`` (e.g. ``dask*25+files``): the records written as CSV files before the clock
+  starts, passed as paths that the workers read, and the results written by the workers
+  (``out_dir``), as on a cluster with shared storage (the hash is of the files read back after
+  the clock stops).
 
 Throughput on a shared machine depends on what else runs, so the table also gives the CPU time
 per record of the calling interpreter (for dask it also runs the LocalCluster's scheduler) and
@@ -115,9 +119,24 @@ def _vmhwm_kb(pid):
     return None
 
 
-def run_mode(mode, n_records, n_samples, kind, workers, chunksize=1):
+def run_mode(mode, n_records, n_samples, kind, workers, chunksize=1, files=False):
     """One mode in this interpreter: wall time, fits, hash and peak memory (a dict)."""
     options = fit_options(kind)
+    source = records(n_records, n_samples, kind)
+    if files:                            # written before the clock starts; read by the workers
+        import tempfile
+
+        from fohw.io.files import write_text
+        from fohw.io.text import format_table
+
+        folder = tempfile.mkdtemp(prefix="bench_batch_")
+        paths = []
+        for k, (u, y) in enumerate(source):
+            paths.append(os.path.join(folder, f"{k:06d}.csv"))
+            write_text(format_table({"u": u, "y": y}), paths[-1])
+        os.mkdir(os.path.join(folder, "out"))
+        source, options = paths, dict(options, out_dir=os.path.join(folder, "out"))
+        MAKING[0] = 0.0
     digest, ok, failed, busy = hashlib.sha256(), 0, 0, 0.0
     cluster = client = pool = None
     worker_kb = None
@@ -140,10 +159,14 @@ def run_mode(mode, n_records, n_samples, kind, workers, chunksize=1):
     cpu0 = _cpu(resource.RUSAGE_SELF)
     workers_cpu0 = sum(client.run(_worker_cpu).values()) if client is not None else 0.0
     t0 = time.perf_counter()
-    for item in fohw.stream_fits(records(n_records, n_samples, kind), executor=executor,
+    saved = []
+    for item in fohw.stream_fits(source, executor=executor,
                                  total=n_records, progress=False, chunksize=chunksize,
                                  **options):
-        if item.ok:
+        if item.ok and files:
+            ok += 1
+            saved.append(item.path)
+        elif item.ok:
             ok += 1
             digest.update(fingerprint(item.result).encode())
         else:
@@ -152,6 +175,12 @@ def run_mode(mode, n_records, n_samples, kind, workers, chunksize=1):
         busy += item.seconds
     wall = time.perf_counter() - t0
     cpu = _cpu(resource.RUSAGE_SELF) - cpu0
+    for path in saved:                   # after the clock: the fits the workers wrote
+        digest.update(fingerprint(fohw.load_result(path)).encode())
+    if files:
+        import shutil
+
+        shutil.rmtree(folder)
     workers_cpu = None
     if pool is not None:
         peaks = [_vmhwm_kb(pid) for pid in list(pool._processes)]
@@ -186,15 +215,17 @@ def main(argv=None):
                     "records, '*K' with K records per task (chunksize)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--chunksize", type=int, default=1, help=argparse.SUPPRESS)
+    ap.add_argument("--files", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
         print(json.dumps(run_mode(args.child, args.records, args.samples, args.kind,
-                                  args.workers, args.chunksize)))
+                                  args.workers, args.chunksize, args.files)))
         return 0
     rows = []
     for mode in args.modes.split(","):
         n = args.records // 4 if mode.endswith("/4") else args.records
-        child, _, chunk = mode.split("/")[0].partition("*")
+        files = mode.endswith("+files")
+        child, _, chunk = mode.split("/")[0].removesuffix("+files").partition("*")
         chunk = int(chunk or 1)
         if child == "dask":
             try:
@@ -204,7 +235,7 @@ def main(argv=None):
                 continue
         cmd = [sys.executable, __file__, "--child", child, "--records", str(n), "--samples",
                str(args.samples), "--workers", str(args.workers), "--kind", args.kind,
-               "--chunksize", str(chunk)]
+               "--chunksize", str(chunk)] + (["--files"] if files else [])
         out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
         row = json.loads(out.strip().splitlines()[-1])
         row["label"] = mode
