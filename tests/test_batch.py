@@ -7,16 +7,21 @@ outcome among the others; and records are read only as room frees up, so a run o
 generator yields its first outcome before the generator is exhausted.
 """
 
+import importlib
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
 import pytest
-from test_model_protocol import KINDS, _case
 
 import fohw
 from fohw._parallel import progress_bar
+
+# The protocol tests' kinds, from the module pytest loads (``--import-mode=importlib`` names it
+# ``tests.test_model_protocol``; a second copy would register its kind twice).
+_protocol = importlib.import_module("tests.test_model_protocol")
+KINDS, _case = _protocol.KINDS, _protocol._case
 
 FAST = dict(order_grid=1, n_starts=1)
 
@@ -172,15 +177,16 @@ def test_the_lagged_identify_and_read_keywords(tmp_path, pools):
     (item,) = fohw.stream_fits([os.fspath(path)], executor=pools["processes"],
                                read={"u": "in", "y": "out"}, **s)
     np.testing.assert_array_equal(item.result.theta, fohw.identify(d.u, d.y, **s).theta)
-    # a Record's sampling time goes to identify; one that contradicts `dt` is its failure
+    # a Record goes to identify as itself: its sampling time is the fit's; a `dt` that
+    # contradicts it, or non-uniform instants, are that record's failure
     rec = fohw.Record(d.u, d.y, dt=4.0)
     (first,) = fohw.stream_fits([rec], **s)
-    assert first.result.dt == 4.0 == fohw.identify(d.u, d.y, dt=4.0, **s).dt
+    assert first.result.dt == 4.0 and _same(first.result, fohw.identify(rec, **s))
     (second,) = fohw.stream_fits([rec], dt=2.0, **s)
-    assert "`dt` = 2.0 but the record says 4.0" in second.message
+    assert "the record is sampled every 4.0 but `dt` = 2.0" in second.message
     t = np.cumsum(np.random.default_rng(1).uniform(0.5, 1.5, d.u.size))
     (third,) = fohw.stream_fits([fohw.Record(d.u, d.y, t=t)], **s)
-    assert "non-uniform sampling instants; fohw.identify (the lagged kind)" in third.message
+    assert "the record has non-uniform time stamps; the lagged kind" in third.message
 
 
 def test_a_count_without_a_total(capsys, monkeypatch):

@@ -150,26 +150,16 @@ def _fit_record(index, record, model, options, read, out_dir):
 
 
 def _identify(record, options):
-    """:func:`fohw.identify` of one record (the lagged kind); a Record's ``dt`` goes along."""
+    """:func:`fohw.identify` of one record (the lagged kind; a Record carries its sampling)."""
     from ..estimators.identify import identify
 
     if _is_records(record):
         raise ParameterError("fohw.identify fits one record; fit several experiments as one "
                              "data set with a start model: stream_fits(records, model).")
-    if not isinstance(record, Record):
-        u, y = record
-        return identify(u, y, **options)
-    if record.t is not None:
-        raise ParameterError(f"record {record.name or record.path or ''!r} has non-uniform "
-                             "sampling instants; fohw.identify (the lagged kind) needs uniform "
-                             "samples: resample it (fohw.model.irregular.resample), or fit a "
-                             "kind that simulates on instants, with model=.")
-    if record.dt is not None:
-        if "dt" in options and options["dt"] != record.dt:
-            raise ParameterError(f"`dt` = {options['dt']!r} but the record says {record.dt!r}; "
-                                 "leave `dt` out to use the record's.")
-        options = dict(options, dt=record.dt)
-    return identify(record.u, record.y, **options)
+    if isinstance(record, Record):
+        return identify(record, **options)
+    u, y = record
+    return identify(u, y, **options)
 
 
 def _message(index, name, error):
@@ -211,8 +201,8 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
         generator is read only as room frees up.
     model : Model, optional
         A start model of any kind: every record is fitted by :func:`fohw.fit` from it.
-        Default: :func:`fohw.identify` (the paper's lagged kind; a Record's ``dt`` is passed
-        as its ``dt``).
+        Default: :func:`fohw.identify` (the paper's lagged kind; a Record is passed as it is,
+        its sampling time and names with it).
     executor : concurrent.futures.Executor or dask.distributed.Client, optional
         Where to run the fits: a ``ProcessPoolExecutor``, a ``ThreadPoolExecutor``, a dask
         client (or its ``get_executor()``); default serially in this process. The results do
