@@ -302,7 +302,8 @@ def test_identify_many_keeps_order_and_failures_on_any_backend():
         np.testing.assert_array_equal(parallel[i].theta, alone.theta)
     assert isinstance(serial[2], fohw.FohwError) and isinstance(parallel[2], fohw.FohwError)
     assert str(serial[2]) == str(parallel[2])
-    with pytest.raises(fohw.ParameterError, match=r"`records\[0\]` must be a Record or a pair"):
+    with pytest.raises(fohw.ParameterError,
+                       match=r"`records\[0\]` must be a Record, a pair \(u, y\) or a file path"):
         fohw.identify_many([3], na=2, nb=2, f_basis=2, g_basis=3)
 
 

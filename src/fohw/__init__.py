@@ -10,7 +10,7 @@ matrix, and the paper's estimators.
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
 from ._parallel import end_with_parent
-from .analysis.batch import identify_many
+from .analysis.batch import identify_many, stream_fits
 from .analysis.crb import CRBResult, crb
 from .analysis.lrtest import LRTest, lr_test, order_test
 from .analysis.montecarlo import monte_carlo
@@ -100,6 +100,7 @@ __all__ = [
     "fit_record_and_impedance",
     "FitResult",
     "identify_many",
+    "stream_fits",
     "Validation",
     "compare",
     "read_record",

@@ -23,8 +23,8 @@ from concurrent.futures.process import BrokenProcessPool
 
 from .exceptions import ParameterError
 
-__all__ = ["run_tasks", "progress_bar", "heartbeat", "TaskError", "end_with_parent", "process_pool",
-           "max_jobs", "check_jobs"]
+__all__ = ["run_tasks", "stream_tasks", "as_executor", "progress_bar", "heartbeat", "TaskError",
+           "end_with_parent", "process_pool", "max_jobs", "check_jobs"]
 
 #: How often (seconds) a worker's watchdog looks whether its parent process is still there.
 PARENT_POLL = 0.5
@@ -175,14 +175,15 @@ def _auto_allowed():
     return _active[0] == 0 and multiprocessing.parent_process() is None
 
 
-def progress_bar(total, label, enabled=None):
+def progress_bar(total, label, enabled=None, *, counting=False):
     """Progress on stderr: a bar over ``total`` steps, or stage messages (``total=None``).
 
     Parameters
     ----------
     total : int or None
         Steps of the bar (tqdm's ``tqdm.auto`` if installed, a widget in a notebook; else a
-        plain ``label: i/total`` counter); ``None`` for stage messages only (:meth:`write`).
+        plain ``label: i/total`` counter); ``None`` for stage messages only (:meth:`write`),
+        or, with ``counting=True``, a count of steps whose total is not known.
     label : str
         Shown beside the count and before every message (``label: message``).
     enabled : bool, optional
@@ -198,18 +199,19 @@ def progress_bar(total, label, enabled=None):
         disabled.
     """
     delay = 0.0
+    counts = total is not None or counting
     if enabled is None:
-        if total is None:
+        if not counts:
             enabled = sys.stderr.isatty()
         else:
             enabled, delay = _auto_allowed(), AUTO_DELAY
     if not enabled:
         return _Silent()
-    if total is not None:
+    if counts:
         bar = _tqdm(total, label, delay)
         if bar is not None:
             return _Tqdm(bar, label, delay)
-    return _Counter(total, label, delay)
+    return _Counter(total, label, delay, counts)
 
 
 def _auto_tqdm():
@@ -291,17 +293,18 @@ class _Counter:
     Nothing shows before ``delay`` seconds have passed.
     """
 
-    def __init__(self, total, label, delay=0.0):
+    def __init__(self, total, label, delay=0.0, counts=None):
         import time
 
         self.total, self.label, self.n = total, label, 0
+        self.counts = total is not None if counts is None else counts
         self.clock = time.monotonic
         self.start = self.clock()
         self.delay = delay
         self.tty = sys.stderr.isatty()
         self.last = None              # when a count was last shown
         self.shown = False
-        if total is not None:         # a bar, not stage messages: inner bars stay quiet
+        if self.counts:               # a bar, not stage messages: inner bars stay quiet
             _active[0] += 1
 
     def update(self, n=1):
@@ -310,15 +313,18 @@ class _Counter:
         if now - self.start < self.delay:
             return
         if self.tty:
-            print(f"\r{self.label}: {self.n}/{self.total}", end="", file=sys.stderr, flush=True)
+            print(f"\r{self.label}: {self._count()}", end="", file=sys.stderr, flush=True)
             self.shown = True
         elif self.last is None or now - self.last >= LINE_INTERVAL or self.n == self.total:
             self._line(now)
 
+    def _count(self):
+        return f"{self.n}/{self.total}" if self.total is not None else f"{self.n} done"
+
     def _line(self, now):
-        print(f"{self.label}: {self.n}/{self.total} ({now - self.start:.0f} s)", file=sys.stderr,
+        print(f"{self.label}: {self._count()} ({now - self.start:.0f} s)", file=sys.stderr,
               flush=True)
-        self.last, self.shown = now, True
+        self.last, self.shown, self.last_n = now, True, self.n
 
     def write(self, message):
         if self.shown and self.tty:                   # below the counter's line
@@ -328,12 +334,12 @@ class _Counter:
     def close(self):
         if self.label is None:
             return
-        if self.total is not None and self.shown:
+        if self.counts and self.shown:
             if self.tty:
                 print(file=sys.stderr, flush=True)
-            elif self.last is not None and self.n != self.total:
+            elif self.last is not None and self.n != self.last_n:
                 self._line(self.clock())
-        if self.total is not None:
+        if self.counts:
             _active[0] -= 1
         self.label = None
 
@@ -405,6 +411,168 @@ class heartbeat:
         return False
 
 
+def as_executor(executor):
+    """``executor`` as a ``concurrent.futures.Executor`` (or None: serial).
+
+    An executor is itself; a dask.distributed ``Client`` gives its ``get_executor()``;
+    anything else is a ParameterError.
+    """
+    if executor is None or isinstance(executor, Executor):
+        return executor
+    if type(executor).__module__.split(".")[0] == "distributed" and \
+            callable(getattr(executor, "get_executor", None)):
+        return executor.get_executor()        # a dask.distributed.Client
+    raise ParameterError("`executor` must be a concurrent.futures.Executor (e.g. a "
+                         "ProcessPoolExecutor), a dask.distributed Client (or its "
+                         f"get_executor()) or None; got {type(executor).__name__}.")
+
+
+def _workers(executor):
+    """How many tasks ``executor`` runs at once, or None where it does not say."""
+    n = getattr(executor, "_max_workers", None)          # ProcessPool-, ThreadPoolExecutor
+    if isinstance(n, numbers.Integral) and n > 0:
+        return int(n)
+    client = getattr(executor, "_client", None)          # dask's ClientExecutor
+    try:
+        return max(1, sum(client.nthreads().values())) if client is not None else None
+    except Exception:                     # noqa: BLE001 - a closed client: no hint
+        return None
+
+
+def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", total=None,
+                 max_pending=None, ordered=True):
+    """``(i, fn(*task))`` for each task of an iterable, serially or on ``executor``, as they end.
+
+    The streaming sibling of :func:`run_tasks`: ``tasks`` is read lazily (a generator is
+    fine) and at most ``max_pending`` tasks are submitted and not yet yielded at any time, so
+    the memory held here does not grow with the number of tasks.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (it is pickled for process and dask executors).
+    tasks : iterable of tuple
+        Positional arguments of each call, read one at a time as room frees up.
+    executor : concurrent.futures.Executor or dask.distributed.Client, optional
+        Where to run the calls; default (None) serially in this process, one at a time.
+    progress : bool, optional
+        As for :func:`run_tasks`.
+    label : str
+        Name shown beside the progress count.
+    total : int, optional
+        The number of tasks, for the progress bar (default: ``len(tasks)`` where it has one,
+        else a count without a total).
+    max_pending : int, optional
+        Tasks submitted but not yet yielded (default: four per worker of the executor where it
+        says how many it has, else 64).
+    ordered : bool, optional
+        Yield in task order (default), or as the tasks end (``False``: a slow task does not
+        hold back the others, and a finished one is never kept waiting).
+
+    Yields
+    ------
+    (int, object)
+        The task's number (from 0) and its return value, or a :class:`TaskError` where the
+        executor could not run or collect it. Tasks lost with a broken process pool (a worker
+        that died) are rerun, each alone in a fresh one-worker pool, so only the task that
+        kills its worker is lost; later tasks then run in a pool of fohw's own of the same size
+        (the broken one cannot run anything). Closing the generator early cancels the tasks
+        not yet started.
+    """
+    executor = as_executor(executor)
+    if total is None and hasattr(tasks, "__len__"):
+        total = len(tasks)
+    if max_pending is None:
+        workers = _workers(executor) if executor is not None else None
+        max_pending = 64 if workers is None else 4 * workers
+    if isinstance(max_pending, bool) or not isinstance(max_pending, numbers.Integral) \
+            or max_pending < 1:
+        raise ParameterError(f"`max_pending` must be a positive integer; got {max_pending!r}.")
+    return _stream_tasks(fn, tasks, executor, progress, label, total, int(max_pending), ordered)
+
+
+def _stream_tasks(fn, tasks, executor, progress, label, total, max_pending, ordered):
+    """The generator of :func:`stream_tasks` (its arguments checked)."""
+    bar = progress_bar(total, label, progress, counting=True)
+    try:
+        if executor is None:
+            for i, task in enumerate(tasks):
+                value = fn(*task)
+                bar.update(1)
+                yield i, value
+            return
+        yield from _stream(fn, enumerate(tasks), executor, max_pending, ordered, bar)
+    finally:
+        bar.close()
+
+
+def _run_alone(fn, task):
+    """``fn(*task)`` alone in a fresh one-worker process pool (a task whose pool broke)."""
+    pool = process_pool(1)
+    try:
+        return pool.submit(fn, *task).result()
+    except Exception as exc:                   # noqa: BLE001 - reported as the task's error
+        return TaskError(exc, isolated=True)
+    finally:
+        pool.shutdown(wait=True)
+
+
+def _stream(fn, numbered, executor, max_pending, ordered, bar):
+    pending = {}                    # future -> (i, task)
+    ready = {}                      # i -> value, finished and not yet yielded (ordered)
+    following = 0                   # the next i to yield (ordered)
+    exhausted = False
+    own = None                      # fohw's pool in place of a broken process pool
+    try:
+        while True:
+            finished = []
+            while not exhausted and len(pending) + len(ready) < max_pending:
+                try:
+                    i, task = next(numbered)
+                except StopIteration:
+                    exhausted = True
+                    break
+                try:
+                    pending[executor.submit(fn, *task)] = (i, task)
+                except BrokenProcessPool:      # broken by an earlier task: rerun it alone
+                    finished.append((i, _run_alone(fn, task)))
+                    workers = max(1, _workers(executor) or 1)
+                    if own is not None:
+                        own.shutdown(wait=False, cancel_futures=True)
+                    executor = own = process_pool(workers)
+                except Exception as exc:       # e.g. an argument that cannot be pickled
+                    finished.append((i, TaskError(exc)))
+            if not pending and not finished:
+                if exhausted:
+                    return
+                continue
+            if pending and not finished:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    i, task = pending.pop(future)
+                    try:
+                        value = future.result()
+                    except BrokenProcessPool:  # lost with the pool, maybe not its fault
+                        value = _run_alone(fn, task)
+                    except Exception as exc:   # the executor's failure, not fn's
+                        value = TaskError(exc)
+                    finished.append((i, value))
+            for i, value in sorted(finished, key=lambda item: item[0]):
+                bar.update(1)
+                if not ordered:
+                    yield i, value
+                else:
+                    ready[i] = value
+            while following in ready:
+                yield following, ready.pop(following)
+                following += 1
+    finally:
+        for future in pending:
+            future.cancel()
+        if own is not None:
+            own.shutdown(wait=False, cancel_futures=True)
+
+
 def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
     """``[fn(*task) for task in tasks]``, serially or on ``executor``, in task order.
 
@@ -414,7 +582,7 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
         A module-level function (it is pickled for process and dask executors).
     tasks : sequence of tuple
         Positional arguments of each call.
-    executor : concurrent.futures.Executor, optional
+    executor : concurrent.futures.Executor or dask.distributed.Client, optional
         Where to run the calls; default (None) serially in this process.
     progress : bool, optional
         A progress bar on stderr (tqdm if installed, a plain counter otherwise): True from the
@@ -433,10 +601,7 @@ def run_tasks(fn, tasks, *, executor=None, progress=None, label="tasks"):
         worker is lost. Exceptions raised by ``fn`` itself are the caller's to catch inside
         ``fn``.
     """
-    if executor is not None and not isinstance(executor, Executor):
-        raise ParameterError("`executor` must be a concurrent.futures.Executor (e.g. a "
-                             "ProcessPoolExecutor, or dask's Client.get_executor()) or None; "
-                             f"got {type(executor).__name__}.")
+    executor = as_executor(executor)
     bar = progress_bar(len(tasks), label, progress)
     out = []
     try:

@@ -26,7 +26,10 @@
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``, ``battery``: the cell's drive cycle as columns t, i, v, soc) or a simulated
   one (``paper_example [--samples N] [--seed S]``) as a file to try the commands on; without
-  NAME, list them. ``@cascaded_tanks`` or ``@robot_arm`` in place of
+  NAME, list them. The file is CSV: ``#`` comment lines saying what it is, its sampling time
+  (``# dt: 4 s``) and units (``# units: uEst=V, ...``), then a header line and one full row
+  per sample; ``fohw.read_record`` reads the sampling time and units, pandas reads it with
+  ``pd.read_csv(FILE, comment="#")``. ``@cascaded_tanks`` or ``@robot_arm`` in place of
   DATA reads the shipped file directly.
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
   ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
@@ -1046,7 +1049,7 @@ def _compare(args):
 
 def _data(args):
     """``fohw data``: list the records, or write one to ``--out`` (default stdout)."""
-    from .datasets import BATTERY_FILENAME, SHIPPED, paper_example, shipped_file
+    from .datasets import BATTERY_FILENAME, SHIPPED
 
     if args.name is None:
         for name, (filename, _, what) in SHIPPED.items():
@@ -1060,19 +1063,7 @@ def _data(args):
               "@NAME (e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
         return 0
     _check_file_out(args.out, "--out")
-    if args.name == "paper_example":
-        d = paper_example(args.samples, random_state=args.seed)
-        text = "u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(d.u, d.y))
-    elif args.name == "battery":
-        from .datasets import battery_cell
-
-        cell = battery_cell()
-        text = "t,i,v,soc\n" + "".join(
-            f"{k * cell.dt:.2f},{float(i)!r},{float(v)!r},{float(q)!r}\n"
-            for k, (i, v, q) in enumerate(zip(cell.i, cell.v, cell.soc)))
-    else:
-        with open(shipped_file(args.name), encoding="utf-8") as fh:
-            text = fh.read()
+    text = _data_text(args)
     if args.out is None:
         sys.stdout.write(text)
     else:
@@ -1080,6 +1071,52 @@ def _data(args):
 
         write_text(text, args.out)
     return 0
+
+
+def _data_text(args):
+    """The CSV text of ``fohw data NAME`` (:func:`fohw.io.text.format_table`)."""
+    import numpy as np
+
+    from .datasets import paper_example
+    from .io.text import format_table
+
+    pandas = 'pandas: pd.read_csv(path, comment="#")'
+    if args.name == "paper_example":
+        d = paper_example(args.samples, random_state=args.seed)
+        return format_table({"u": d.u, "y": d.y}, comments=[
+            f"the paper's example (Section 6.1, Eq. 57), simulated: {args.samples} samples, "
+            f"seed {args.seed} (fohw data paper_example --samples {args.samples} --seed "
+            f"{args.seed}); one sample is the time unit", pandas])
+    if args.name == "battery":
+        from .datasets import BATTERY_SOURCE, battery_cell
+
+        cell = battery_cell()
+        t = np.round(np.arange(cell.i.size) * cell.dt, 2)
+        return format_table({"t": t, "i": cell.i, "v": cell.v, "soc": cell.soc}, dt=cell.dt,
+                            time_unit="s", units={"t": "s", "i": "A", "v": "V", "soc": "1"},
+                            comments=["an LG M50LT lithium-ion cell's drive cycle (fohw data "
+                                      "battery): t time, i current (negative: discharge), v "
+                                      "terminal voltage, soc state of charge (a fraction)",
+                                      f"source: {BATTERY_SOURCE}", pandas])
+    if args.name == "cascaded_tanks":
+        from .datasets import CASCADED_TANKS_SOURCE, cascaded_tanks
+
+        tanks = cascaded_tanks()
+        est, val = tanks.estimation, tanks.validation
+        return format_table({"uEst": est.u, "uVal": val.u, "yEst": est.y, "yVal": val.y},
+                            dt=est.dt, time_unit=est.time_unit,
+                            units={k: "V" for k in ("uEst", "uVal", "yEst", "yVal")},
+                            comments=[f"{tanks.name} (fohw data cascaded_tanks): u pump "
+                                      "voltage, y lower tank level (sensor voltage); estimate "
+                                      "on uEst,yEst, validate on uVal,yVal",
+                                      f"source: {CASCADED_TANKS_SOURCE}", pandas])
+    from .datasets import ROBOT_ARM_SOURCE, robot_arm
+
+    arm = robot_arm()
+    return format_table({"torque": arm.u, "acceleration": arm.y}, comments=[
+        f"{arm.name} (fohw data robot_arm): torque = reaction torque (input), acceleration = "
+        "arm acceleration (output); the source gives no sampling time and no units",
+        f"source: {ROBOT_ARM_SOURCE}", pandas])
 
 
 def _reproduce(args):

@@ -13,6 +13,10 @@ guess:
   ``0x10 1`` or ``0.5 0.3.1`` is an error at line 1, never a header that drops a sample);
 * a column given once: a value on the first data line and nothing below (the cascaded-tanks
   file gives ``Ts`` so); it is returned as a scalar, not as a signal;
+* header comments above the data that say what the columns are (what ``fohw data`` writes,
+  :func:`format_table`): ``# dt: 4 s`` (the sampling time and its unit) and
+  ``# units: u=V, y=A`` (a unit per column); other comment lines are ignored, and a ``dt`` or
+  ``units`` comment that cannot be read is an error naming its line;
 * anything else that is not a number, a missing value (``NA``, ``nan``, an empty field, ...),
   a row with more fields than the header or the first data line (an extra field, ``1,234.5``
   in a comma file), a row with fewer, a second header line, a header that names a column twice,
@@ -43,7 +47,7 @@ from ..exceptions import DataFileError, ParameterError
 from ..record import Record
 from .files import check_input_file
 
-__all__ = ["Table", "read_table", "read_record"]
+__all__ = ["Table", "read_table", "read_record", "format_table"]
 
 #: Names of a column given once that :func:`read_record` takes as the sampling time.
 SAMPLING_TIME_NAMES = ("ts", "dt", "sampling_time", "sample_time")
@@ -65,6 +69,9 @@ class Table:
     skipped : list of str
         What was read but is not data: the header line, comment and blank lines, a trailing
         separator.
+    meta : dict
+        What the header comments above the data say: ``dt`` and ``time_unit`` (from
+        ``# dt: 4 s``), ``units`` (``{column name: unit}``, from ``# units: u=V, y=A``).
     """
 
     data: np.ndarray
@@ -72,6 +79,49 @@ class Table:
     scalars: dict = field(default_factory=dict)
     path: str = ""
     skipped: list = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+
+
+#: Header comments ``# key: value`` that :func:`read_table` reads into ``Table.meta``.
+HEADER_KEYS = ("dt", "units")
+
+
+def _header_comments(src):
+    """``Table.meta`` from the comment lines above the first line that is not a comment."""
+    meta = {}
+    with src.open() as fh:
+        for lineno, raw in _lines(fh):
+            line = _decode(src, lineno, raw).strip()
+            if not line:
+                continue
+            if line[0] not in "#%":
+                break
+            key, colon, value = line[1:].partition(":")
+            key, value = key.strip().lower(), value.strip()
+            if not colon or key not in HEADER_KEYS:
+                continue
+            if key == "dt":
+                number, _, unit = value.partition(" ")
+                try:
+                    dt = float(number)
+                except ValueError:
+                    dt = float("nan")
+                if not (np.isfinite(dt) and dt > 0.0):
+                    raise DataFileError(f"{src.name}: line {lineno}: `# dt:` must give a positive "
+                                        f"sampling time and its unit (e.g. '# dt: 4 s'); got "
+                                        f"{value!r}.")
+                meta["dt"], meta["time_unit"] = dt, unit.strip()
+            else:
+                units = {}
+                for item in filter(None, (f.strip() for f in value.split(","))):
+                    name, eq, unit = item.partition("=")
+                    if not eq or not name.strip():
+                        raise DataFileError(f"{src.name}: line {lineno}: `# units:` must list "
+                                            "column=unit pairs separated by commas (e.g. "
+                                            f"'# units: u=V, y=A'); got {item!r}.")
+                    units[name.strip()] = unit.strip()
+                meta["units"] = units
+    return meta
 
 
 def parse_number(text):
@@ -259,6 +309,7 @@ def read_table(path, *, decimal=".") -> Table:
         table = _read_fast(src, decimal)
         if table is None:
             table = _read_lines(src, decimal)
+        table.meta = _header_comments(src)
         after = src.snapshot()
     except OSError as exc:
         raise DataFileError(f"{src.name}: cannot be read ({exc.strerror or exc}).") from None
@@ -596,9 +647,82 @@ def _raise_earliest(src, names, empty, later, lineno, first_line, first, decimal
 
 
 def sampling_time(table):
-    """The sampling time a file gives once (a column named ``Ts``, ``dt``, ... ; any case)."""
+    """The sampling time a file gives: once (a column ``Ts``, ``dt``, ...), or in ``# dt: 4 s``.
+
+    The column name is matched in any case; None where the file gives none.
+    """
     found = [k for k in table.scalars if isinstance(k, str) and k.lower() in SAMPLING_TIME_NAMES]
-    return table.scalars[found[0]] if found else None
+    column = table.scalars[found[0]] if found else None
+    header = table.meta.get("dt")
+    if column is not None and header is not None and column != header:
+        raise DataFileError(f"{table.path}: the column {found[0]!r} gives the sampling time "
+                            f"{column!r} but the header comment `# dt:` {header!r}; which one "
+                            "holds? Correct the file, or pass `dt`.")
+    return column if column is not None else header
+
+
+def format_table(columns, *, dt=None, time_unit="", units=None, comments=()):
+    """A record as CSV text that :func:`read_record` and pandas' ``read_csv`` both read.
+
+    ``#`` header comments, one header line, one full row per sample: pandas reads it with
+    ``pandas.read_csv(path, comment="#")``.
+
+    Parameters
+    ----------
+    columns : mapping of str to array_like
+        Column name -> samples (1-D, all of one length). A name holds no comma, quote or ``#``.
+    dt : float, optional
+        The sampling time, written as ``# dt: 4 s`` (nothing when None).
+    time_unit : str, optional
+        Its unit.
+    units : mapping of str to str, optional
+        A unit per column, written as ``# units: u=V, y=A``.
+    comments : sequence of str
+        Lines written first, each as a ``#`` comment (what the record is, its source).
+
+    Returns
+    -------
+    str
+        Numbers are written with ``repr`` (they read back bit for bit); no trailing separator,
+        no column given once.
+
+    Examples
+    --------
+    >>> import io, fohw
+    >>> from fohw.io.text import format_table
+    >>> text = format_table({"u": [0.0, 1.5], "y": [0.25, 2.0]}, dt=4.0, time_unit="s",
+    ...                     units={"u": "V", "y": "V"}, comments=["two samples"])
+    >>> print(text, end="")
+    # two samples
+    # dt: 4.0 s
+    # units: u=V, y=V
+    u,y
+    0.0,0.25
+    1.5,2.0
+    >>> rec = fohw.read_record(io.StringIO(text))
+    >>> rec.dt, rec.time_unit, rec.output_unit
+    (4.0, 's', 'V')
+    """
+    names = list(columns)
+    for name in names:
+        if not isinstance(name, str) or not name or any(c in name for c in ',"\'#\n\r'):
+            raise ParameterError("a column name must be a non-empty string without a comma, "
+                                 f"quote, '#' or line end; got {name!r}.")
+    values = [np.asarray(columns[name], dtype=float) for name in names]
+    if any(v.ndim != 1 or v.shape != values[0].shape for v in values):
+        raise ParameterError("every column must be 1-D and of one length; got shapes "
+                             f"{[v.shape for v in values]}.")
+    head = [f"# {line}" for text in comments for line in str(text).splitlines()]
+    if dt is not None:
+        head.append(f"# dt: {float(dt)!r}" + (f" {time_unit}" if time_unit else ""))
+    if units:
+        unknown = [k for k in units if k not in names]
+        if unknown:
+            raise ParameterError(f"`units` names columns that are not written: {unknown}.")
+        head.append("# units: " + ", ".join(f"{k}={v}" for k, v in units.items() if v))
+    head.append(",".join(names))
+    rows = (",".join(map(repr, map(float, row))) for row in zip(*values))
+    return "\n".join(head) + "\n" + "".join(f"{row}\n" for row in rows)
 
 
 def _column(table, spec, what):
@@ -638,9 +762,11 @@ def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | in
         The sampling time, or the name of a column that gives it once (e.g. ``"Ts"``: a value on
         the first data line and nothing below); a signal column is refused.
         Default: a column given once named ``Ts``, ``dt``, ``sampling_time`` or ``sample_time``
-        (any case) if there is one, else ``None`` (one sample is the time unit).
+        (any case) if there is one, else a header comment ``# dt: 4 s`` (what ``fohw data``
+        writes), else ``None`` (one sample is the time unit).
     name, input_unit, output_unit, time_unit, source : str, optional
-        Stored on the record; the input and output names come from the header.
+        Stored on the record; the input and output names come from the header, the units
+        (when not given) from header comments ``# units: u=V, y=A`` and ``# dt: 4 s``.
     decimal : {".", ","}
         The decimal mark (``","``: columns separated by ``;`` or whitespace).
 
@@ -692,7 +818,13 @@ def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | in
             raise ParameterError(f"`dt` = {key!r} is not a column of {table.path}.")
     elif dt is None:
         dt = sampling_time(table)
+        if dt is not None and dt == table.meta.get("dt"):
+            time_unit = time_unit or table.meta.get("time_unit", "")
     names = table.names or []
+    units = table.meta.get("units", {})
+    if names:                                # units of the header comment `# units: u=V, ...`
+        input_unit = input_unit or units.get(names[iu], "")
+        output_unit = output_unit or units.get(names[iy], "")
     return Record(u=table.data[:, iu], y=table.data[:, iy], dt=dt,
                   name=name if name is not None else os.path.basename(table.path),
                   input_name=names[iu] if names else "u",
