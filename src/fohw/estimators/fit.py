@@ -33,6 +33,7 @@ import warnings
 import numpy as np
 
 from .. import _linalg
+from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import (
     ConvergenceWarning,
@@ -173,6 +174,22 @@ def rank_rcond(how, n_rows, n_cols):
     return exact if how == "exact" else max(exact, FD_RCOND)
 
 
+def penalty_terms(model, n_free=None, t_matrix=None):
+    """``(r, J)`` of a kind's :meth:`~fohw.Model.penalty` (``J`` over the free parameters), or empty.
+
+    The residuals a kind adds to the squared simulation error (a regularisation); ``J`` is
+    ``d r / d free`` through the tie matrix.
+    """
+    out = model.penalty()
+    params = model.parameters
+    if t_matrix is None:
+        t_matrix = params.tie_matrix()
+    if out is None:
+        return np.zeros(0), np.zeros((0, t_matrix.shape[1] if n_free is None else n_free))
+    r, jac = (np.asarray(x, dtype=float) for x in out)
+    return r, np.atleast_2d(jac).reshape(r.size, -1) @ t_matrix
+
+
 def _order_grid(model, grid):
     """``model`` with its free orders moved to each point of a grid inside their bounds."""
     params = model.parameters
@@ -193,6 +210,7 @@ def _order_grid(model, grid):
             for combo in itertools.product(*axes)]
 
 
+@thin_solves
 def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3, max_nfev=200,
         tol=1e-10, exact_jacobian=True):
     """Fit any :class:`fohw.Model` to a record by simulation (output) error.
@@ -276,7 +294,9 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
              for m in list(_hook(model.starts, u, y, weight)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
-    penalty = np.full(y.size, PENALTY * y_scale)
+    # A kind's regularisation (Model.penalty): its residuals follow the record's.
+    n_pen = penalty_terms(model)[0].size
+    penalty = np.full(y.size + n_pen, PENALTY * y_scale)
     lower, upper = params.free_bounds()
     counter = {"nfev": 0}
 
@@ -303,6 +323,8 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
             return penalty
+        if n_pen:
+            return np.concatenate([(y - yhat) * sw, penalty_terms(m, len(names), t_matrix)[0]])
         return (y - yhat) * sw
 
     has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
@@ -317,10 +339,12 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
                 else:
                     jac = free_jacobian(m, u, exact=has_exact)[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-            return np.zeros((y.size, len(names)))
+            return np.zeros((y.size + n_pen, len(names)))
         if weight is not None:
             jac = jac * sw[:, None]
-        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, len(names)))
+        if n_pen:
+            jac = np.concatenate([jac, -penalty_terms(m, len(names), t_matrix)[1]])
+        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size + n_pen, len(names)))
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
     candidates = []
@@ -380,8 +404,15 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     yhat, jac, how_cov = free_jacobian(fitted, u, exact=has_exact)
     if weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
-    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
-            not stationary(jac, (y - yhat) * sw, x, lower, upper):
+    crit_r = (y - yhat) * sw
+    if n_pen:   # the regularised criterion: its rows join the covariance's Gram matrix
+        pen_r, pen_j = penalty_terms(fitted, len(names), t_matrix)
+        messages.append(f"Regularisation ({type(model).__name__}.penalty): {float(pen_r @ pen_r):.6g} "
+                        "added to the squared error; the covariance is s^2 (J^T J + P^T P)^-1.")
+        jac, crit_r = np.concatenate([jac, -pen_j]), np.concatenate([crit_r, pen_r])
+        sse = float(np.sum(((y - yhat) * sw) ** 2))     # the record's part only
+    if ls.status == 3 and not float(crit_r @ crit_r) < sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, crit_r, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
