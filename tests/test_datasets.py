@@ -90,7 +90,9 @@ def test_record_split_keeps_meaning_and_refuses_bad_points():
     assert (a.n_samples, b.n_samples) == (768, 256)
     np.testing.assert_array_equal(np.r_[a.y, b.y], est.y)
     assert b.dt == 4.0 and b.output_name == "lower tank level"
-    np.testing.assert_array_equal(b.time[:2], [0.0, 4.0])
+    # the second part keeps the instants it had in the whole record (768 samples of 4 s)
+    np.testing.assert_array_equal(b.time[:2], [3072.0, 3076.0])
+    np.testing.assert_array_equal(np.r_[a.time, b.time], est.time)
     c, d = est.split(100)
     assert c.n_samples == 100 and d.u[0] == est.u[100]
     for bad in (0, 1024, 1.0, 0.0, True, "half"):

@@ -71,6 +71,14 @@ class FitResult(metaclass=abc.ABCMeta):
         A fingerprint of the record ``(u, y)`` the fit used (tests of two fits check it).
     options : dict
         The fit's settings.
+    data : dict
+        What the data were, when the fit was given :class:`fohw.Record` s: channel names and
+        units (``input_names``, ``input_units``, ``output_name``, ``output_unit``,
+        ``time_unit``), ``dt``, and one entry per record (``name``, ``n_samples``, ``t0``,
+        ``uniform``, ``dt``). Empty for arrays.
+    per_record : dict
+        ``{name: {"values": [...], "standard_errors": [...] or None}}`` of the parameters
+        estimated once per record (``fohw.fit(..., per_record=...)``), in record order.
     """
 
     model: Model
@@ -86,11 +94,14 @@ class FitResult(metaclass=abc.ABCMeta):
     residuals: np.ndarray | None = None
     data_digest: str = ""
     options: dict = field(default_factory=dict)
+    data: dict = field(default_factory=dict)
+    per_record: dict = field(default_factory=dict)
 
     def __post_init__(self):
         object.__setattr__(self, "covariance", _readonly(self.covariance))
         object.__setattr__(self, "residuals", _readonly(self.residuals))
-        object.__setattr__(self, "options", MappingProxyType(dict(self.options)))
+        for name in ("options", "data", "per_record"):
+            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
 
     # --- derived facts --------------------------------------------------------------------
     @property
@@ -169,12 +180,25 @@ class FitResult(metaclass=abc.ABCMeta):
                  f"{self.n_free} free parameters, Jacobian {self.jacobian}",
                  f"  status = {self.status.name}, sse = {self.sse:.6g}, rmse = {self.rmse:.6g}, "
                  f"noise variance = {self.noise_variance:.6g}, simulations = {self.nfev}",
-                 f"  {self.message}", ""]
+                 f"  {self.message}"]
+        if self.data:
+            d = self.data
+            inputs = ", ".join(f"{n} [{u}]" if u else n
+                               for n, u in zip(d["input_names"], d["input_units"]))
+            out = f"{d['output_name']} [{d['output_unit']}]" if d["output_unit"] else d["output_name"]
+            dt = "" if d.get("dt") is None else f", dt = {d['dt']:g} {d.get('time_unit', '')}".rstrip()
+            lines.append(f"  data: {len(d['records'])} record(s); input {inputs}; output {out}{dt}")
+        lines.append("")
         width = max(12, max((len(n) for n in self.parameters), default=0) + 2)
         lines.append(f"  {'parameter':<{width}}{'estimate':>14}{'std err':>14}")
         for name, value, se, how in self._rows():
             se_text = f"{se:>14.4g}" if se is not None else f"{how:>14}"
             lines.append(f"  {name:<{width}}{value:>14.6g}{se_text}")
+        for name, entry in self.per_record.items():
+            ses = entry["standard_errors"] or [None] * len(entry["values"])
+            for r, (v, se) in enumerate(zip(entry["values"], ses)):
+                se_text = f"{se:>14.4g}" if se is not None else f"{'':>14}"
+                lines.append(f"  {f'{name}[{r}]':<{width}}{v:>14.6g}{se_text}  (record {r})")
         return "\n".join(lines)
 
     def __repr__(self):
@@ -204,7 +228,8 @@ class FitResult(metaclass=abc.ABCMeta):
                 "starts": [[dict(s), float(v) if math.isfinite(v) else None]
                            for s, v in self.starts],
                 "residuals": None if self.residuals is None else self.residuals.tolist(),
-                "data_digest": self.data_digest, "options": _jsonable(dict(self.options))}
+                "data_digest": self.data_digest, "options": _jsonable(dict(self.options)),
+                "data": _jsonable(dict(self.data)), "per_record": _jsonable(dict(self.per_record))}
 
     @classmethod
     def from_dict(cls, d) -> FitResult:
@@ -225,7 +250,8 @@ class FitResult(metaclass=abc.ABCMeta):
                    starts=tuple((dict(s), math.inf if v is None else float(v))
                                 for s, v in d.get("starts", [])),
                    residuals=None if res is None else np.array(res, dtype=float),
-                   data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}))
+                   data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}),
+                   data=dict(d.get("data") or {}), per_record=dict(d.get("per_record") or {}))
 
     def __reduce__(self):
         return (_rebuild, (self.to_dict(),))

@@ -12,30 +12,72 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._validation import check_array, check_same_length, check_scalar
-from .exceptions import ParameterError
+from .exceptions import DimensionError, ParameterError
 
-__all__ = ["Record", "Benchmark"]
+__all__ = ["Record", "Benchmark", "as_records", "UNIFORM_RTOL"]
+
+
+#: Time stamps whose steps all lie within this fraction of their mean step are uniform: the
+#: record keeps ``dt`` (the mean step) and its start time, not the stamps.
+UNIFORM_RTOL = 1e-6
+
+INTERSAMPLE = ("zoh", "foh")
+
+
+def _names(value, m, what):
+    """``value`` (one string, or one per input column) as a tuple of ``m`` strings."""
+    if isinstance(value, str):
+        return (value,) if m == 1 else tuple(f"{value}{j + 1}" if value else "" for j in range(m))
+    try:
+        out = tuple(value)
+    except TypeError:
+        raise ParameterError(f"`{what}` must be a string or one string per input column; got "
+                             f"{value!r}.") from None
+    if len(out) != m or not all(isinstance(v, str) for v in out):
+        raise ParameterError(f"`{what}` must hold {m} strings (one per input column); got "
+                             f"{value!r}.")
+    return out
 
 
 @dataclass(frozen=True, repr=False)
 class Record:
-    """One measured (or simulated) SISO record.
+    """One measured (or simulated) experiment: input and output samples and what they mean.
 
     Parameters
     ----------
-    u, y : array_like, shape (N,)
-        Input and output samples, finite, in the data's own units.
+    u : array_like, shape (N,) or (N, m)
+        Input samples (one column per input), finite, in the data's own units.
+    y : array_like, shape (N,)
+        Output samples.
     dt : float or None, optional
         Sampling time (in ``time_unit``); ``None`` where the source gives none (the model then
-        uses one sample as the unit).
+        uses one sample as the unit) or where ``t`` gives the instants.
+    t : array_like, shape (N,), optional
+        Sampling instants, strictly increasing (instead of ``dt``). Instants whose steps all lie
+        within :data:`UNIFORM_RTOL` of their mean step are uniform: the record then has
+        ``dt`` = that mean step and ``t0 = t[0]``, and :attr:`t` is ``None``. Non-uniform
+        instants are kept; the model kinds that can simulate on them do so
+        (:func:`fohw.fit` says which cannot).
+    intersample : {"zoh", "foh"}, optional
+        How the input behaves between samples: held (zero-order hold, the default) or linear
+        (first-order hold). Used where a model is simulated between the samples (non-uniform
+        instants).
+    t0 : float, optional
+        The time of the first sample (default 0).
     name : str, optional
         What the record is.
-    input_name, output_name, input_unit, output_unit, time_unit : str, optional
-        What ``u`` and ``y`` measure and in which units.
+    input_name, input_unit : str or sequence of str, optional
+        What each input column measures and its unit (one string for one input).
+    output_name, output_unit, time_unit : str, optional
     source : str, optional
         The citation of the data.
     path : str or None, optional
         The file it was read from.
+
+    Notes
+    -----
+    Several experiments of one system are a list of Records; :func:`fohw.fit` fits one model to
+    all of them (shared parameters, each record simulated from its own start).
 
     Examples
     --------
@@ -46,28 +88,71 @@ class Record:
     >>> first, rest = tanks.estimation.split(0.25)
     >>> first.n_samples, rest.n_samples, rest.output_unit
     (256, 768, 'V')
+    >>> rec = fohw.Record(u=[1.0, 0.0, 0.0, 1.0], y=[0.0, 1.0, 0.5, 0.2], t=[0.0, 0.5, 1.5, 2.0])
+    >>> rec.uniform, rec.time
+    (False, array([0. , 0.5, 1.5, 2. ]))
     """
 
     u: np.ndarray
     y: np.ndarray
     dt: float | None = None
     name: str = ""
-    input_name: str = "u"
+    input_name: str | tuple = "u"
     output_name: str = "y"
-    input_unit: str = ""
+    input_unit: str | tuple = ""
     output_unit: str = ""
     time_unit: str = ""
     source: str = ""
     path: str | None = None
+    t: np.ndarray | None = None
+    intersample: str = "zoh"
+    t0: float = 0.0
 
     def __post_init__(self):
-        u = check_array(self.u, "u")
+        u = check_array(self.u, "u", ndim=None)
+        if u.ndim == 2 and u.shape[1] == 1:
+            u = u[:, 0]
+        if u.ndim not in (1, 2) or u.shape[0] == 0 or (u.ndim == 2 and u.shape[1] == 0):
+            raise DimensionError(f"`u` must have shape (N,) or (N, m); got {u.shape}.")
         y = check_array(self.y, "y")
         check_same_length(u, y, "u", "y")
         for name, value in (("u", u), ("y", y)):
             value = value.copy()
             value.setflags(write=False)
             object.__setattr__(self, name, value)
+        m = 1 if u.ndim == 1 else u.shape[1]
+        names = _names(self.input_name, m, "input_name")
+        units = _names(self.input_unit, m, "input_unit")
+        object.__setattr__(self, "input_name", names[0] if m == 1 else names)
+        object.__setattr__(self, "input_unit", units[0] if m == 1 else units)
+        if self.intersample not in INTERSAMPLE:
+            raise ParameterError(f"`intersample` must be one of {INTERSAMPLE}; got "
+                                 f"{self.intersample!r}.")
+        object.__setattr__(self, "t0", check_scalar(self.t0, "t0"))
+        if self.t is not None:
+            t = check_array(self.t, "t")
+            check_same_length(t, y, "t", "y")
+            steps = np.diff(t)
+            if steps.size and not np.all(steps > 0):
+                k = int(np.flatnonzero(steps <= 0)[0])
+                raise ParameterError(f"`t` must be strictly increasing; t[{k + 1}] = {t[k + 1]!r}"
+                                     f" follows t[{k}] = {t[k]!r}.")
+            if steps.size == 0:
+                raise DimensionError("`t` needs at least two instants to say a sampling time.")
+            mean = (t[-1] - t[0]) / steps.size
+            uniform = bool(np.max(np.abs(steps - mean)) <= UNIFORM_RTOL * mean)
+            if self.dt is not None and not (uniform and abs(self.dt - mean) <= UNIFORM_RTOL * mean):
+                raise ParameterError(f"give `dt` or `t`, not both: `dt` = {self.dt!r} but the "
+                                     f"instants `t` have {'mean ' if not uniform else ''}step "
+                                     f"{mean!r}{'' if uniform else ' and are not uniform'}.")
+            object.__setattr__(self, "t0", float(t[0]))
+            if uniform:
+                object.__setattr__(self, "dt", float(mean))
+                object.__setattr__(self, "t", None)
+            else:
+                t = t.copy()
+                t.setflags(write=False)
+                object.__setattr__(self, "t", t)
         if self.dt is not None:
             object.__setattr__(self, "dt", check_scalar(self.dt, "dt", lower=0.0,
                                                         lower_inclusive=False))
@@ -78,20 +163,57 @@ class Record:
         return self.u.shape[0]
 
     @property
+    def n_inputs(self) -> int:
+        """Number of input columns ``m``."""
+        return 1 if self.u.ndim == 1 else self.u.shape[1]
+
+    @property
+    def input_names(self) -> tuple:
+        """The input columns' names (one per column)."""
+        return _names(self.input_name, self.n_inputs, "input_name")
+
+    @property
+    def input_units(self) -> tuple:
+        """The input columns' units (one per column)."""
+        return _names(self.input_unit, self.n_inputs, "input_unit")
+
+    @property
+    def uniform(self) -> bool:
+        """Whether the samples are uniformly spaced (no time stamps kept)."""
+        return self.t is None
+
+    @property
     def sampling_time(self) -> float | None:
         """The sampling time, ``None`` where the source gives none (alias of :attr:`dt`)."""
         return self.dt
 
     @property
     def time(self) -> np.ndarray:
-        """Sample times ``k * dt`` (``k`` where ``dt`` is unknown)."""
-        return np.arange(self.n_samples) * (self.dt or 1.0)
+        """Sample instants: :attr:`t`, or ``t0 + k * dt`` (``k`` where ``dt`` is unknown)."""
+        if self.t is not None:
+            return np.array(self.t)
+        return self.t0 + np.arange(self.n_samples) * (self.dt or 1.0)
+
+    @property
+    def time_label(self) -> str:
+        """The label of a time axis: ``"time [s]"``, or ``"sample k"`` where ``dt`` is unknown."""
+        if self.dt is None and self.t is None:
+            return "sample k"
+        return f"time [{self.time_unit}]" if self.time_unit else "time"
+
+    def label(self, which="y", column=0) -> str:
+        """An axis label for the output (``"y"``) or an input column (``"u"``): name [unit]."""
+        if which == "y":
+            name, unit = self.output_name, self.output_unit
+        else:
+            name, unit = self.input_names[column], self.input_units[column]
+        return f"{name} [{unit}]" if unit else name
 
     def split(self, at):
         """``(first, second)``: the samples before ``at`` and from ``at`` on.
 
         ``at`` is a sample index (``1 <= at < N``) or a fraction of the record (``0 < at < 1``).
-        Both parts keep the names, units, sampling time and source.
+        Both parts keep the names, units, sampling time (or instants) and source.
         """
         n = self.n_samples
         if isinstance(at, numbers.Integral) and not isinstance(at, bool):
@@ -111,10 +233,94 @@ class Record:
             raise ParameterError("a Record is indexed by a contiguous slice, e.g. record[100:];"
                                  f" got {index!r}.")
         start, stop, _ = index.indices(self.n_samples)
-        return replace(self, u=self.u[index], y=self.y[index],
-                       name=f"{self.name}[{start}:{stop}]" if self.name else "")
+        if stop <= start:
+            raise ParameterError(f"the slice {index!r} of a record of {self.n_samples} samples "
+                                 "is empty.")
+        name = f"{self.name}[{start}:{stop}]" if self.name else ""
+        if self.t is not None:
+            t = self.t[index]
+            if t.size < 2:
+                raise ParameterError(f"the slice {index!r} leaves one instant: a record with "
+                                     "time stamps keeps at least two.")
+            return replace(self, u=self.u[index], y=self.y[index], t=t, name=name)
+        return replace(self, u=self.u[index], y=self.y[index], name=name,
+                       t0=self.t0 + start * (self.dt or 1.0))
+
+    # --- tables ---------------------------------------------------------------------------
+    @classmethod
+    def from_dataframe(cls, frame, u, y, *, time=None, dt=None, units=None, **kwargs):
+        """A record from a :class:`pandas.DataFrame` (channel names from its columns).
+
+        Parameters
+        ----------
+        frame : pandas.DataFrame
+        u : str or sequence of str
+            The input column(s).
+        y : str
+            The output column.
+        time : str, optional
+            A column of sampling instants (numbers). Default: the index if it is a
+            :class:`~pandas.DatetimeIndex` or :class:`~pandas.TimedeltaIndex` (instants in
+            seconds from the first, ``time_unit`` "s"), else none (give ``dt``).
+        dt : float, optional
+            The sampling time, where no time column or time index gives the instants.
+        units : mapping, optional
+            ``column -> unit``.
+        **kwargs
+            Further :class:`Record` fields (``name``, ``time_unit``, ``source``, ``intersample``).
+        """
+        columns = [u] if isinstance(u, str) else list(u)
+        for col in columns + [y] + ([] if time is None else [time]):
+            if col not in frame.columns:
+                raise ParameterError(f"{col!r} is not a column of the DataFrame (columns: "
+                                     f"{', '.join(map(str, frame.columns))}).")
+        units = dict(units or {})
+        t = None
+        if time is not None:
+            t = check_array(frame[time].to_numpy(), f"frame[{time!r}]")
+        else:
+            index = frame.index
+            kind = getattr(index, "inferred_type", "")
+            if kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
+                    str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64")):
+                delta = np.asarray(index - index[0]).astype("timedelta64[ns]").astype(np.int64)
+                t = delta / 1e9
+                kwargs.setdefault("time_unit", "s")
+        if t is not None and dt is not None:
+            raise ParameterError("give `dt` or a time column/index, not both.")
+        uu = frame[columns].to_numpy(dtype=float)
+        return cls(u=uu[:, 0] if len(columns) == 1 else uu, y=frame[y].to_numpy(dtype=float),
+                   dt=dt, t=t, input_name=columns[0] if len(columns) == 1 else tuple(columns),
+                   output_name=y,
+                   input_unit=units.get(columns[0], "") if len(columns) == 1 else
+                   tuple(units.get(c, "") for c in columns),
+                   output_unit=units.get(y, ""), **kwargs)
+
+    def to_dataframe(self):
+        """A :class:`pandas.DataFrame`: a time column, the inputs, then the output.
+
+        Units are in ``frame.attrs["units"]``; the record's other fields in ``frame.attrs``.
+        """
+        import pandas as pd
+
+        data = {"time": self.time}
+        u = self.u.reshape(self.n_samples, -1)
+        for j, name in enumerate(self.input_names):
+            data[name] = u[:, j]
+        data[self.output_name] = self.y
+        if len(data) != 2 + self.n_inputs:
+            raise ParameterError("the record's channel names are not distinct "
+                                 f"({self.input_names}, {self.output_name!r}); cannot make columns.")
+        frame = pd.DataFrame(data)
+        frame.attrs["units"] = {**dict(zip(self.input_names, self.input_units)),
+                                self.output_name: self.output_unit, "time": self.time_unit}
+        frame.attrs.update(name=self.name, dt=self.dt, source=self.source,
+                           intersample=self.intersample)
+        return frame
 
     def _signal(self, which):
+        if which == "u" and self.n_inputs > 1:
+            return "u = " + ", ".join(self.label("u", j) for j in range(self.n_inputs))
         name, unit = ((self.input_name, self.input_unit) if which == "u"
                       else (self.output_name, self.output_unit))
         unit = f" [{unit}]" if unit else ""
@@ -122,9 +328,33 @@ class Record:
 
     def __repr__(self):
         unit = f" {self.time_unit}" if self.time_unit else ""
-        dt = "unknown" if self.dt is None else f"{self.dt:g}{unit}"
+        if self.t is not None:
+            dt = f"non-uniform, mean step {(self.t[-1] - self.t[0]) / (self.n_samples - 1):g}{unit}"
+        else:
+            dt = "unknown" if self.dt is None else f"{self.dt:g}{unit}"
         return (f"Record({self.name!r}, n_samples={self.n_samples}, dt={dt}, "
                 f"{self._signal('u')}, {self._signal('y')})")
+
+
+def as_records(data, y=None, *, what="data"):
+    """``data`` as a list of :class:`Record` (a Record, a DataFrame needs columns: refused here).
+
+    Returns ``None`` when ``data`` is not a record or a list of records (arrays: the caller
+    reads ``u, y``).
+    """
+    if isinstance(data, Record):
+        records = [data]
+    elif isinstance(data, (list, tuple)) and data and all(isinstance(r, Record) for r in data):
+        records = list(data)
+    elif type(data).__name__ == "DataFrame":
+        raise ParameterError(f"`{what}` is a DataFrame: say which columns are the input and the "
+                             "output with fohw.Record.from_dataframe(frame, u=..., y=...).")
+    else:
+        return None
+    if y is not None:
+        raise ParameterError(f"`{what}` is a Record (or a list of them), which carries its output;"
+                             f" do not also pass `y`.")
+    return records
 
 
 @dataclass(frozen=True, repr=False)

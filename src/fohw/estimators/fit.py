@@ -43,6 +43,7 @@ from ..exceptions import (
 )
 from ..fit_result import FitResult
 from ..model.base import Model
+from ..record import as_records
 from ..results import Status
 from ._common import bounded_least_squares
 
@@ -115,6 +116,143 @@ def check_record(model, u, y):
                 f"{DATA_RANGE[1]:g}], where squared simulation errors leave the range of doubles; "
                 f"rescale `{name}` (e.g. to an RMS near 1): the model's parameters rescale with it.")
     return u, y
+
+
+class _Experiment:
+    """One record of a fit: its samples, weights, instants and how a model is run on it."""
+
+    def __init__(self, u, y, weight, *, t=None, intersample="zoh", warmup=0, name=""):
+        self.u, self.y, self.weight, self.t = u, y, weight, t
+        self.intersample, self.warmup, self.name = intersample, warmup, name
+
+    def _held(self):
+        if not self.warmup:
+            return self.u
+        return np.concatenate([np.repeat(self.u[:1], self.warmup, axis=0), self.u])
+
+    def simulate(self, model):
+        """The model's free run on this record (after its warm-up)."""
+        if self.t is not None:
+            t = self.t
+            if self.warmup:
+                step = (t[-1] - t[0]) / (t.size - 1)
+                t = np.r_[t[0] - step * np.arange(self.warmup, 0, -1), t]
+            simulate_at = getattr(model, "simulate_at", None)
+            if simulate_at is None:
+                raise ParameterError(
+                    f"the record{_named(self.name)} has non-uniform time stamps and a "
+                    f"{type(model).__name__} has no simulator between samples (`simulate_at`); "
+                    "resample the record to a uniform grid (e.g. numpy.interp at "
+                    "t[0] + k*dt) or use a kind that simulates on time stamps.")
+            yhat = simulate_at(self._held(), t, intersample=self.intersample)
+        else:
+            yhat = model.simulate(self._held())
+        return np.asarray(yhat, dtype=float)[self.warmup:]
+
+    def jacobian(self, model, exact):
+        """``(yhat, J)`` on this record: ``J`` over every parameter (:meth:`Model.jacobian`)."""
+        if exact and self.t is None:
+            out = model.jacobian(self._held())
+            if out is not None:
+                return (np.asarray(out[0], dtype=float)[self.warmup:],
+                        np.asarray(out[1], dtype=float)[self.warmup:])
+        return None
+
+
+def _named(name):
+    return f" {name!r}" if name else ""
+
+
+class _Data:
+    """The records of a fit as one criterion: residuals and Jacobians stacked record by record."""
+
+    def __init__(self, experiments):
+        self.experiments = experiments
+        self.y = np.concatenate([e.y for e in experiments])
+        weights = [e.weight for e in experiments]
+        self.weight = None if all(w is None for w in weights) else np.concatenate(
+            [np.ones(e.y.size) if e.weight is None else e.weight for e in experiments])
+        self.bounds = np.cumsum([0] + [e.y.size for e in experiments])
+
+    def simulate(self, model):
+        return np.concatenate([e.simulate(model) for e in self.experiments])
+
+
+def _record_info(records):
+    """What the data were (names, units, sampling), kept on the result."""
+    first = records[0]
+    info = {"input_names": list(first.input_names), "input_units": list(first.input_units),
+            "output_name": first.output_name, "output_unit": first.output_unit,
+            "time_unit": first.time_unit, "dt": first.dt,
+            "records": [{"name": r.name, "n_samples": r.n_samples, "t0": r.t0,
+                         "uniform": r.uniform, "dt": r.dt} for r in records]}
+    return info
+
+
+def _experiments(model, u, y, sample_weight, warmup):
+    """The data of a fit as experiments, with the record check of each; and their info."""
+    records = as_records(u, y, what="u")
+    if records is None:
+        if y is None:
+            raise ParameterError("`y` is missing: pass the output samples, or a fohw.Record (or "
+                                 "a list of Records) as the data.")
+        uu, yy = check_record(model, u, y)
+        weight = None if sample_weight is None else check_weight(sample_weight, yy)
+        return [_Experiment(uu, yy, weight, warmup=warmup)], None
+    if not isinstance(model, Model):
+        raise ParameterError(f"`model` must be a fohw.Model (a model kind); got "
+                             f"{type(model).__name__}.")
+    if sample_weight is not None:
+        weights = list(sample_weight) if len(records) > 1 else [sample_weight]
+        if len(weights) != len(records):
+            raise ParameterError(f"`sample_weight` must hold one array per record ({len(records)});"
+                                 f" got {len(weights)}.")
+    else:
+        weights = [None] * len(records)
+    dts = {r.dt for r in records if r.uniform and r.dt is not None}
+    model_dt = model.dt
+    for r in records:
+        have = r.dt if r.uniform else None
+        if have is not None and "dt" in model.config() and abs(have - model_dt) > 1e-12 * have:
+            raise ParameterError(
+                f"the record{_named(r.name)} is sampled every {have:g} {r.time_unit or ''}".rstrip()
+                + f" but the {type(model).__name__} has dt = {model_dt:g}; build the model with "
+                f"dt={have:g} (the record's sampling time): fohw does not change it silently.")
+    if len(dts) > 1 and "dt" not in model.config():
+        raise ParameterError(f"the records have different sampling times ({sorted(dts)}); a "
+                             f"{type(model).__name__} runs in samples, so they must share one.")
+    experiments = []
+    for k, (r, w) in enumerate(zip(records, weights)):
+        label = f"record {k}{_named(r.name)}"
+        try:
+            uu = model.check_input(r.u)
+        except (ParameterError, DimensionError) as exc:
+            raise type(exc)(f"{label}: {exc}") from None
+        weight = None if w is None else check_weight(w, r.y)
+        experiments.append(_Experiment(uu, r.y, weight, t=r.t, intersample=r.intersample,
+                                       warmup=warmup, name=r.name))
+        if r.t is not None:
+            # a kind that cannot simulate on time stamps says so here, not as a failed search
+            with np.errstate(all="ignore"):
+                experiments[-1].simulate(model)
+    u_all = np.concatenate([e.u.reshape(e.u.shape[0], -1) for e in experiments])
+    y_all = np.concatenate([e.y for e in experiments])
+    check_record(model, u_all if model.n_inputs > 1 else u_all[:, 0], y_all)
+    return experiments, _record_info(records)
+
+
+def data_digest_of(experiments, dt):
+    """:func:`data_digest` of several records (one record: the same digest as its arrays)."""
+    if len(experiments) == 1 and experiments[0].t is None and not experiments[0].warmup:
+        e = experiments[0]
+        return data_digest(e.u, e.y, dt, e.weight)
+    h = hashlib.sha1()
+    for e in experiments:
+        h.update(data_digest(e.u, e.y, dt, e.weight).encode())
+        if e.t is not None:
+            h.update(np.ascontiguousarray(e.t, dtype=np.float64).tobytes())
+        h.update(repr(e.warmup).encode())
+    return h.hexdigest()[:16]
 
 
 def free_jacobian(model, u, *, exact=True):
@@ -211,9 +349,9 @@ def _order_grid(model, grid):
 
 
 @thin_solves
-def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3, max_nfev=200,
-        tol=1e-10, exact_jacobian=True):
-    """Fit any :class:`fohw.Model` to a record by simulation (output) error.
+def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_starts=3,
+        max_nfev=200, tol=1e-10, exact_jacobian=True, per_record=(), warmup=0):
+    """Fit any :class:`fohw.Model` to a record (or several) by simulation (output) error.
 
     Parameters
     ----------
@@ -221,19 +359,24 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         The kind, its start values, and which parameters are free, fixed, tied or bounded (its
         :attr:`~fohw.Model.parameters`; pass ``model.with_parameters(parameters)`` to change
         them).
-    u : array_like
+    u : array_like, Record or list of Record
         Input, as the kind takes it (1-D, or ``(N, m)`` for ``m`` input columns; a circuit takes
-        ``[current, state of charge]``).
-    y : array_like, shape (N,)
-        Measured output.
+        ``[current, state of charge]``); or a :class:`fohw.Record` (then ``y`` is not given:
+        the record carries it, and its names, units and sampling reach the result); or a list
+        of Records: several experiments of one system, fitted as one data set (one model, the
+        criterion summed over the records, each record simulated from its own start). A record
+        with non-uniform time stamps is simulated on them by the kind's ``simulate_at``.
+    y : array_like, shape (N,), optional
+        Measured output (with array ``u``).
     start : Model or sequence of Model, optional
         Further start models of the same kind (e.g. a simpler model's estimate: the fit never
         ends above the best start).
     sample_weight : array_like, shape (N,), optional
-        Non-negative weights of the squared errors (default 1). Zeros hold samples back from
-        the criterion while the simulation still runs through them (a held-back block inside
-        the record). The kind's :meth:`~fohw.Model.starts` and
-        :meth:`~fohw.Model.linear_start` get them when they take a ``sample_weight`` keyword.
+        Non-negative weights of the squared errors (default 1); one array per record for a list
+        of records. Zeros hold samples back from the criterion while the simulation still runs
+        through them (a held-back block inside the record). The kind's
+        :meth:`~fohw.Model.starts` and :meth:`~fohw.Model.linear_start` get them when they take
+        a ``sample_weight`` keyword.
     order_grid : int, optional
         Scan points per free order for each start (its own value is always among them); 1 skips
         the scan. At most ``MAX_SCAN`` points in all (over every start model).
@@ -245,6 +388,16 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in ``(0, 1)``.
     exact_jacobian : bool, optional
         Use the kind's exact Jacobian where it has one (default); False forces finite differences.
+    per_record : sequence of str, optional
+        Free parameters estimated once per record (nuisance parts such as an output offset);
+        the others are shared. The result's :attr:`~fohw.FitResult.per_record` holds each
+        record's value and standard error; its model holds the first record's; the covariance
+        of the shared parameters accounts for the per-record ones.
+    warmup : int, optional
+        Samples of each record's first input held before it (0: each record starts from rest).
+        A record that starts where the system had settled under its first input (a step test
+        from an operating point) is simulated from that state this way; a fractional kind
+        settles slowly (its memory decays like a power of time), so give it a long warm-up.
 
     Returns
     -------
@@ -268,7 +421,12 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     --------
     See :class:`fohw.Model` for a kind written in a dozen lines and fitted with this function.
     """
-    u, y = check_record(model, u, y)
+    experiments, info = _experiments(model, u, y, sample_weight,
+                                     check_int(warmup, "warmup", minimum=0))
+    data = _Data(experiments)
+    y, weight = data.y, data.weight
+    u_hook = (np.concatenate([e.u for e in experiments]) if len(experiments) > 1
+              else experiments[0].u)
     order_grid = check_int(order_grid, "order_grid", minimum=1)
     n_starts = check_int(n_starts, "n_starts", minimum=1)
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
@@ -278,13 +436,16 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     if not names:
         raise ParameterError("every parameter of the model is fixed or tied: nothing to fit. Free "
                              "some with model.with_parameters(parameters) (Parameter(fixed=False)).")
-    weight = None if sample_weight is None else check_weight(sample_weight, y)
+    n_rec = len(experiments)
+    per_record = _check_per_record(per_record, params, n_rec)
+    extra_names = [f"{n}[{r}]" for n in per_record for r in range(1, n_rec)]
     sw = 1.0 if weight is None else np.sqrt(weight)
     n_used = y.size if weight is None else int(np.count_nonzero(weight))
-    if n_used <= len(names):
+    n_x = len(names) + len(extra_names)
+    if n_used <= n_x:
         raise DimensionError(f"`y` has {n_used} samples{'' if weight is None else ' of positive weight'} "
-                             f"for {len(names)} free parameters ({', '.join(names)}); need more "
-                             "samples than parameters.")
+                             f"for {n_x} free parameters ({', '.join(list(names) + extra_names)}); "
+                             "need more samples than parameters.")
     extra = [] if start is None else [start] if isinstance(start, Model) else list(start)
     for s in extra:
         if type(s) is not type(model) or s.parameters.names != params.names:
@@ -292,16 +453,80 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
                                  f"`model` ({type(model).__name__}); got {type(s).__name__}.")
     # The user's settings (fixed flags, bounds, ties) hold for every start.
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
-             for m in list(_hook(model.starts, u, y, weight)) + extra]
+             for m in list(_hook(model.starts, u_hook, y, weight)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
-    # A kind's regularisation (Model.penalty): its residuals follow the record's.
+    # A kind's regularisation (Model.penalty): its residuals follow the records'.
     n_pen = penalty_terms(model)[0].size
     penalty = np.full(y.size + n_pen, PENALTY * y_scale)
-    lower, upper = params.free_bounds()
+    lower0, upper0 = params.free_bounds()
+    pr_index = [names.index(n) for n in per_record]
+    lower = np.r_[lower0, np.repeat(lower0[pr_index], n_rec - 1)]
+    upper = np.r_[upper0, np.repeat(upper0[pr_index], n_rec - 1)]
     counter = {"nfev": 0}
+    has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
+    t_matrix = params.tie_matrix()
 
-    def at(x):
-        return model.with_parameters(params.with_free(np.clip(x, lower, upper)))
+    def column(i, r):
+        """Index in the full vector of per-record parameter ``i``'s value for record ``r``."""
+        return pr_index[i] if r == 0 else len(names) + i * (n_rec - 1) + r - 1
+
+    def at(x, r=0):
+        """The model of record ``r`` at the full vector ``x`` (shared, then per-record values)."""
+        x = np.clip(x, lower, upper)
+        free = x[:len(names)].copy()
+        for i in range(len(per_record)):
+            free[pr_index[i]] = x[column(i, r)]
+        return model.with_parameters(params.with_free(free))
+
+    def extend(x0):
+        """A shared-parameter vector with each per-record copy at its record-0 value."""
+        x0 = np.asarray(x0, dtype=float)
+        return np.r_[x0, np.repeat(x0[pr_index], n_rec - 1)]
+
+    def run(x, with_jacobian):
+        """``(yhat, J)`` over every record at ``x`` (``J`` over the full vector, or ``None``)."""
+        parts, jacs = [], []
+        m = None
+        for r, e in enumerate(experiments):
+            if m is None or per_record:
+                m = at(x, r)
+            out = e.jacobian(m, has_exact) if with_jacobian else None
+            if with_jacobian and out is None:
+                return None, None
+            if out is None:
+                parts.append(e.simulate(m))
+            else:
+                parts.append(out[0])
+                jacs.append(out[1] @ t_matrix)
+        yhat = np.concatenate(parts)
+        if not with_jacobian:
+            return yhat, None
+        jac = np.zeros((y.size, n_x))
+        for r, j in enumerate(jacs):
+            rows = slice(data.bounds[r], data.bounds[r + 1])
+            jac[rows, :len(names)] = j
+            for i in range(len(per_record)):
+                if r:
+                    jac[rows, column(i, r)] = j[:, pr_index[i]]
+                    jac[rows, pr_index[i]] = 0.0
+        return yhat, jac
+
+    def full_jacobian(x):
+        """``(yhat, J, how)`` at ``x``: exact where the kind gives it, else central differences."""
+        if has_exact:
+            yhat, jac = run(x, True)
+            if jac is not None:
+                return yhat, jac, "exact"
+        yhat, _ = run(x, False)
+        cols = []
+        for j in range(n_x):
+            step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
+            up, down = x.copy(), x.copy()
+            up[j] = min(x[j] + step, upper[j])
+            down[j] = max(x[j] - step, lower[j])
+            cols.append((run(up, False)[0] - run(down, False)[0]) / (up[j] - down[j]))
+        jac = np.column_stack(cols) if cols else np.zeros((y.size, 0))
+        return yhat, jac, "finite differences"
 
     # In the local search the solver asks for the Jacobian at (nearly) every point whose residual
     # it computed; a kind's exact Jacobian comes with its output, so both are computed at once
@@ -312,39 +537,38 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         counter["nfev"] += 1
         try:
             with np.errstate(all="ignore"):
-                m = at(x)
-                out = m.jacobian(u) if with_jacobian and has_exact else None
-                if out is not None:
-                    yhat = np.asarray(out[0], dtype=float)
-                    last["x"], last["jac"] = np.array(x, dtype=float), out[1]
-                else:
-                    yhat = np.asarray(m.simulate(u), dtype=float)
+                yhat, jac = run(x, with_jacobian and has_exact)
+                if jac is not None:
+                    last["x"], last["jac"] = np.array(x, dtype=float), jac
+                elif yhat is None:
+                    yhat, _ = run(x, False)
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
             return penalty
         if n_pen:
-            return np.concatenate([(y - yhat) * sw, penalty_terms(m, len(names), t_matrix)[0]])
+            return np.concatenate([(y - yhat) * sw, penalty_at(x)[0]])
         return (y - yhat) * sw
 
-    has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
-    t_matrix = params.tie_matrix()
+    def penalty_at(x):
+        """The kind's penalty at the first record's model: ``(r, J)``, ``J`` over the full vector."""
+        r, j = penalty_terms(at(np.asarray(x, dtype=float)), len(names), t_matrix)
+        return r, np.concatenate([j, np.zeros((r.size, n_x - len(names)))], axis=1)
 
     def jacobian(x):
-        m = at(x)
         try:
             with np.errstate(all="ignore"):
                 if "x" in last and np.array_equal(last["x"], x):
-                    jac = np.asarray(last["jac"], dtype=float) @ t_matrix
+                    jac = last["jac"]
                 else:
-                    jac = free_jacobian(m, u, exact=has_exact)[1]
+                    jac = full_jacobian(np.asarray(x, dtype=float))[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-            return np.zeros((y.size + n_pen, len(names)))
+            return np.zeros((y.size + n_pen, n_x))
         if weight is not None:
             jac = jac * sw[:, None]
         if n_pen:
-            jac = np.concatenate([jac, -penalty_terms(m, len(names), t_matrix)[1]])
-        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size + n_pen, len(names)))
+            jac = np.concatenate([jac, -penalty_at(x)[1]])
+        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size + n_pen, n_x))
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
     candidates = []
@@ -361,7 +585,7 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
             candidates.append(m)
             try:
                 with np.errstate(all="ignore"):
-                    solved = _hook(m.linear_start, u, y, weight)
+                    solved = _hook(m.linear_start, u_hook, y, weight)
             except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
                 solved = None
             if solved is not None:
@@ -370,9 +594,9 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     ranked = {}
     for m in candidates:
         x = m.parameters.free_values()
-        if np.any(x < lower) or np.any(x > upper):
+        if np.any(x < lower0) or np.any(x > upper0):
             continue
-        r = residual(x)
+        r = residual(extend(x))
         sse = float(r @ r) if r is not penalty else np.inf
         ranked.setdefault(tuple(x.tolist()), sse)
     table = sorted(((sse, x) for x, sse in ranked.items()), key=lambda row: row[0])
@@ -382,7 +606,7 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     for sse0, x0 in table[:n_starts]:
         if not np.isfinite(sse0):
             continue
-        x, status, ls = bounded_least_squares(lambda x: residual(x, True), np.array(x0),
+        x, status, ls = bounded_least_squares(lambda x: residual(x, True), extend(x0),
                                               jac=jacobian, lower=lower, upper=upper, ftol=tol,
                                               xtol=tol, gtol=tol, max_nfev=max_nfev)
         # The solver's last residual is at ls.x; x differs only where it was put on a bound.
@@ -401,29 +625,34 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
-    yhat, jac, how_cov = free_jacobian(fitted, u, exact=has_exact)
+    with np.errstate(all="ignore"):
+        yhat, jac, how_cov = full_jacobian(np.asarray(x, dtype=float))
     if weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
     crit_r = (y - yhat) * sw
     if n_pen:   # the regularised criterion: its rows join the covariance's Gram matrix
-        pen_r, pen_j = penalty_terms(fitted, len(names), t_matrix)
+        pen_r, pen_j = penalty_at(x)
         messages.append(f"Regularisation ({type(model).__name__}.penalty): {float(pen_r @ pen_r):.6g} "
                         "added to the squared error; the covariance is s^2 (J^T J + P^T P)^-1.")
         jac, crit_r = np.concatenate([jac, -pen_j]), np.concatenate([crit_r, pen_r])
-        sse = float(np.sum(((y - yhat) * sw) ** 2))     # the record's part only
+        sse = float(np.sum(((y - yhat) * sw) ** 2))     # the records' part only
     if ls.status == 3 and not float(crit_r @ crit_r) < sse0 * (1.0 - 1e-9) and \
             not stationary(jac, crit_r, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
+    all_names = list(names) + extra_names
+    full_cov = None
     bad = np.flatnonzero(~np.isfinite(yhat) | (np.abs(yhat) > ESCAPE * y_scale))
     if bad.size:
         status = Status.FAILED
+        r = int(np.searchsorted(data.bounds, bad[0], side="right")) - 1
+        where = f"sample {int(bad[0] - data.bounds[r])}" + (f" of record {r}" if n_rec > 1 else "")
         messages.append(f"The fitted model's free run on its own input leaves the range of the data "
-                        f"at sample {int(bad[0])} (|yhat| beyond {ESCAPE:g} max|y| or not finite).")
+                        f"at {where} (|yhat| beyond {ESCAPE:g} max|y| or not finite).")
         covariance = None
     else:
-        note = fitted.check_fitted(u, y)
+        note = fitted.check_fitted(experiments[0].u, experiments[0].y) if n_rec == 1 else None
         if note:
             status = Status.FAILED
             messages.append(note)
@@ -431,7 +660,7 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
         if inverse is None:
             # the kind's own sentence (check_fitted) names the cause: it stays FAILED, first
             status = Status.FAILED if note else Status.RANK_DEFICIENT
-            cols = ", ".join(names[i] for i in fac.dependent)
+            cols = ", ".join(all_names[i] for i in fac.dependent)
             messages.append(f"Rank deficient: rank {fac.rank} of {fac.n_columns}; the columns of "
                             f"{cols} are linear combinations of the others (the output's "
                             "sensitivities to the free parameters), so those parameters are not "
@@ -439,7 +668,14 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
                             "whose input excites them).")
             covariance = None
         else:
-            covariance = sse / (n_used - len(names)) * inverse
+            full_cov = sse / (n_used - n_x) * inverse
+            covariance = full_cov[:len(names), :len(names)]
+    per = {}
+    for i, n in enumerate(per_record):
+        idx = [column(i, r) for r in range(n_rec)]
+        per[n] = {"values": [float(x[j]) for j in idx],
+                  "standard_errors": None if full_cov is None else
+                  [float(np.sqrt(full_cov[j, j])) for j in idx]}
     message = " ".join(messages)
     if status == Status.RANK_DEFICIENT:
         warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
@@ -450,7 +686,32 @@ def fit(model, u, y, *, start=None, sample_weight=None, order_grid=5, n_starts=3
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=n_used, message=message,
                      nfev=counter["nfev"], jacobian=how_cov, starts=starts, residuals=y - yhat,
-                     data_digest=data_digest(u, y, model.dt, weight),
+                     data_digest=data_digest_of(experiments, model.dt),
                      options=dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev,
                                   tol=tol, exact_jacobian=exact_jacobian,
-                                  sample_weight=None if weight is None else weight.tolist()))
+                                  sample_weight=None if weight is None else weight.tolist(),
+                                  per_record=list(per_record), warmup=experiments[0].warmup),
+                     data=info or {}, per_record=per)
+
+
+def _check_per_record(per_record, params, n_records):
+    """``per_record`` as a tuple of free, untied parameter names no other parameter is tied to."""
+    if isinstance(per_record, str):
+        per_record = (per_record,)
+    per_record = tuple(per_record)
+    for n in per_record:
+        if n not in params:
+            raise ParameterError(f"`per_record`: {n!r} is not a parameter of the model "
+                                 f"({', '.join(params)}).")
+        if n not in params.free_names:
+            raise ParameterError(f"`per_record`: {n!r} is fixed or tied; only free parameters "
+                                 "can be estimated per record.")
+        tied = [m for m, p in params.items() if p.tie is not None and p.tie[0] == n]
+        if tied:
+            raise ParameterError(f"`per_record`: {', '.join(tied)} is tied to {n!r}; untie it "
+                                 "first (a tie to a per-record value has no single meaning).")
+    if len(set(per_record)) != len(per_record):
+        raise ParameterError(f"`per_record` names a parameter twice: {per_record!r}.")
+    if per_record and n_records < 2:
+        raise ParameterError("`per_record` needs several records (a list of fohw.Record).")
+    return per_record

@@ -232,6 +232,9 @@ GENERIC_MODEL_FIELDS = ("kind", "config", "parameters")
 #: The fields of a result file of another kind (:meth:`fohw.FitResult.to_dict`).
 GENERIC_RESULT_FIELDS = ("model", "covariance", "status", "sse", "n_samples", "message", "nfev",
                          "jacobian", "starts", "residuals", "data_digest", "options")
+#: Fields a result file of another kind may have besides those: what the data were (names, units,
+#: sampling of the records) and the per-record estimates of a fit to several records.
+GENERIC_RESULT_OPTIONAL = ("data", "per_record")
 
 
 def _number_list(d, key, path, ndim):
@@ -284,7 +287,11 @@ def _generic_model_from_dict(body, version, path, field="the file"):
 
 def _generic_result_from_dict(body, version, path):
     """A FitResult of any kind but the lagged one, every field checked before it is built."""
-    _require_fields(body, GENERIC_RESULT_FIELDS, "fohw-result", version, path)
+    _require_fields(body, GENERIC_RESULT_FIELDS + tuple(k for k in GENERIC_RESULT_OPTIONAL
+                                                        if k in body), "fohw-result", version, path)
+    for key in GENERIC_RESULT_OPTIONAL:
+        if key in body and not isinstance(body[key], dict):
+            _bad(body, key, "an object", path)
     model = _generic_model_from_dict(body["model"], version, path, "field 'model'")
     if body["status"] not in Status.__members__:
         _bad(body, "status", f"one of {list(Status.__members__)}", path)
