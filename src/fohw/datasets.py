@@ -681,12 +681,19 @@ class PulseTest:
         """The voltage [V]."""
         return self.v
 
+    def record(self) -> Record:
+        """The test as a :class:`fohw.Record` (inputs current, soc, temperature; output voltage)."""
+        return Record(self.u, self.v, dt=self.dt, name=f"T{self.ambient:g}_soc{self.soc0:g}",
+                      input_name=("current", "soc", "temperature"), input_unit=("A", "", "degC"),
+                      output_name="voltage", output_unit="V", time_unit="s",
+                      source="PyBaMM DFN (Chen2020), benchmarks/generate_pybamm_pulses.py")
+
     def __repr__(self):
         return (f"PulseTest(T = {self.ambient:g} degC, soc0 = {self.soc0:g}, {self.n_samples} samples "
                 f"at {self.dt:g} s)")
 
 
-def pybamm_pulses(temperatures=None, socs=None):
+def pybamm_pulses(temperatures=None, socs=None, *, every=1):
     """Pulse tests of an LG M50 cell simulated by PyBaMM (DFN, ``Chen2020``), shipped with fohw.
 
     Fifteen records, one per ambient temperature (0, 10, 25, 35, 45 degC) and initial state of
@@ -701,6 +708,11 @@ def pybamm_pulses(temperatures=None, socs=None):
     temperatures, socs : sequence of float, optional
         Keep the records at these ambient temperatures [degC] / initial states of charge
         (default all).
+    every : int, optional
+        Keep every ``every``-th sample (a divisor of 100: 1, 2, 4, 5, 10, ...; default 1). The
+        current changes only at multiples of 10 s, so the kept samples are the same record at
+        the step ``0.1 every`` s exactly (each sample's current is still the one held over the
+        interval before it); ``every=5`` gives 221 samples at 0.5 s.
 
     Returns
     -------
@@ -720,6 +732,10 @@ def pybamm_pulses(temperatures=None, socs=None):
     """
     from .model.circuit import OCVTable
 
+    every = check_int(every, "every", minimum=1)
+    if 100 % every:
+        raise ParameterError(f"`every` must divide 100 (the current changes every 100 samples); "
+                             f"got {every}.")
     path = _packaged(PULSES_FILENAME, PULSES_SHA256)
     with np.load(path, allow_pickle=False) as data:
         d = {k: data[k] for k in data.files}
@@ -737,7 +753,8 @@ def pybamm_pulses(temperatures=None, socs=None):
             continue
         i = d["current"][k].astype(np.float64)
         soc = soc0 + np.concatenate([[0.0], np.cumsum(i[:-1])]) * dt / (3600.0 * capacity)
-        records.append(PulseTest(i=i, v=d["voltage_uv"][k] / 1e6, soc=soc,
-                                 temperature=d["cell_temperature_uk"][k] / 1e6, dt=dt, ambient=amb,
-                                 soc0=soc0))
+        keep = slice(None, None, every)
+        records.append(PulseTest(i=i[keep], v=d["voltage_uv"][k][keep] / 1e6, soc=soc[keep],
+                                 temperature=d["cell_temperature_uk"][k][keep] / 1e6, dt=dt * every,
+                                 ambient=amb, soc0=soc0))
     return records, OCVTable(d["ocv_soc"], d["ocv_volts"])
