@@ -50,9 +50,14 @@ def _interp1(x, points, values):
     return (1 - t) * values[j] + t * values[j + 1]
 
 
-def _bilinear(s, t, table):
-    rows = [_interp1(t, T_POINTS, table[k]) for k in range(len(SOC_POINTS))]
-    return _interp1(s, SOC_POINTS, rows)
+def _bilinear(s, t, table, arrhenius=False, log=False):
+    """Bilinear interpolation; with ``arrhenius`` in 1/T (kelvin), with ``log`` of the logarithms."""
+    points = [-1 / (x + 273.15) for x in T_POINTS] if arrhenius else T_POINTS
+    t = -1 / (t + 273.15) if arrhenius else t
+    values = np.log(table) if log else table
+    rows = [_interp1(t, points, values[k]) for k in range(len(SOC_POINTS))]
+    out = _interp1(s, SOC_POINTS, rows)
+    return math.exp(out) if log else out
 
 
 def _literal(model, u):
@@ -64,7 +69,8 @@ def _literal(model, u):
     beta = {e: fohw.gl_weights(alpha[e], n) for e in (1, 2)}
     for k in range(n):
         i, s, t = u[k]
-        p = {name: _bilinear(s, t, model.table(name)) for name in model.tables}
+        arr = model.temperature_interpolation == "arrhenius"
+        p = {name: _bilinear(s, t, model.table(name), arr, arr and name != "a") for name in model.tables}
         v[k] = OCV(s) + p["a"] + p["R0"] * i
         for e in (1, 2):
             r = (p[f"tau{e}"] / model.dt) ** alpha[e]
@@ -74,8 +80,9 @@ def _literal(model, u):
     return v
 
 
-def test_simulate_against_a_literal_loop():
-    model, u = _model(), _record()
+@pytest.mark.parametrize("interpolation", ["linear", "arrhenius"])
+def test_simulate_against_a_literal_loop(interpolation):
+    model, u = _model(temperature_interpolation=interpolation), _record()
     np.testing.assert_allclose(model.simulate(u), _literal(model, u), rtol=0, atol=1e-13)
 
 
@@ -91,6 +98,19 @@ def test_constant_tables_are_the_equivalent_circuit():
     np.testing.assert_allclose(model.simulate(u), ec.simulate(u[:, :2]), rtol=0, atol=1e-14)
 
 
+def test_arrhenius_interpolation_is_exact_for_an_arrhenius_resistance():
+    # R0 = A exp(E / (R T)) at 0 and 45 degC; at 20 degC the table gives the law's value.
+    law = lambda t: 0.02 * math.exp(30e3 / 8.314 * (1 / (t + 273.15) - 1 / 298.15))  # noqa: E731
+    model = fohw.CircuitTables([], soc_points=[0.5], temperature_points=[0.0, 45.0],
+                               values={"R0": [[law(0.0), law(45.0)]]},
+                               temperature_interpolation="arrhenius")
+    u = np.array([[1.0, 0.5, 20.0], [1.0, 0.5, 45.0], [1.0, 0.5, 60.0]])
+    np.testing.assert_allclose(model.simulate(u), [law(20.0), law(45.0), law(45.0)], rtol=1e-13)
+    linear = fohw.CircuitTables([], soc_points=[0.5], temperature_points=[0.0, 45.0],
+                                values={"R0": [[law(0.0), law(45.0)]]})
+    assert linear.simulate(u)[0] > law(20.0) * 1.05          # the chord above the convex law
+
+
 def test_varying_solve_against_the_recursion():
     rng = np.random.default_rng(1)
     n = 300                                  # several leaves and merges
@@ -104,8 +124,9 @@ def test_varying_solve_against_the_recursion():
     np.testing.assert_allclose(varying_solve(r, beta, f[:, 0]), z[:, 0], rtol=0, atol=1e-13)
 
 
-def test_jacobian_against_central_differences():
-    model, u = _model(), _record(n=300)
+@pytest.mark.parametrize("interpolation", ["linear", "arrhenius"])
+def test_jacobian_against_central_differences(interpolation):
+    model, u = _model(temperature_interpolation=interpolation), _record(n=300)
     v, jac = model.jacobian(u)
     np.testing.assert_array_equal(v, model.simulate(u))
     values = model.parameters.valuesdict()

@@ -4,7 +4,8 @@ The circuit of :class:`fohw.EquivalentCircuit` (``R0`` and RC/ZARC elements besi
 open-circuit voltage), with every resistance, time constant and the voltage offset given at
 breakpoints of the state of charge and the temperature, the way PyBaMM's equivalent-circuit
 parameter sets are written (``R0(SOC, T)``, ``R1(SOC, T)``, ``tau1(SOC, T)``, ...), and
-interpolated linearly between them (held at the end values outside the table). The orders of
+interpolated linearly between them (held at the end values outside the table), or, with
+``temperature_interpolation="arrhenius"``, their logarithms linearly in SOC and ``1/T``. The orders of
 the ZARC elements are shared by every breakpoint (one ``alpha`` per element).
 
 The input has three columns, ``u = [current, soc, temperature]`` (``[A]``, fraction of the
@@ -72,11 +73,12 @@ def _axis_weights(x, points):
     return w
 
 
-def table_weights(soc, temperature, soc_points, temperature_points):
+def table_weights(soc, temperature, soc_points, temperature_points, *, arrhenius=False):
     """Bilinear weights ``(N, n_soc * n_T)`` of every sample on the breakpoints (soc-major order).
 
     Outside the table the end values are held (no extrapolation). A table ``P`` (shape
-    ``(n_soc, n_T)``) is then ``weights @ P.ravel()`` at every sample.
+    ``(n_soc, n_T)``) is then ``weights @ P.ravel()`` at every sample. With ``arrhenius``, the
+    temperature coordinate is ``-1 / (T + 273.15)`` (degC in, kelvin inside) instead of ``T``.
 
     Examples
     --------
@@ -89,6 +91,9 @@ def table_weights(soc, temperature, soc_points, temperature_points):
            [0.  , 0.  , 0.  , 1.  ]])
     """
     ws = _axis_weights(soc, soc_points)
+    if arrhenius:
+        temperature = -1.0 / (np.asarray(temperature) + 273.15)
+        temperature_points = -1.0 / (np.asarray(temperature_points) + 273.15)
     wt = _axis_weights(temperature, temperature_points)
     return (ws[:, :, None] * wt[:, None, :]).reshape(soc.shape[0], -1)
 
@@ -171,6 +176,12 @@ class CircuitTables(Model):
         docstring); 0 (default): none.
     n_tau, n_alpha : int, optional
         The start scan's grid (:meth:`starts`).
+    temperature_interpolation : {"linear", "arrhenius"}, optional
+        ``"linear"`` (default, as PyBaMM's tables): every table linear in SOC and temperature
+        between breakpoints. ``"arrhenius"``: the logarithm of every resistance and time constant
+        linear in SOC and in ``1 / T`` (kelvin), so a parameter that follows
+        ``exp(E / (R T))`` between two temperature breakpoints is interpolated exactly; the
+        offsets stay linear (in SOC and ``1 / T``).
 
     Notes
     -----
@@ -193,7 +204,8 @@ class CircuitTables(Model):
     """
 
     def __init__(self, elements, *, soc_points, temperature_points, values=None, ocv=None, dt=1.0,
-                 tau_bounds=None, smoothing=0.0, n_tau=6, n_alpha=5):
+                 tau_bounds=None, smoothing=0.0, n_tau=6, n_alpha=5,
+                 temperature_interpolation="linear"):
         if isinstance(elements, str):
             raise ParameterError(f"`elements` must be a sequence of 'rc' or 'zarc'; got {elements!r} "
                                  "(write [element] for one).")
@@ -219,6 +231,10 @@ class CircuitTables(Model):
         self.smoothing = check_scalar(smoothing, "smoothing", lower=0.0)
         self.n_tau = check_int(n_tau, "n_tau", minimum=1)
         self.n_alpha = check_int(n_alpha, "n_alpha", minimum=1)
+        if temperature_interpolation not in ("linear", "arrhenius"):
+            raise ParameterError(f"`temperature_interpolation` must be 'linear' or 'arrhenius'; got "
+                                 f"{temperature_interpolation!r}.")
+        self.temperature_interpolation = temperature_interpolation
         if isinstance(ocv, dict):
             ocv = OCVTable.from_dict(ocv)
         if ocv is not None and not callable(ocv):
@@ -304,7 +320,8 @@ class CircuitTables(Model):
         return CircuitTables(self.kinds, soc_points=self.soc_points,
                              temperature_points=self.temperature_points, values=new, ocv=self.ocv,
                              dt=self.dt, tau_bounds=self.tau_bounds, smoothing=self.smoothing,
-                             n_tau=self.n_tau, n_alpha=self.n_alpha)
+                             n_tau=self.n_tau, n_alpha=self.n_alpha,
+                             temperature_interpolation=self.temperature_interpolation)
 
     def config(self) -> dict:
         """Structure and settings (JSON values); the OCV map must be an :class:`fohw.OCVTable`."""
@@ -315,13 +332,15 @@ class CircuitTables(Model):
                 "temperature_points": self.temperature_points.tolist(),
                 "ocv": None if self.ocv is None else self.ocv.to_dict(), "dt": self.dt,
                 "tau_bounds": list(self.tau_bounds), "smoothing": self.smoothing,
-                "n_tau": self.n_tau, "n_alpha": self.n_alpha}
+                "n_tau": self.n_tau, "n_alpha": self.n_alpha,
+                "temperature_interpolation": self.temperature_interpolation}
 
     def __eq__(self, other):
         if type(other) is not type(self):
             return NotImplemented
         same_ocv = self.ocv is other.ocv or (isinstance(self.ocv, OCVTable) and self.ocv == other.ocv)
-        settings = ("kinds", "step", "tau_bounds", "smoothing", "n_tau", "n_alpha")
+        settings = ("kinds", "step", "tau_bounds", "smoothing", "n_tau", "n_alpha",
+                    "temperature_interpolation")
         return (same_ocv and all(getattr(self, n) == getattr(other, n) for n in settings)
                 and np.array_equal(self.soc_points, other.soc_points)
                 and np.array_equal(self.temperature_points, other.temperature_points)
@@ -349,7 +368,11 @@ class CircuitTables(Model):
     def weights(self, u):
         """``(N, n_soc * n_T)`` interpolation weights of the record's samples (:func:`table_weights`)."""
         _, soc, temp = self._signals(u)
-        return table_weights(soc, temp, self.soc_points, self.temperature_points)
+        return self._weights(soc, temp)
+
+    def _weights(self, soc, temp):
+        return table_weights(soc, temp, self.soc_points, self.temperature_points,
+                             arrhenius=self.temperature_interpolation == "arrhenius")
 
     def _ocv(self, soc):
         if self.ocv is None:
@@ -359,6 +382,19 @@ class CircuitTables(Model):
             raise ParameterError(f"`ocv` ({self.ocv!r}) must return one finite voltage per sample.")
         return out
 
+    def value(self, name, w):
+        """Table ``name`` at the samples of interpolation weights ``w`` (``temperature_interpolation``)."""
+        flat = self.tables[name].ravel()
+        if self.temperature_interpolation == "arrhenius" and name != "a":
+            return np.exp(w @ np.log(flat))
+        return w @ flat
+
+    def _dvalue(self, name, w, p):
+        """``d value / d breakpoint``, ``(N, n_breakpoints)``, given the values ``p``."""
+        if self.temperature_interpolation == "arrhenius" and name != "a":
+            return p[:, None] * w / self.tables[name].ravel()
+        return w
+
     def element_current(self, e, i, w, *, derivatives=False):
         """``z`` of element ``e`` (1-based): the current through its resistor, for weights ``w``.
 
@@ -367,7 +403,7 @@ class CircuitTables(Model):
         """
         kind = self.kinds[e - 1]
         alpha = self.alphas.get(f"alpha{e}", 1.0)
-        tau = w @ self.tables[f"tau{e}"].ravel()
+        tau = self.value(f"tau{e}", w)
         n = i.shape[0]
         r = (tau / self.dt) ** alpha
         beta = gl_weights_unchecked(alpha, n) if kind == "zarc" else np.r_[1.0, -1.0, np.zeros(n - 2)][:n]
@@ -375,7 +411,7 @@ class CircuitTables(Model):
             return varying_solve(r, beta, i), None
         z = varying_solve(r, beta, i)
         bz = causal_product(beta, z, n)
-        dr_tau = (alpha * r / tau)[:, None] * w              # d r / d tau_b
+        dr_tau = (alpha * r / tau)[:, None] * self._dvalue(f"tau{e}", w, tau)   # d r / d tau_b
         forcing = [-dr_tau * bz[:, None]]
         if kind == "zarc":
             dbeta = gl_weights_derivative(alpha, n)
@@ -390,26 +426,27 @@ class CircuitTables(Model):
             raise ParameterError(f"a CircuitTables starts at rest (`initial` None or 'rest'); got "
                                  f"{initial!r}.")
         i, soc, temp = self._signals(u)
-        w = table_weights(soc, temp, self.soc_points, self.temperature_points)
-        v = self._ocv(soc) + w @ self.tables["a"].ravel() + (w @ self.tables["R0"].ravel()) * i
+        w = self._weights(soc, temp)
+        v = self._ocv(soc) + self.value("a", w) + self.value("R0", w) * i
         for e in range(1, len(self.kinds) + 1):
             z, _ = self.element_current(e, i, w)
-            v = v + (w @ self.tables[f"R{e}"].ravel()) * z
+            v = v + self.value(f"R{e}", w) * z
         return v
 
     @thin_solves
     def jacobian(self, u):
         """The voltage and its exact derivatives by every parameter (:attr:`parameters` order)."""
         i, soc, temp = self._signals(u)
-        w = table_weights(soc, temp, self.soc_points, self.temperature_points)
-        v = self._ocv(soc) + w @ self.tables["a"].ravel() + (w @ self.tables["R0"].ravel()) * i
-        cols = [w, w * i[:, None]]
+        w = self._weights(soc, temp)
+        r0 = self.value("R0", w)
+        v = self._ocv(soc) + self.value("a", w) + r0 * i
+        cols = [w, self._dvalue("R0", w, r0) * i[:, None]]
         for e, kind in enumerate(self.kinds, start=1):
             z, dz = self.element_current(e, i, w, derivatives=True)
-            rk = w @ self.tables[f"R{e}"].ravel()
+            rk = self.value(f"R{e}", w)
             v = v + rk * z
             nb = w.shape[1]
-            cols += [w * z[:, None], rk[:, None] * dz[:, :nb]]
+            cols += [self._dvalue(f"R{e}", w, rk) * z[:, None], rk[:, None] * dz[:, :nb]]
             if kind == "zarc":
                 cols.append(rk[:, None] * dz[:, nb:])
         return v, np.concatenate(cols, axis=1)
@@ -457,6 +494,8 @@ class CircuitTables(Model):
         of its table's parameters, ``n_alpha`` orders per ZARC inside its order's bounds, from
         0.2 up), the tables that enter linearly (``a``, ``R0`` and the resistances) are solved by
         least squares, resistances clipped to ``R_MIN``; the best ``SCAN_STARTS`` are returned.
+        (With ``"arrhenius"`` interpolation the values between breakpoints are taken as linear
+        in the breakpoints' for this step: exact at the breakpoints, a start elsewhere.)
         A time-constant table with a fixed entry keeps its values, as does a fixed order.
         """
         i, soc, temp = self._signals(u)
@@ -466,7 +505,7 @@ class CircuitTables(Model):
                                  "excitation, so no resistance or time constant can be identified.")
         sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
                                                                                  "sample_weight"))
-        w = table_weights(soc, temp, self.soc_points, self.temperature_points)
+        w = self._weights(soc, temp)
         target = (y - self._ocv(soc)) * sw
         params = self.parameters
         grids = []
