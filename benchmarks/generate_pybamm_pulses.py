@@ -28,7 +28,7 @@ in degC. ``ocv_soc``/``ocv_volts`` tabulate the cell's open-circuit voltage (pos
 negative electrode potential at PyBaMM's stoichiometries for each state of charge).
 
 Stored: the voltage on a 1 uV grid (int32), the temperature on a 1 uK grid (int32), the current
-as float64; about 0.2 MB compressed.
+as float64; 64 kB compressed.
 """
 
 import argparse
