@@ -79,6 +79,9 @@ class FitResult(metaclass=abc.ABCMeta):
     per_record : dict
         ``{name: {"values": [...], "standard_errors": [...] or None}}`` of the parameters
         estimated once per record (``fohw.fit(..., per_record=...)``), in record order.
+    n_per_record : int
+        Values estimated besides :attr:`free_names` (each per-record parameter's copies for the
+        records after the first); counted in :attr:`noise_variance`'s degrees of freedom.
     """
 
     model: Model
@@ -96,6 +99,7 @@ class FitResult(metaclass=abc.ABCMeta):
     options: dict = field(default_factory=dict)
     data: dict = field(default_factory=dict)
     per_record: dict = field(default_factory=dict)
+    n_per_record: int = 0
 
     def __post_init__(self):
         object.__setattr__(self, "covariance", _readonly(self.covariance))
@@ -116,8 +120,8 @@ class FitResult(metaclass=abc.ABCMeta):
 
     @property
     def noise_variance(self) -> float:
-        """``sse / (n_samples - n_free)``: the residual variance with the fitted parameters counted."""
-        dof = self.n_samples - self.n_free
+        """``sse / (n_samples - n_free - n_per_record)``: every estimated value counted."""
+        dof = self.n_samples - self.n_free - self.n_per_record
         return self.sse / dof if dof > 0 else math.nan
 
     @property
@@ -176,8 +180,9 @@ class FitResult(metaclass=abc.ABCMeta):
 
     def summary(self) -> str:
         """A text table of the estimates (with standard errors) and the fit's diagnostics."""
+        more = f" (+ {self.n_per_record} per-record values)" if self.n_per_record else ""
         lines = [f"fohw fit: {type(self.model).__name__}, N = {self.n_samples}, "
-                 f"{self.n_free} free parameters, Jacobian {self.jacobian}",
+                 f"{self.n_free} free parameters{more}, Jacobian {self.jacobian}",
                  f"  status = {self.status.name}, sse = {self.sse:.6g}, rmse = {self.rmse:.6g}, "
                  f"noise variance = {self.noise_variance:.6g}, simulations = {self.nfev}",
                  f"  {self.message}"]
@@ -229,7 +234,8 @@ class FitResult(metaclass=abc.ABCMeta):
                            for s, v in self.starts],
                 "residuals": None if self.residuals is None else self.residuals.tolist(),
                 "data_digest": self.data_digest, "options": _jsonable(dict(self.options)),
-                "data": _jsonable(dict(self.data)), "per_record": _jsonable(dict(self.per_record))}
+                "data": _jsonable(dict(self.data)), "per_record": _jsonable(dict(self.per_record)),
+                "n_per_record": self.n_per_record}
 
     @classmethod
     def from_dict(cls, d) -> FitResult:
@@ -251,7 +257,8 @@ class FitResult(metaclass=abc.ABCMeta):
                                 for s, v in d.get("starts", [])),
                    residuals=None if res is None else np.array(res, dtype=float),
                    data_digest=str(d.get("data_digest", "")), options=dict(d.get("options") or {}),
-                   data=dict(d.get("data") or {}), per_record=dict(d.get("per_record") or {}))
+                   data=dict(d.get("data") or {}), per_record=dict(d.get("per_record") or {}),
+                   n_per_record=int(d.get("n_per_record", 0)))
 
     def __reduce__(self):
         return (_rebuild, (self.to_dict(),))

@@ -17,8 +17,10 @@ from .exceptions import DimensionError, ParameterError
 __all__ = ["Record", "Benchmark", "as_records", "UNIFORM_RTOL"]
 
 
-#: Time stamps whose steps all lie within this fraction of their mean step are uniform: the
-#: record keeps ``dt`` (the mean step) and its start time, not the stamps.
+#: Time stamps that all lie within this fraction of their mean step of the uniform grid
+#: ``t[0] + k * step`` (plus the rounding of their magnitude, ``4 eps max|t|``: stamps in Unix
+#: seconds) are uniform: the record keeps ``dt`` (the mean step) and its start time, not the
+#: stamps.
 UNIFORM_RTOL = 1e-6
 
 INTERSAMPLE = ("zoh", "foh")
@@ -53,15 +55,15 @@ class Record:
         Sampling time (in ``time_unit``); ``None`` where the source gives none (the model then
         uses one sample as the unit) or where ``t`` gives the instants.
     t : array_like, shape (N,), optional
-        Sampling instants, strictly increasing (instead of ``dt``). Instants whose steps all lie
-        within :data:`UNIFORM_RTOL` of their mean step are uniform: the record then has
-        ``dt`` = that mean step and ``t0 = t[0]``, and :attr:`t` is ``None``. Non-uniform
-        instants are kept; the model kinds that can simulate on them do so
+        Sampling instants, strictly increasing (instead of ``dt`` and ``t0``). Instants that all
+        lie within :data:`UNIFORM_RTOL` of their mean step of a uniform grid are uniform: the
+        record then has ``dt`` = that mean step and ``t0 = t[0]``, and :attr:`t` is ``None``.
+        Non-uniform instants are kept; the model kinds that can simulate on them do so
         (:func:`fohw.fit` says which cannot).
     intersample : {"zoh", "foh"}, optional
         How the input behaves between samples: held (zero-order hold, the default) or linear
-        (first-order hold). Used where a model is simulated between the samples (non-uniform
-        instants).
+        (first-order hold). :func:`fohw.fit` simulates a record with time stamps, or with a
+        first-order hold, between its samples (the kind's ``simulate_at``).
     t0 : float, optional
         The time of the first sample (default 0).
     name : str, optional
@@ -129,6 +131,9 @@ class Record:
             raise ParameterError(f"`intersample` must be one of {INTERSAMPLE}; got "
                                  f"{self.intersample!r}.")
         object.__setattr__(self, "t0", check_scalar(self.t0, "t0"))
+        if self.t is not None and self.t0 != 0.0:
+            raise ParameterError(f"give `t0` or `t`, not both (the instants start at t[0]); got "
+                                 f"t0 = {self.t0!r}.")
         if self.t is not None:
             t = check_array(self.t, "t")
             check_same_length(t, y, "t", "y")
@@ -140,8 +145,10 @@ class Record:
             if steps.size == 0:
                 raise DimensionError("`t` needs at least two instants to say a sampling time.")
             mean = (t[-1] - t[0]) / steps.size
-            uniform = bool(np.max(np.abs(steps - mean)) <= UNIFORM_RTOL * mean)
-            if self.dt is not None and not (uniform and abs(self.dt - mean) <= UNIFORM_RTOL * mean):
+            grid = t[0] + mean * np.arange(t.size)
+            slack = UNIFORM_RTOL * mean + 4 * np.finfo(float).eps * float(np.max(np.abs(t)))
+            uniform = bool(np.max(np.abs(t - grid)) <= slack)
+            if self.dt is not None and not (uniform and abs(self.dt - mean) <= slack):
                 raise ParameterError(f"give `dt` or `t`, not both: `dt` = {self.dt!r} but the "
                                      f"instants `t` have {'mean ' if not uniform else ''}step "
                                      f"{mean!r}{'' if uniform else ' and are not uniform'}.")
@@ -242,7 +249,7 @@ class Record:
             if t.size < 2:
                 raise ParameterError(f"the slice {index!r} leaves one instant: a record with "
                                      "time stamps keeps at least two.")
-            return replace(self, u=self.u[index], y=self.y[index], t=t, name=name)
+            return replace(self, u=self.u[index], y=self.y[index], t=t, t0=0.0, name=name)
         return replace(self, u=self.u[index], y=self.y[index], name=name,
                        t0=self.t0 + start * (self.dt or 1.0))
 
@@ -344,8 +351,16 @@ def as_records(data, y=None, *, what="data"):
     """
     if isinstance(data, Record):
         records = [data]
-    elif isinstance(data, (list, tuple)) and data and all(isinstance(r, Record) for r in data):
+    elif isinstance(data, (list, tuple)) and any(isinstance(r, Record) for r in data):
+        other = [k for k, r in enumerate(data) if not isinstance(r, Record)]
+        if other:
+            raise ParameterError(f"`{what}` mixes Records and other data (entry {other[0]} is a "
+                                 f"{type(data[other[0]]).__name__}); a list of experiments holds "
+                                 "Records only (fohw.Record(u=..., y=...) for arrays).")
         records = list(data)
+    elif isinstance(data, (list, tuple)) and len(data) == 0:
+        raise ParameterError(f"`{what}` is an empty list: give a Record, a list of Records, or "
+                             "arrays u and y.")
     elif type(data).__name__ == "DataFrame":
         raise ParameterError(f"`{what}` is a DataFrame: say which columns are the input and the "
                              "output with fohw.Record.from_dataframe(frame, u=..., y=...).")

@@ -234,7 +234,10 @@ GENERIC_RESULT_FIELDS = ("model", "covariance", "status", "sse", "n_samples", "m
                          "jacobian", "starts", "residuals", "data_digest", "options")
 #: Fields a result file of another kind may have besides those: what the data were (names, units,
 #: sampling of the records) and the per-record estimates of a fit to several records.
-GENERIC_RESULT_OPTIONAL = ("data", "per_record")
+GENERIC_RESULT_OPTIONAL = ("data", "per_record", "n_per_record")
+#: The keys of a result file's ``data`` field (:attr:`fohw.FitResult.data`).
+DATA_FIELDS = ("input_names", "input_units", "output_name", "output_unit", "time_unit", "dt",
+               "records")
 
 
 def _number_list(d, key, path, ndim):
@@ -285,13 +288,42 @@ def _generic_model_from_dict(body, version, path, field="the file"):
     return model
 
 
+def _check_data_fields(body, path):
+    """The optional ``data``, ``per_record`` and ``n_per_record`` fields of a result, checked."""
+    if "n_per_record" in body:
+        _integer(body, "n_per_record", path, 0)
+    if "data" in body:
+        data = body["data"]
+        if not isinstance(data, dict):
+            _bad(body, "data", "an object", path)
+        if data:
+            if set(data) != set(DATA_FIELDS):
+                _bad(body, "data", f"an object with the keys {', '.join(DATA_FIELDS)}", path)
+            if not (isinstance(data["records"], list) and data["records"] and all(
+                    isinstance(r, dict) and isinstance(r.get("n_samples"), int)
+                    for r in data["records"])):
+                _bad(body, "data", "an object whose 'records' is a list of {name, n_samples, "
+                     "t0, uniform, dt}", path)
+    if "per_record" in body:
+        per = body["per_record"]
+        if not isinstance(per, dict):
+            _bad(body, "per_record", "an object", path)
+        for name, entry in per.items():
+            ok = isinstance(entry, dict) and set(entry) == {"values", "standard_errors"} and \
+                isinstance(entry["values"], list) and all(_is_number(v) for v in entry["values"])
+            se = entry.get("standard_errors") if isinstance(entry, dict) else None
+            ok = ok and (se is None or (isinstance(se, list) and len(se) == len(entry["values"])
+                                        and all(_is_number(v) for v in se)))
+            if not ok:
+                _bad(body, "per_record", f"an object name -> {{values: [numbers], "
+                     f"standard_errors: [numbers] or null}} (entry {name!r})", path)
+
+
 def _generic_result_from_dict(body, version, path):
     """A FitResult of any kind but the lagged one, every field checked before it is built."""
     _require_fields(body, GENERIC_RESULT_FIELDS + tuple(k for k in GENERIC_RESULT_OPTIONAL
                                                         if k in body), "fohw-result", version, path)
-    for key in GENERIC_RESULT_OPTIONAL:
-        if key in body and not isinstance(body[key], dict):
-            _bad(body, key, "an object", path)
+    _check_data_fields(body, path)
     model = _generic_model_from_dict(body["model"], version, path, "field 'model'")
     if body["status"] not in Status.__members__:
         _bad(body, "status", f"one of {list(Status.__members__)}", path)

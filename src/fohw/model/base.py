@@ -150,9 +150,9 @@ class Model(abc.ABC):
     :meth:`jacobian` (exact ``d yhat / d parameters``; finite differences otherwise),
     :meth:`starts` and :meth:`linear_start` (where :func:`fohw.fit` starts), :meth:`config`
     (the settings that are not parameters, for files), :meth:`check_settings` (bounds or ties
-    the kind cannot hold), :meth:`penalty` (a regularisation added to the fit's criterion) and
-    :meth:`check_fitted` (a kind's own sanity check of a fitted
-    model).
+    the kind cannot hold), :meth:`penalty` (a regularisation added to the fit's criterion),
+    :meth:`check_fitted` (a kind's own sanity check of a fitted model) and :meth:`simulate_at`
+    (non-uniform instants).
 
     Examples
     --------
@@ -276,6 +276,18 @@ class Model(abc.ABC):
     def check_fitted(self, u, y):
         """A sentence saying why this fitted model is not trustworthy, or ``None`` (default)."""
         return None
+
+    def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None) -> np.ndarray:
+        """The output at non-uniform instants ``t`` (:func:`fohw.model.irregular.simulate_at`).
+
+        The default is the fine-grid scheme (:func:`fohw.model.irregular.grid_simulate`): the
+        kind rebuilt at a fine step through :meth:`config`'s ``dt``, which a kind without one
+        cannot take (refused). A kind that is exact on any steps, or discrete in samples,
+        overrides it.
+        """
+        from .irregular import grid_simulate
+
+        return grid_simulate(self, u, t, intersample=intersample, refine=refine, step=step)
 
     def config(self) -> dict:
         """The settings that are not parameters, as keyword arguments of the constructor.

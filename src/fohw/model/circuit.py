@@ -666,6 +666,33 @@ class EquivalentCircuit(Model):
             v = v + e.response(i, self.dt)
         return v
 
+    def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
+        """Terminal voltage [V] at non-uniform instants ``t`` (:func:`fohw.model.irregular.simulate_at`).
+
+        The static part (``OCV(soc) + a + b soc + R0 i + c3 i^3``) is read at the instants
+        and the RC elements are solved exactly for the held current at any steps
+        (:func:`fohw.model.irregular.rc_response_at`); ZARC and Warburg elements are simulated
+        on the fine grid (``refine``, ``step``) and read at the instants. The first sample
+        stands for the interval before ``t[0]`` of the first step's length, the elements at rest
+        before it (:mod:`fohw.model.irregular`).
+        """
+        from . import irregular
+
+        irregular.check_intersample(intersample)
+        i, soc = self._signals(u)
+        t = irregular.check_instants(t, i.size)
+        v = self.static_part(i, soc)
+        grid = None
+        for e in self.elements:
+            if e.kind == "rc":
+                v = v + irregular.rc_response_at(e.R, e.tau, i, t, intersample)
+                continue
+            if grid is None:
+                grid = irregular.fine_grid(t, refine=refine, step=step)
+                fine = grid.hold(i, t, intersample)
+            v = v + grid.read(e.response(fine, grid.step), t)
+        return v
+
     def jacobian(self, u):
         """The simulated voltage and its exact derivatives by every parameter (:attr:`parameters` order).
 

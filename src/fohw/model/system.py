@@ -349,6 +349,14 @@ class HammersteinWiener(Model):
                               random_state=random_state,
                               divergence_threshold=divergence_threshold, history=initial)
 
+    def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
+        """Refused: the lagged model is discrete in samples (its lags are samples, not seconds)."""
+        raise ParameterError(
+            "a HammersteinWiener (the lagged kind) is discrete in samples: it has no meaning "
+            "between its samples, so it cannot be simulated at non-uniform instants `t`. "
+            "resample the record to a uniform grid (fohw.model.irregular.resample), or use a "
+            "continuous-time kind (fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")
+
     def config(self) -> dict:
         """The model in its own file format (:meth:`to_dict`): what :meth:`fohw.Model.to_dict` stores."""
         return self.to_dict()
