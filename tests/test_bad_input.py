@@ -964,6 +964,20 @@ API = [
     ("fit", "n_tau = 10**6 (#20: no cap)",
      lambda t: fohw.fit(_circ34(n_tau=10**6), *_cell34()), fohw.ParameterError,
      "(`n_tau` = 1000000 time constants"),
+    ("EquivalentCircuit", "current_sign = 'positive' (issue 37)",
+     lambda t: fohw.EquivalentCircuit(["rc"], current_sign="positive"), fohw.ParameterError,
+     "`current_sign` must be one of 'charge_positive', 'discharge_positive'"),
+    ("fit", "a circuit's current in the other sign convention (issue 37)",
+     lambda t: fohw.fit(_circ34(), *(lambda u, v: (u * [-1.0, 1.0], v))(*_cell34())),
+     fohw.ParameterError, "The current `u[:, 0]` is given in the other convention: build the "
+     "circuit with current_sign='discharge_positive'"),
+    ("fit_impedance", "a frequency of 0 Hz",
+     lambda t: fohw.fit_impedance(fohw.EquivalentCircuit(["zarc"]), [0.0, 1.0, 2.0], [0.02] * 3),
+     fohw.ParameterError, "`f` must be positive frequencies [Hz]; got 0.0 at index 0"),
+    ("fit_joint", "a noise level of 0",
+     lambda t: fohw.fit_joint(fohw.EquivalentCircuit(["rc"]), np.column_stack([U, 0.5 + 0 * U]), U,
+                              [1.0, 2.0], [0.02, 0.02], noise=(0.0, 0.01)),
+     fohw.ParameterError, "`noise` must hold two positive, finite noise levels; got (0.0, 0.01)"),
 ]
 
 CLI = [

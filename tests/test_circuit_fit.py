@@ -326,17 +326,15 @@ def test_a_constant_current_is_refused_unless_the_offset_or_r0_is_held():
 
 
 def test_a_current_of_the_other_sign_is_named():
-    # A discharge record whose current is given with the other sign: the voltage rises with a
-    # "discharge"; the best non-negative resistances are all 0, and the fit says why.
+    # A record whose current is given with the other sign: the voltage falls with a "charge".
+    # Issue 37: the fit ran and ended with every resistance at 0; the record is now refused
+    # before the scan, naming the other convention (tests/test_circuit_conventions.py).
     u = record(2000, seed=17)
     true = EquivalentCircuit([ZARC(0.012, 60.0, 0.5)], r0=0.015)
     v = true.simulate(u) + 1e-4 * np.random.default_rng(18).standard_normal(u.shape[0])
     flipped = u * [-1.0, 1.0]
-    with pytest.warns((fohw.ConvergenceWarning, fohw.RankDeficiencyWarning)):
-        fit = fohw.fit(EquivalentCircuit(["zarc"], tau_bounds=(1.0, 1000.0)), flipped, v)
-    assert fit.status in (fohw.Status.FAILED, fohw.Status.RANK_DEFICIENT)
-    assert "Every resistance of the fitted circuit is 0" in fit.message
-    assert "sign convention" in fit.message
+    with pytest.raises(fohw.ParameterError, match="current_sign='discharge_positive'"):
+        fohw.fit(EquivalentCircuit(["zarc"], tau_bounds=(1.0, 1000.0)), flipped, v)
 
 
 @pytest.mark.parametrize("kind, bounds, match", [

@@ -25,6 +25,7 @@ from .estimators.hybrid import (
     SingleInnovationLMOptions,
 )
 from .estimators.identify import identify
+from .estimators.impedance_fit import fit_impedance, fit_joint
 from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
@@ -96,6 +97,8 @@ __all__ = [
     "Parameters",
     "register_model",
     "fit",
+    "fit_impedance",
+    "fit_joint",
     "FitResult",
     "identify_many",
     "Validation",

@@ -1,7 +1,8 @@
 """Fractional equivalent circuits of a battery cell: OCV map, series resistance, RC/ZARC/Warburg elements.
 
-The terminal voltage of a cell driven by a current ``i`` (positive = charge) is written term by
-term,
+The terminal voltage of a cell driven by a current ``i`` is written term by term (in the equations
+``i`` is positive on charge; :class:`EquivalentCircuit` takes the measured current in either sign
+convention, its ``current_sign``),
 
 ``v[k] = OCV(soc[k]) + a + b soc[k] + R0 i[k] + c3 i[k]^3 + sum_e x_e[k]``,
 
@@ -49,7 +50,7 @@ from .kernels import causal_product, series_divide
 from .parameters import Parameter, Parameters
 
 __all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS",
-           "impedance_error"]
+           "impedance_error", "CURRENT_SIGNS", "SIGN_T"]
 
 
 def _omega(f):
@@ -324,10 +325,26 @@ ELEMENT_KINDS = {"rc": RC, "zarc": ZARC, "warburg": Warburg}
 #: Scan starts :meth:`EquivalentCircuit.starts` returns (the best grid points, distinct).
 SCAN_STARTS = 5
 
+#: The sign conventions of the measured current ``u[:, 0]`` (:class:`EquivalentCircuit`'s
+#: ``current_sign``): ``"charge_positive"`` (a charge current is positive, a discharge negative:
+#: the shipped LG M50LT record, ``fohw.datasets.battery_cell()``) and ``"discharge_positive"``
+#: (PyBaMM's and most cyclers' convention).
+CURRENT_SIGNS = ("charge_positive", "discharge_positive")
+
+#: The sign check of :meth:`EquivalentCircuit.starts` refuses a record whose voltage steps fall
+#: with the current's steps (as the circuit counts it) with a t-statistic below ``-SIGN_T``: the
+#: slope of ``diff(v - OCV)`` on ``diff(i)`` is ``R0`` plus the elements' share, positive for any
+#: passive cell, and noise alone reaches ``-SIGN_T`` standard errors with probability below 3e-7.
+SIGN_T = 5.0
+
 #: Most combinations of grid points the start scan (:meth:`EquivalentCircuit.starts`) may
 #: solve: about 30 us each (4 ZARCs at the default grid, 43 750 of them, take 1.3 s); five ZARCs
 #: at the default grid would need 175 000 and are refused, naming ``n_tau`` and ``n_alpha``.
 MAX_GRID_STARTS = 50_000
+
+#: Without a grid point of non-negative resistances, the scan projects its best
+#: ``PROJECTED_STARTS * SCAN_STARTS`` points onto the feasible set (:meth:`EquivalentCircuit.starts`).
+PROJECTED_STARTS = 4
 
 
 class OCVTable:
@@ -418,7 +435,8 @@ class EquivalentCircuit(Model):
 
     A :class:`fohw.Model`: its input ``u`` has two columns, the current ``i`` [A] and the state
     of charge ``soc`` (``u[:, 0]``, ``u[:, 1]``), its output is the terminal voltage [V], and
-    :func:`fohw.fit` fits it by simulation error.
+    :func:`fohw.fit` fits it by simulation error. The current's sign is the ``current_sign``
+    argument (default: positive = charge); a fit checks the record against it.
 
     Parameters
     ----------
@@ -437,11 +455,24 @@ class EquivalentCircuit(Model):
         the overpotential ``a + b soc + ...``).
     dt : float, optional
         Sampling time [s] (default 1).
+    current_sign : {"charge_positive", "discharge_positive"}, optional
+        The sign convention of the measured current ``u[:, 0]``. ``"charge_positive"``
+        (default): a charge current is positive and a discharge negative, the convention of
+        the LG M50LT record shipped with fohw (``fohw.datasets.battery_cell()``), in which the
+        voltage rises with the current. ``"discharge_positive"``: a discharge current is
+        positive (PyBaMM's ``"Current [A]"``, most cyclers' exports); the circuit then counts
+        ``-u[:, 0]``. The parameters mean the same in both (``R0 >= 0`` whatever the sign),
+        and so does the state of charge column, which the user computes. :func:`fohw.fit`
+        checks the record against the convention (:meth:`starts`; a record whose voltage steps
+        fall with the current's steps is refused, naming the other convention).
     tau_bounds : (float, float), optional
         Bounds of every time constant in a fit [s]; default ``(dt, inf)`` (a time constant
         below the step is not resolved: it merges with ``R0``). The scan of
-        :meth:`starts` covers ``tau_bounds``, up to ``N dt / 10`` when the upper bound is
-        infinite.
+        :meth:`starts` covers ``tau_bounds``; with the default (an infinite upper bound) it
+        runs from ``dt`` up to the duration of the record it is given, ``N dt`` (for a pulse
+        with its relaxation, the relaxation's time constants up to the record's length; a
+        time constant beyond the record makes an element an integrator over it, its ``R`` and
+        ``tau`` not separately identifiable), and the local search is free beyond.
     n_tau, n_alpha : int, optional
         The scan's grid (:meth:`starts`): log-spaced time constants and orders per element
         (default 8 and 5). The scan visits every combination of the elements' grid points (same-kind
@@ -486,10 +517,15 @@ class EquivalentCircuit(Model):
     tau_bounds: tuple | None = None
     n_tau: int = 8
     n_alpha: int = 5
+    current_sign: str = "charge_positive"
 
     def __post_init__(self):
         dt = check_scalar(self.dt, "dt", lower=0.0, lower_inclusive=False)
         object.__setattr__(self, "dt", dt)
+        if not (isinstance(self.current_sign, str) and self.current_sign in CURRENT_SIGNS):
+            raise ParameterError(f"`current_sign` must be one of {', '.join(map(repr, CURRENT_SIGNS))} "
+                                 f"(the sign of a charge current in u[:, 0]); got "
+                                 f"{self.current_sign!r}.")
         if self.tau_bounds is not None:
             try:
                 lo, hi = (float(x) for x in self.tau_bounds)
@@ -611,7 +647,8 @@ class EquivalentCircuit(Model):
                                  f"capacity); got {float(soc[k])!r} at sample {k} (values from "
                                  f"{float(soc.min())!r} to {float(soc.max())!r}). Check its units "
                                  "and the initial state of charge of the coulomb count.")
-        return np.ascontiguousarray(u[:, 0]), np.ascontiguousarray(soc)
+        i = u[:, 0] if self.current_sign == "charge_positive" else -u[:, 0]
+        return np.ascontiguousarray(i), np.ascontiguousarray(soc)
 
     def ocv_values(self, soc):
         """``OCV(soc)`` [V] from the circuit's map, checked: one finite value per sample (0 without a map)."""
@@ -722,9 +759,18 @@ class EquivalentCircuit(Model):
         parameters keep their values. ``sample_weight`` (from :func:`fohw.fit`) weights the
         squares. The best ``SCAN_STARTS`` are returned (:func:`fohw.fit` refines its
         ``n_starts`` best). Without the scan, local searches of RC + ZARC mixtures were seen to
-        end at ``alpha -> 1`` or ``alpha -> 0``. A record whose current is zero at every sample
-        is refused, as is a constant current (``R0 i`` is then the offset ``a``) unless ``a`` or
-        ``R0`` is fixed, and a grid of more than ``MAX_GRID_STARTS`` combinations.
+        end at ``alpha -> 1`` or ``alpha -> 0``. When no combination has non-negative
+        resistances, the best few are projected onto the feasible set: their linear parameters
+        re-solved by least squares with the resistances bounded below by 0
+        (:func:`scipy.optimize.lsq_linear`), the nearest feasible point in the criterion's own
+        metric, and ranked by their sum of squares there.
+
+        Refused, each with its own message: a record whose current is zero at every sample (no
+        excitation), a constant current (``R0 i`` is then the offset ``a``) unless ``a`` or
+        ``R0`` is fixed, a record whose voltage falls with the current as the circuit counts it
+        (:meth:`check_sign`: the other ``current_sign``), and a grid of more than
+        ``MAX_GRID_STARTS`` combinations. (A constant voltage, and fewer samples than free
+        parameters, are refused by :func:`fohw.fit` before the scan.)
         """
         i, soc = self._signals(u)
         y = check_array(y, "y")
@@ -743,14 +789,15 @@ class EquivalentCircuit(Model):
         sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
                                                                                  "sample_weight"))
         ocv_v = self.ocv_values(soc)
+        self.check_sign(i, y - ocv_v, sw)
         grids = []
         for k, kind in enumerate(self.kinds, start=1):
             if kind == "warburg":
                 taus = [None]
             else:
                 lo, hi = params[f"tau{k}"].bounds
-                if not math.isfinite(hi):
-                    hi = max(i.size * self.dt / 10.0, lo)
+                if not math.isfinite(hi):       # the record's duration (see `tau_bounds`)
+                    hi = max(i.size * self.dt, lo)
                 taus = np.geomspace(lo, hi, self.n_tau) if self.n_tau > 1 else \
                     np.array([math.sqrt(lo * hi)])
             if kind == "rc":
@@ -793,14 +840,64 @@ class EquivalentCircuit(Model):
             out.append(self.with_parameters({n: x for n, x in values.items() if n not in tied}))
         return out
 
+    def check_sign(self, i, v, sample_weight=None):
+        """Refuse a record whose voltage falls when the current, as ``current_sign`` counts it, rises.
+
+        The least-squares slope of the voltage's steps ``diff(v)`` on the current's steps
+        ``diff(i)`` is ``R0`` plus the elements' share of the step (``Re Z > 0`` for a passive
+        cell): positive. A slope below ``-SIGN_T`` standard errors (from the scatter of the
+        steps about it) says the current is counted with the wrong sign; the error names the
+        other convention. Steps between samples of zero weight are left out.
+
+        Parameters
+        ----------
+        i : ndarray, shape (N,)
+            The current as the circuit counts it (positive = charge).
+        v : ndarray, shape (N,)
+            The terminal voltage less the OCV map [V].
+        sample_weight : ndarray, shape (N,), optional
+            The steps where both ends have a positive weight are used.
+
+        Raises
+        ------
+        ParameterError
+            Naming both conventions, the slope and its t-statistic.
+        """
+        di, dv = np.diff(i), np.diff(v)
+        if sample_weight is not None:
+            keep = (sample_weight[1:] > 0) & (sample_weight[:-1] > 0)
+            di, dv = di[keep], dv[keep]
+        sxx = float(di @ di)
+        if di.size < 3 or sxx == 0.0:
+            return
+        slope = float(di @ dv) / sxx
+        scatter = dv - slope * di
+        se = math.sqrt(float(scatter @ scatter) / (di.size - 1) / sxx)
+        t = slope / se if se > 0 else (-math.inf if slope < 0 else math.inf)
+        if t < -SIGN_T:
+            other = CURRENT_SIGNS[1 - CURRENT_SIGNS.index(self.current_sign)]
+            counted = ("a charge current positive" if self.current_sign == "charge_positive" else
+                       "a discharge current positive")
+            raise ParameterError(
+                f"the voltage falls when the current rises: with current_sign="
+                f"{self.current_sign!r} ({counted}), the slope of the voltage's steps on the "
+                f"current's steps is {slope:.4g} V/A (t = {t:.3g} over {di.size} steps), where a "
+                "cell's is positive (R0 plus its elements). The current `u[:, 0]` is given in the "
+                f"other convention: build the circuit with current_sign={other!r}"
+                + (" (PyBaMM's and most cyclers' convention)" if other == "discharge_positive"
+                   else " (the shipped LG M50LT record's)") + ".")
+
     def check_fitted(self, u, y):
         """A sentence when every resistance ended at 0 (the voltage does not answer the current)."""
         rs = [self.r0] + [e.sigma if e.kind == "warburg" else e.R for e in self.elements]
         if any(r > 0 for r in rs):
             return None
+        other = CURRENT_SIGNS[1 - CURRENT_SIGNS.index(self.current_sign)]
         return ("Every resistance of the fitted circuit is 0: its voltage does not answer the "
-                "current as a cell's does (a charge current, u[:, 0] > 0, raises it). Check the "
-                "sign convention and the units of the current.")
+                f"current as a cell's does (a charge current raises it; with current_sign="
+                f"{self.current_sign!r} a charge current is u[:, 0] "
+                f"{'> 0' if self.current_sign == 'charge_positive' else '< 0'}). Check the sign "
+                f"convention (current_sign={other!r}?) and the units of the current.")
 
     def config(self) -> dict:
         """The structure and settings: element kinds, current map, OCV table, ``dt``, scan grid.
@@ -820,7 +917,7 @@ class EquivalentCircuit(Model):
         return {"elements": list(self.kinds), "current_map": self.c3 is not None,
                 "ocv": None if self.ocv is None else self.ocv.to_dict(), "dt": self.dt,
                 "tau_bounds": None if self.tau_bounds is None else list(self.tau_bounds),
-                "n_tau": self.n_tau, "n_alpha": self.n_alpha}
+                "n_tau": self.n_tau, "n_alpha": self.n_alpha, "current_sign": self.current_sign}
 
     @classmethod
     def from_config(cls, config) -> EquivalentCircuit:
@@ -838,7 +935,8 @@ class EquivalentCircuit(Model):
             return NotImplemented
         return (_same_map(self.ocv, other.ocv) and self.kinds == other.kinds and self.dt == other.dt
                 and self.tau_bounds == other.tau_bounds and (self.n_tau, self.n_alpha) ==
-                (other.n_tau, other.n_alpha) and self.parameters == other.parameters)
+                (other.n_tau, other.n_alpha) and self.current_sign == other.current_sign
+                and self.parameters == other.parameters)
 
     __hash__ = None
 
@@ -1069,7 +1167,22 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
         rss = yy - 2 * float(full @ rhs[idx]) + float(full @ gsub @ full)
         (negative if bad else found).append(
             (rss, tuple(combo), {**{n: fixed[n] for n in names if n in fixed}, **coef}))
-    # Without a point of non-negative resistances (e.g. an order held where the record does not
-    # want it), the best points with their negative resistances clipped to 0 are the starts.
-    found = sorted(found or negative, key=lambda t: t[0])
+    if not found:
+        # No point of non-negative resistances (e.g. an order held where the record does not
+        # want it): the best few, projected onto the feasible set (their linear parameters
+        # re-solved with the resistances >= 0), ranked by their sum of squares there.
+        negative.sort(key=lambda t: t[0])
+        for _, combo, _ in negative[:PROJECTED_STARTS * keep]:
+            idx = list(range(nb)) + [index[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
+            free = [(j, n) for j, n in zip(idx, names) if n not in fixed]
+            target = y - sum((cols[:, j] * scale[j] * fixed[n] for j, n in zip(idx, names)
+                              if n in fixed), np.zeros(y.size))
+            lower = [0.0 if n == "R0" or n[0] in "Rs" else -np.inf for _, n in free]
+            sol = scipy.optimize.lsq_linear(cols[:, [j for j, _ in free]], target,
+                                            bounds=(lower, np.inf))
+            coef = {n: max(float(c) / scale[j], 0.0) if lo == 0.0 else float(c) / scale[j]
+                    for (j, n), c, lo in zip(free, sol.x, lower)}
+            found.append((2.0 * float(sol.cost), tuple(combo),
+                          {**{n: fixed[n] for n in names if n in fixed}, **coef}))
+    found.sort(key=lambda t: t[0])
     return [(combo, coef) for _, combo, coef in found[:keep]]
