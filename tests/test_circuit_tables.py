@@ -232,6 +232,23 @@ def test_bad_settings_are_refused_naming_them(kwargs, match):
         fohw.CircuitTables(base.pop("elements"), **base)
 
 
+def test_the_current_sign_convention_is_an_argument_and_checked():
+    model, u = _model(), _record()
+    flipped = u.copy()
+    flipped[:, 0] *= -1.0
+    other = fohw.CircuitTables(model.kinds, soc_points=SOC_POINTS, temperature_points=T_POINTS,
+                               values=model.tables | model.alphas, ocv=OCV, dt=0.5,
+                               tau_bounds=(0.5, 500.0), current_sign="discharge_positive")
+    np.testing.assert_array_equal(other.simulate(flipped), model.simulate(u))
+    # a record in the other convention: the fit's scan refuses it, naming that convention
+    v = model.simulate(u)
+    with pytest.raises(fohw.ParameterError, match="current_sign='discharge_positive'"):
+        model.starts(flipped, v)
+    with pytest.raises(fohw.ParameterError, match="`current_sign` must be one of"):
+        fohw.CircuitTables(["rc"], soc_points=SOC_POINTS, temperature_points=T_POINTS,
+                           current_sign="positive")
+
+
 def test_a_temperature_in_kelvin_is_refused():
     u = _record()
     u[:, 2] += 273.15

@@ -41,7 +41,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_scalar
 from ..exceptions import ParameterError
 from .base import Model
-from .circuit import RC, ZARC, OCVTable
+from .circuit import CURRENT_SIGNS, RC, ZARC, EquivalentCircuit, OCVTable
 from .gl import gl_weights_derivative, gl_weights_unchecked
 from .kernels import HalfMerge, causal_product, divide_and_conquer
 from .parameters import Parameter, Parameters
@@ -151,9 +151,9 @@ def _table_names(table, soc_points, temperature_points):
 class CircuitTables(Model):
     """A battery cell's equivalent circuit with parameters tabulated over state of charge and temperature.
 
-    A :class:`fohw.Model`: ``u = [current, soc, temperature]`` (``u[:, 0]`` in A, positive =
-    charge as :class:`fohw.EquivalentCircuit`; ``u[:, 1]`` the coulomb-counted state of charge;
-    ``u[:, 2]`` in degC), output the terminal voltage [V].
+    A :class:`fohw.Model`: ``u = [current, soc, temperature]`` (``u[:, 0]`` in A, in the sign
+    ``current_sign`` says, as :class:`fohw.EquivalentCircuit`; ``u[:, 1]`` the coulomb-counted
+    state of charge; ``u[:, 2]`` in degC), output the terminal voltage [V].
 
     Parameters
     ----------
@@ -176,6 +176,9 @@ class CircuitTables(Model):
         docstring); 0 (default): none.
     n_tau, n_alpha : int, optional
         The start scan's grid (:meth:`starts`).
+    current_sign : {"charge_positive", "discharge_positive"}, optional
+        The sign convention of ``u[:, 0]`` (default: a charge current is positive); a fit checks
+        the record against it (:meth:`fohw.EquivalentCircuit.check_sign`).
     temperature_interpolation : {"linear", "arrhenius"}, optional
         ``"linear"`` (default, as PyBaMM's tables): every table linear in SOC and temperature
         between breakpoints. ``"arrhenius"``: the logarithm of every resistance and time constant
@@ -205,7 +208,7 @@ class CircuitTables(Model):
 
     def __init__(self, elements, *, soc_points, temperature_points, values=None, ocv=None, dt=1.0,
                  tau_bounds=None, smoothing=0.0, n_tau=6, n_alpha=5,
-                 temperature_interpolation="linear"):
+                 temperature_interpolation="linear", current_sign="charge_positive"):
         if isinstance(elements, str):
             raise ParameterError(f"`elements` must be a sequence of 'rc' or 'zarc'; got {elements!r} "
                                  "(write [element] for one).")
@@ -235,6 +238,10 @@ class CircuitTables(Model):
             raise ParameterError(f"`temperature_interpolation` must be 'linear' or 'arrhenius'; got "
                                  f"{temperature_interpolation!r}.")
         self.temperature_interpolation = temperature_interpolation
+        if not (isinstance(current_sign, str) and current_sign in CURRENT_SIGNS):
+            raise ParameterError(f"`current_sign` must be one of {', '.join(map(repr, CURRENT_SIGNS))} "
+                                 f"(the sign of a charge current in u[:, 0]); got {current_sign!r}.")
+        self.current_sign = current_sign
         if isinstance(ocv, dict):
             ocv = OCVTable.from_dict(ocv)
         if ocv is not None and not callable(ocv):
@@ -321,7 +328,8 @@ class CircuitTables(Model):
                              temperature_points=self.temperature_points, values=new, ocv=self.ocv,
                              dt=self.dt, tau_bounds=self.tau_bounds, smoothing=self.smoothing,
                              n_tau=self.n_tau, n_alpha=self.n_alpha,
-                             temperature_interpolation=self.temperature_interpolation)
+                             temperature_interpolation=self.temperature_interpolation,
+                             current_sign=self.current_sign)
 
     def config(self) -> dict:
         """Structure and settings (JSON values); the OCV map must be an :class:`fohw.OCVTable`."""
@@ -333,14 +341,15 @@ class CircuitTables(Model):
                 "ocv": None if self.ocv is None else self.ocv.to_dict(), "dt": self.dt,
                 "tau_bounds": list(self.tau_bounds), "smoothing": self.smoothing,
                 "n_tau": self.n_tau, "n_alpha": self.n_alpha,
-                "temperature_interpolation": self.temperature_interpolation}
+                "temperature_interpolation": self.temperature_interpolation,
+                "current_sign": self.current_sign}
 
     def __eq__(self, other):
         if type(other) is not type(self):
             return NotImplemented
         same_ocv = self.ocv is other.ocv or (isinstance(self.ocv, OCVTable) and self.ocv == other.ocv)
         settings = ("kinds", "step", "tau_bounds", "smoothing", "n_tau", "n_alpha",
-                    "temperature_interpolation")
+                    "temperature_interpolation", "current_sign")
         return (same_ocv and all(getattr(self, n) == getattr(other, n) for n in settings)
                 and np.array_equal(self.soc_points, other.soc_points)
                 and np.array_equal(self.temperature_points, other.temperature_points)
@@ -352,6 +361,8 @@ class CircuitTables(Model):
     def _signals(self, u):
         u = self.check_input(u)
         i, soc, temp = (np.ascontiguousarray(u[:, j]) for j in range(3))
+        if self.current_sign == "discharge_positive":
+            i = -i
         bad = np.flatnonzero((soc < 0.0) | (soc > 1.0))
         if bad.size:
             k = int(bad[0])
@@ -506,6 +517,8 @@ class CircuitTables(Model):
         sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
                                                                                  "sample_weight"))
         w = self._weights(soc, temp)
+        # the record against the current's sign convention (the circuit's own check)
+        EquivalentCircuit([], current_sign=self.current_sign).check_sign(i, y - self._ocv(soc), sw)
         target = (y - self._ocv(soc)) * sw
         params = self.parameters
         grids = []
