@@ -21,7 +21,7 @@ kernels. The same estimate is printed at N = 16 495, where it can be checked aga
 measured direct fit. Prints medians of CPU time (``time.process_time``) over ``--repeats``.
 
 ``--part spectrum``: ``fohw.fit_impedance`` of four circuits to the cell's measured spectra at SOC
-0.4, 0.5 and 0.6 (1e-3 to 0.33 Hz, with the OCV's capacitor), and ``fohw.fit_joint`` of a ZARC
+0.4, 0.5 and 0.6 (1e-3 to 0.33 Hz, with the OCV's capacitor), and ``fohw.fit_record_and_impedance`` of a ZARC
 and of two RC elements to the drive cycle's estimation half (h = 1.5 s, tau <= 20 000 s) with
 the SOC 0.6 spectrum, against the record alone: RMS relative impedance errors, validation RMSE
 (free run of the second half), CPU times. The numbers of docs/battery.md's "Conventions and the
@@ -284,7 +284,7 @@ def run_spectrum():
             t0 = time.process_time()
             alone = fohw.fit(model, u[est], d.v[est], order_grid=1)
             t1 = time.process_time()
-            joint = fohw.fit_joint(model, u[est], d.v[est], f[band], z_at(0.6),
+            joint = fohw.fit_record_and_impedance(model, u[est], d.v[est], f[band], z_at(0.6),
                                    capacity=cell.capacity, ocv_slope=slope(0.6))
             t2 = time.process_time()
         for name, fit, sec in (("record alone", alone, t1 - t0), ("joint", joint, t2 - t1)):

@@ -974,9 +974,10 @@ API = [
     ("fit_impedance", "a frequency of 0 Hz",
      lambda t: fohw.fit_impedance(fohw.EquivalentCircuit(["zarc"]), [0.0, 1.0, 2.0], [0.02] * 3),
      fohw.ParameterError, "`f` must be positive frequencies [Hz]; got 0.0 at index 0"),
-    ("fit_joint", "a noise level of 0",
-     lambda t: fohw.fit_joint(fohw.EquivalentCircuit(["rc"]), np.column_stack([U, 0.5 + 0 * U]), U,
-                              [1.0, 2.0], [0.02, 0.02], noise=(0.0, 0.01)),
+    ("fit_record_and_impedance", "a noise level of 0",
+     lambda t: fohw.fit_record_and_impedance(fohw.EquivalentCircuit(["rc"]),
+                                             np.column_stack([U, 0.5 + 0 * U]), U, [1.0, 2.0],
+                                             [0.02, 0.02], noise=(0.0, 0.01)),
      fohw.ParameterError, "`noise` must hold two positive, finite noise levels; got (0.0, 0.01)"),
 ]
 

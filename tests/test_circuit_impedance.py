@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import fohw
-from fohw.estimators.impedance_fit import fit_impedance, fit_joint, spectrum_residual
+from fohw.estimators.impedance_fit import fit_impedance, fit_record_and_impedance, spectrum_residual
 from fohw.model.circuit import RC, ZARC, EquivalentCircuit, Warburg
 
 DT = 0.1
@@ -171,7 +171,7 @@ def test_the_joint_fit_weights_each_part_by_its_noise():
     rng = np.random.default_rng(4)
     z = true.impedance(f) * (1 + 0.003 * (rng.standard_normal(30) + 1j * rng.standard_normal(30)))
     model = EquivalentCircuit(["rc", "zarc"], tau_bounds=(1.0, 2000.0), n_tau=5, n_alpha=3)
-    res = fit_joint(model, u, y, f, z)
+    res = fit_record_and_impedance(model, u, y, f, z)
     assert res.converged and res.n_samples == 1500 + 60
     s_time, s_spec = res.options["noise"]
     # The default noise levels are the separate fits' RMS residuals (near the true 2e-4, 0.003).
@@ -189,4 +189,4 @@ def test_the_joint_fit_weights_each_part_by_its_noise():
     # The spectrum pins the slow ZARC better than the record alone: a smaller standard error.
     assert se["tau2"] < alone.standard_errors()["tau2"]
     with pytest.raises(fohw.ParameterError, match="`noise` must hold two positive"):
-        fit_joint(model, u, y, f, z, noise=(0.0, 0.01))
+        fit_record_and_impedance(model, u, y, f, z, noise=(0.0, 0.01))

@@ -25,7 +25,7 @@ from .estimators.hybrid import (
     SingleInnovationLMOptions,
 )
 from .estimators.identify import identify
-from .estimators.impedance_fit import fit_impedance, fit_joint
+from .estimators.impedance_fit import fit_impedance, fit_record_and_impedance
 from .estimators.migd import MultiInnovationGradient
 from .estimators.output_error import OutputErrorOptions
 from .estimators.rls import MultiInnovationRLS, RlsOptions
@@ -98,7 +98,7 @@ __all__ = [
     "register_model",
     "fit",
     "fit_impedance",
-    "fit_joint",
+    "fit_record_and_impedance",
     "FitResult",
     "identify_many",
     "Validation",

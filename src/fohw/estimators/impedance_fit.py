@@ -15,7 +15,7 @@ the measured modulus, real and imaginary parts stacked:
 impedance data, whose errors grow with ``|Z|``): every frequency counts by its relative error,
 the quantity :func:`fohw.model.circuit.impedance_error` reports.
 
-The joint fit (:func:`fit_joint`) stacks the record's simulation error and the spectrum's
+The joint fit (:func:`fit_record_and_impedance`) stacks the record's simulation error and the spectrum's
 residual, each divided by its own noise level,
 ``r = [sqrt(w) (y - yhat) / sigma_time, r_spectrum / sigma_spectrum]``: the Gaussian likelihood of
 two independent parts with their own variances. By default each ``sigma`` is the RMS residual
@@ -40,39 +40,16 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
-from ..model.circuit import EquivalentCircuit, _combos, _element
+from ..model.circuit import EquivalentCircuit, check_spectrum, make_element, scan_combinations
 from ..results import Status
 from ._common import bounded_least_squares
 from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian, rank_rcond
 
-__all__ = ["fit_impedance", "fit_joint", "spectrum_residual", "WEIGHTS"]
+__all__ = ["fit_impedance", "fit_record_and_impedance", "spectrum_residual", "WEIGHTS"]
 
 #: The weightings of the spectrum's residual: ``"relative"`` (divided by ``|Z|``, default),
 #: ``"unit"`` (ohms, unweighted); an array of one positive weight per frequency also works.
 WEIGHTS = ("relative", "unit")
-
-
-def _check_spectrum(f, z):
-    f = check_array(f, "f", min_length=1)
-    bad = np.flatnonzero(f <= 0)
-    if bad.size:
-        raise ParameterError(f"`f` must be positive frequencies [Hz]; got {float(f[bad[0]])!r} at "
-                             f"index {int(bad[0])}.")
-    try:
-        z = np.asarray(z, dtype=np.complex128).ravel()
-    except (TypeError, ValueError):
-        raise ParameterError(f"`z` must be an array of complex impedances [ohm]; got "
-                             f"{type(z).__name__}.") from None
-    if z.shape != f.shape:
-        raise ParameterError(f"`z` must have one value per frequency; got {z.shape[0]} values for "
-                             f"{f.shape[0]} frequencies.")
-    bad = np.flatnonzero(~np.isfinite(z) | (z == 0))
-    if bad.size:
-        k = int(bad[0])
-        raise ParameterError(f"`z` must be finite and non-zero at every frequency; got {z[k]!r} at "
-                             f"index {k} (f = {f[k]:g} Hz), {bad.size} such value(s) in all. Drop "
-                             "those frequencies.")
-    return f, z
 
 
 def _spectrum_weight(weight, z):
@@ -173,27 +150,14 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     dt = model.dt if discrete else None
     grids = []
     for k, kind in enumerate(kinds, start=1):
-        if kind == "warburg":
-            taus = [None]
-        else:
+        lo = hi = None
+        if kind != "warburg":
             lo, hi = params[f"tau{k}"].bounds
             lo, hi = max(lo, band[0]), min(hi, band[1])
             if lo > hi:
                 lo = hi = min(max(math.sqrt(band[0] * band[1]), params[f"tau{k}"].bounds[0]),
                               params[f"tau{k}"].bounds[1])
-            taus = np.geomspace(lo, hi, model.n_tau) if model.n_tau > 1 else [math.sqrt(lo * hi)]
-        if kind == "rc":
-            alphas = [1.0]
-        else:
-            lo, hi = params[f"alpha{k}"].bounds
-            alphas = (np.linspace(max(lo, 0.2), hi, model.n_alpha) if model.n_alpha > 1 else
-                      [hi if kind == "zarc" else 0.5 * (lo + hi)])
-        g = [(t, a) for t in taus for a in alphas]
-        if f"tau{k}" in fixed:
-            g = [(fixed[f"tau{k}"], a) for a in sorted({a for _, a in g})]
-        if f"alpha{k}" in fixed:
-            g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
-        grids.append(g)
+        grids.append(model.element_grid(k, params, fixed, (lo, hi)))
     # Linear columns: R0 (1), b (the capacitor's unit), each element's unit impedance.
     base_names, base_cols = ["R0"], [np.ones(f.size, dtype=complex)]
     offset = np.zeros(f.size, dtype=complex)
@@ -208,12 +172,12 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     for kind, g in zip(kinds, grids):
         for tau, alpha in g:
             if (kind, tau, alpha) not in units:
-                e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
+                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
                 units[(kind, tau, alpha)] = e.impedance(f, dt)
     names = base_names + [f"{'sigma' if kind == 'warburg' else 'R'}{e}"
                           for e, kind in enumerate(kinds, start=1)]
     found = []
-    for combo in _combos(kinds, grids, fixed):
+    for combo in scan_combinations(kinds, grids, fixed):
         cols = base_cols + [units[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
         target = z - offset
         free = []
@@ -329,7 +293,7 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     {'a': 0.0, 'R0': 0.02, 'R1': 0.004, 'tau1': 2.0, 'R2': 0.01, 'tau2': 80.0, 'alpha2': 0.55}
     """
     _check_circuit(model)
-    f, z = _check_spectrum(f, z)
+    f, z = check_spectrum(f, z)
     w = _spectrum_weight(weight, z)
     n_starts = check_int(n_starts, "n_starts", minimum=1)
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
@@ -390,7 +354,7 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
 
 
 @thin_solves
-def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="relative",
+def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=None, weight="relative",
               discrete=False, capacity=None, ocv_slope=0.0, n_starts=3, max_nfev=200, tol=1e-10):
     """Fit an :class:`fohw.EquivalentCircuit` to a time record and an impedance spectrum at once.
 
@@ -436,7 +400,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
     own variance; see the module's docstring for what it implies and how to change it.
     """
     _check_circuit(model)
-    f, z = _check_spectrum(f, z)
+    f, z = check_spectrum(f, z)
     w = _spectrum_weight(weight, z)
     u = model.check_input(u)
     y = check_array(y, "y")
@@ -515,7 +479,7 @@ def fit_joint(model, u, y, f, z, *, noise=None, sample_weight=None, weight="rela
                 f"{rms_spec:.4g}."]
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} evaluations; raise `max_nfev`.")
-    status, message = _finish("fit_joint", status, messages, rank_note)
+    status, message = _finish("fit_record_and_impedance", status, messages, rank_note)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=n, message=message, nfev=int(ls.nfev),
                      jacobian="exact (record), finite differences (spectrum)",

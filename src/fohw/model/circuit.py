@@ -50,7 +50,8 @@ from .kernels import causal_product, series_divide
 from .parameters import Parameter, Parameters
 
 __all__ = ["RC", "ZARC", "Warburg", "EquivalentCircuit", "OCVTable", "ELEMENT_KINDS",
-           "impedance_error", "CURRENT_SIGNS", "SIGN_T"]
+           "impedance_error", "CURRENT_SIGNS", "SIGN_T", "make_element", "scan_combinations",
+           "check_spectrum"]
 
 
 def _omega(f):
@@ -421,7 +422,8 @@ def _placeholder(kind, tau):
     return Warburg(0.0, 0.5)
 
 
-def _element(kind, R, tau, alpha):
+def make_element(kind, R, tau, alpha):
+    """The element of ``kind`` ("rc", "zarc" or "warburg") with these values."""
     if kind == "rc":
         return RC(R, tau)
     if kind == "zarc":
@@ -747,6 +749,34 @@ class EquivalentCircuit(Model):
             cols += [d[n] for n in e.names]
         return v, np.column_stack(cols)
 
+    def element_grid(self, k, params, fixed, tau_range):
+        """The scan's ``(tau, alpha)`` points of element ``k`` (counted from 1).
+
+        ``n_tau`` time constants log-spaced over ``tau_range``, ``n_alpha`` orders inside their
+        bounds (from 0.2), fixed ones held; a Warburg element has no time constant (``None``).
+        """
+        kind = self.kinds[k - 1]
+        if kind == "warburg":
+            taus = [None]
+        else:
+            lo, hi = tau_range
+            taus = np.geomspace(lo, hi, self.n_tau) if self.n_tau > 1 else \
+                np.array([math.sqrt(lo * hi)])
+        if kind == "rc":
+            alphas = [1.0]
+        else:
+            lo, hi = params[f"alpha{k}"].bounds
+            if self.n_alpha > 1:
+                alphas = np.linspace(max(lo, 0.2), hi, self.n_alpha)
+            else:
+                alphas = np.array([hi if kind == "zarc" else 0.5 * (lo + hi)])
+        g = [(t, a) for t in taus for a in alphas]
+        if f"tau{k}" in fixed:
+            g = [(fixed[f"tau{k}"], a) for a in sorted({a for _, a in g})]
+        if f"alpha{k}" in fixed:
+            g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
+        return g
+
     def starts(self, u, y, *, sample_weight=None):
         """Start circuits from a scan of the time constants and orders (linear parameters solved).
 
@@ -792,29 +822,11 @@ class EquivalentCircuit(Model):
         self.check_sign(i, y - ocv_v, sw)
         grids = []
         for k, kind in enumerate(self.kinds, start=1):
-            if kind == "warburg":
-                taus = [None]
-            else:
-                lo, hi = params[f"tau{k}"].bounds
-                if not math.isfinite(hi):       # the record's duration (see `tau_bounds`)
-                    hi = max(i.size * self.dt, lo)
-                taus = np.geomspace(lo, hi, self.n_tau) if self.n_tau > 1 else \
-                    np.array([math.sqrt(lo * hi)])
-            if kind == "rc":
-                alphas = [1.0]
-            else:
-                lo, hi = params[f"alpha{k}"].bounds
-                if self.n_alpha > 1:
-                    alphas = np.linspace(max(lo, 0.2), hi, self.n_alpha)
-                else:
-                    alphas = np.array([hi if kind == "zarc" else 0.5 * (lo + hi)])
-            g = [(t, a) for t in taus for a in alphas]
-            if f"tau{k}" in fixed:
-                g = [(fixed[f"tau{k}"], a) for a in sorted({a for _, a in g})]
-            if f"alpha{k}" in fixed:
-                g = [(t, fixed[f"alpha{k}"]) for t in sorted({t for t, _ in g}, key=lambda t: t or 0)]
-            grids.append(g)
-        n_combos = sum(1 for _ in itertools.islice(_combos(self.kinds, grids, fixed),
+            lo, hi = params[f"tau{k}"].bounds if kind != "warburg" else (None, None)
+            if kind != "warburg" and not math.isfinite(hi):   # the record's duration
+                hi = max(i.size * self.dt, lo)
+            grids.append(self.element_grid(k, params, fixed, (lo, hi)))
+        n_combos = sum(1 for _ in itertools.islice(scan_combinations(self.kinds, grids, fixed),
                                                    MAX_GRID_STARTS + 1))
         if n_combos > MAX_GRID_STARTS:
             raise ParameterError(
@@ -998,6 +1010,30 @@ class EquivalentCircuit(Model):
                                  + ("given" if self.ocv is not None else "none")])
 
 
+def check_spectrum(f, z):
+    """``(f, z)``: positive frequencies [Hz] and one finite, non-zero complex impedance each."""
+    f = check_array(f, "f", min_length=1)
+    bad = np.flatnonzero(f <= 0)
+    if bad.size:
+        raise ParameterError(f"`f` must be positive frequencies [Hz]; got {float(f[bad[0]])!r} at "
+                             f"index {int(bad[0])}.")
+    try:
+        z = np.asarray(z, dtype=np.complex128).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError(f"`z` must be an array of complex impedances [ohm]; got "
+                             f"{type(z).__name__}.") from None
+    if z.shape != f.shape:
+        raise ParameterError(f"`z` must have one value per frequency; got {z.shape[0]} values for "
+                             f"{f.shape[0]} frequencies.")
+    bad = np.flatnonzero(~np.isfinite(z) | (z == 0))
+    if bad.size:
+        k = int(bad[0])
+        raise ParameterError(f"`z` must be finite and non-zero at every frequency (a relative "
+                             f"error needs |z| > 0); got {z[k]!r} at index {k} (f = {f[k]:g} Hz), "
+                             f"{bad.size} such value(s) in all. Drop those frequencies.")
+    return f, z
+
+
 def impedance_error(circuit, f, z, band=None, *, discrete=False, capacity=None, ocv_slope=0.0):
     """Relative error ``|Z_model - Z| / |Z|`` of a circuit's impedance against a measured spectrum.
 
@@ -1040,24 +1076,7 @@ def impedance_error(circuit, f, z, band=None, *, discrete=False, capacity=None, 
             raise ParameterError(f"`circuit` must be an EquivalentCircuit or a fohw.fit result of "
                                  f"one; got {what}.")
         circuit = model
-    f = check_array(f, "f")
-    if np.any(f <= 0):
-        raise ParameterError(f"`f` must be positive frequencies [Hz]; got {float(f[f <= 0][0])!r} at "
-                             f"index {int(np.flatnonzero(f <= 0)[0])}.")
-    try:
-        z = np.asarray(z, dtype=np.complex128).ravel()
-    except (TypeError, ValueError):
-        raise ParameterError(f"`z` must be an array of complex impedances; got "
-                             f"{type(z).__name__}.") from None
-    if z.shape != f.shape:
-        raise ParameterError(f"`z` must have one value per frequency; got {z.shape[0]} values for "
-                             f"{f.shape[0]} frequencies.")
-    bad = np.flatnonzero(~np.isfinite(z) | (z == 0))
-    if bad.size:
-        k = int(bad[0])
-        raise ParameterError(f"`z` must be finite and non-zero at every frequency (a relative "
-                             f"error needs |z| > 0); got {z[k]!r} at index {k} (f = {f[k]:g} Hz), "
-                             f"{bad.size} such value(s) in all. Drop those frequencies.")
+    f, z = check_spectrum(f, z)
     keep = np.ones(f.shape, dtype=bool)
     if band is not None:
         try:
@@ -1095,7 +1114,7 @@ def _check_rest(initial):
                              "column u[:, 1].")
 
 
-def _combos(kinds, grids, fixed):
+def scan_combinations(kinds, grids, fixed):
     """The combinations of grid points the scan visits, generated without the skipped ones.
 
     Same-kind elements are interchangeable: their time constants (Warburg: orders) increase
@@ -1130,7 +1149,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     for kind, g in zip(kinds, grids):
         for tau, alpha in g:
             if (kind, tau, alpha) not in responses:
-                e = _element(kind, 1.0, tau if tau is not None else 1.0, alpha)
+                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
                 responses[(kind, tau, alpha)] = e.unit_response(i, dt)
     keys = list(responses)
     cols = np.column_stack(base + [responses[k] for k in keys]) * sw[:, None]
@@ -1146,7 +1165,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     names = base_names + [f"R{e + 1}" if kinds[e] != "warburg" else f"sigma{e + 1}"
                           for e in range(len(kinds))]
     found, negative = [], []
-    for combo in _combos(kinds, grids, fixed):
+    for combo in scan_combinations(kinds, grids, fixed):
         idx = list(range(nb)) + [index[(kinds[e], t, a)] for e, (t, a) in enumerate(combo)]
         free = [j for j, n in zip(idx, names) if n not in fixed]
         fix = [(j, fixed[n]) for j, n in zip(idx, names) if n in fixed]
