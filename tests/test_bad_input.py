@@ -400,6 +400,9 @@ API = [
      lambda t: fohw.analysis.metrics.fit_percent(Y, Y, n_init=49),
      fohw.DimensionError, "`n_init` must leave at least 2 samples"),
     # issue 26 (26lr)
+    ("order_test", "a validation record without the estimation record",
+     lambda t: fohw.order_test(_lr_fit("commensurate"), validation=(U, U ** 3)),
+     fohw.ParameterError, "`validation` needs the estimation record too"),
     ("lr_test", "`restricted` not a result", lambda t: fohw.lr_test("x", _lr_fit("commensurate")),
      fohw.ParameterError, "`restricted` must be an IdentificationResult"),
     ("lr_test", "`full` from a recursive method",

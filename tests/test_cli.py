@@ -390,3 +390,18 @@ def test_readme_lists_every_example_and_no_tracker_reference():
     headings = [line for p in (root / "docs").glob("*.md") for line in p.read_text().splitlines()
                 if line.startswith("#") and tracker.search(line)]
     assert headings == []
+
+
+def test_identify_prints_the_corrected_order_test(tmp_path, capsys):
+    # The output-error chain's fit prints the white-noise order test in its summary; the CLI
+    # has the record, so it adds the test corrected for correlated residuals and the verdict.
+    d = fohw.datasets.paper_example(300, random_state=0)
+    path = tmp_path / "data.txt"
+    np.savetxt(path, np.column_stack([d.u, d.y]))
+    assert main(["identify", str(path), "--na", "1", "--nb", "1", "--f-basis", "1",
+                 "--g-basis", "1", "--method", "output_error"]) == 0
+    out = capsys.readouterr().out
+    res = fohw.identify(d.u, d.y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error")
+    t = res.order_test(d.u, d.y)
+    assert f"Order test corrected for correlated residuals ({t.correction})" in out
+    assert f"p = {t.pvalue_corrected:.4g}" in out and f"Verdict: {t.verdict}" in out

@@ -12,6 +12,7 @@ The convergence checks assert the observed order of the fine-grid scheme between
 held value has acted) fails it.
 """
 
+import importlib
 import math
 
 import numpy as np
@@ -26,7 +27,6 @@ from irregular_reference import (
     rc_step,
     zoh_response,
 )
-from test_model_protocol import KINDS
 from tf_reference import mittag_leffler
 
 import fohw
@@ -38,6 +38,10 @@ from fohw.model.irregular import (
     resample,
     simulate_at,
 )
+
+# The protocol tests' kinds, from the module pytest already loads (``--import-mode=importlib``
+# names it ``tests.test_model_protocol``; a second copy would register its kind twice).
+KINDS = importlib.import_module("tests.test_model_protocol").KINDS
 
 TAU = 0.5
 

@@ -320,6 +320,24 @@ def test_lr_test_of_a_fixed_against_a_free_order(case):
     assert t.pvalue == pytest.approx(0.5 * scipy.stats.chi2.sf(t.statistic, 1), rel=1e-12)
 
 
+def test_lr_test_corrects_for_correlated_residuals_and_gives_a_verdict(case):
+    # Every kind's test reports the statistic corrected from both fits' residuals (a FitResult
+    # keeps them) beside the white-noise one, and reads it beside a held-back record.
+    truth = case.true.parameters[case.order].value
+    null = fohw.fit(_with(case.start, case.order, value=truth, fixed=True), case.u, case.y)
+    t = fohw.lr_test(null, case.fit)       # without the record: along the fits' difference
+    assert t.correction.startswith("sandwich: factor") and 0 <= t.pvalue_corrected <= 1
+    assert "fits' difference" in t.correction
+    assert t.verdict in ("not significant", "significant; not validated (no held-back record)")
+    scored = fohw.lr_test(null, case.fit, u=case.u, y=case.y)   # with it: the score direction
+    assert "along the score direction" in scored.correction, scored.correction
+    assert 0 <= scored.pvalue_corrected <= 1
+    half = case.y.size // 2
+    held = fohw.lr_test(null, case.fit, validation=(case.u[half:], case.y[half:]))
+    assert len(held.validation) == 2 and np.all(np.isfinite(held.validation))
+    assert held.verdict in fohw.analysis.order_verdict.VERDICTS
+
+
 def test_lr_test_refuses_fits_to_two_records(case):
     # issue 34 cases 22/23: fits to two different records gave LR 34 260, p = 0.
     other = _case(case.factory, seed=3)
@@ -366,6 +384,10 @@ def test_select_between_a_right_and_a_wrong_candidate(case):
     assert sel.rows[1]["fit"] > sel.rows[0]["fit"]
     assert sel.rows[1]["lr_pvalue"] < 1e-6 and "vs wrong" in sel.rows[1]["lr_reference"]
     assert math.isnan(sel.rows[0]["lr_pvalue"])
+    assert sel.rows[1]["lr_pvalue_corrected"] < 0.05
+    assert sel.rows[1]["order_verdict"] == ("significant and validates"
+                                            if sel.rows[1]["fit"] >= sel.rows[0]["fit"] + 0.5
+                                            else "significant but does not validate (model error)")
     assert isinstance(sel.best, fohw.FitResult) and sel.best.n_samples == case.y.size
     assert "right" in sel.to_markdown()
 

@@ -570,6 +570,13 @@ def test_lr_column_against_the_nested_integer_candidate(paper):
     assert sel.rows[2]["lr_pvalue"] == fohw.lr_test(sel.results[0], sel.results[2]).pvalue
     assert np.isnan(sel.rows[0]["lr_pvalue"]) and sel.rows[0]["lr_reference"] == ""
     assert "| lr_pvalue |" in sel.to_markdown()
+    # beside it, the test corrected for correlated residuals and the verdict (issue 36)
+    from fohw.analysis.order_verdict import verdict
+    row = sel.rows[1]
+    assert 0 <= row["lr_pvalue_corrected"] <= 1
+    assert row["order_verdict"] == verdict(row["lr_pvalue_corrected"], sel.rows[0]["fit"],
+                                           row["fit"]) != ""
+    assert "| lr_pvalue_corrected | order_verdict |" in sel.to_markdown()
     # no nested candidate in the grid: NaN and no column in the table
     alone = fohw.select_structure(paper.u, paper.y, {"orders": ["commensurate"]}, na=2, nb=2,
                                   **STRUCT)

@@ -12,7 +12,7 @@ from . import _startup, datasets  # noqa: F401
 from ._parallel import end_with_parent
 from .analysis.batch import identify_many
 from .analysis.crb import CRBResult, crb
-from .analysis.lrtest import LRTest, lr_test
+from .analysis.lrtest import LRTest, lr_test, order_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
@@ -160,6 +160,7 @@ __all__ = [
     "FractionalTF",
     "LRTest",
     "lr_test",
+    "order_test",
     "ProfileInterval",
     "profile_interval",
     "FractionalHW",

@@ -591,17 +591,76 @@ def _input_output(args, data, names):
     return u, y
 
 
+def _record(args, u, y, dt, columns=None):
+    """The columns read as a :class:`fohw.Record`, the data every verb takes.
+
+    The same path as the library's: the sampling time and the channel names reach the result
+    and the figures. ``columns`` are the picked columns' header names (inputs, then the output), if any.
+    """
+    from .record import Record
+
+    n_in = 1 if u.ndim == 1 else u.shape[1]
+    picked = columns if columns is not None else [None] * (n_in + 1)
+    in_names = [c or (("u" if n_in == 1 else f"u{j + 1}")) for j, c in enumerate(picked[:-1])]
+    if getattr(args, "inputs", None):
+        in_names = list(args.inputs)
+    return Record(u=u, y=y, dt=dt, name=os.path.basename(str(args.data)),
+                  input_name=in_names[0] if n_in == 1 else tuple(in_names),
+                  output_name=picked[-1] or "y", path=str(args.data))
+
+
+def _column_names(args, names, count, spec=None):
+    """The header names of the columns ``--columns`` picks (None where a column has none)."""
+    spec = args.columns if spec is None else spec
+    if names is None:
+        return None
+    if spec is None:
+        lower = [n.lower() for n in names]
+        if count == 2 and "u" in lower and "y" in lower:
+            return [names[lower.index("u")], names[lower.index("y")]]
+        return list(names[:count]) if len(names) == count else None
+    parts = [p.strip() for p in spec.split(",")]
+    return [names[int(p)] if p.lstrip("-").isdigit() and 0 <= int(p) < len(names) else
+            (p if p in names else None) for p in parts]
+
+
 def _identify(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
     data, names, file_dt = read_table(args.data, _decimal(args))
     u, y = _input_output(args, data, names)
     options = _method_options(args)
-    res, check, caught = _fit_and_check(args, u, y, options, _dt(args.dt, file_dt))
+    record = _record(args, u, y, _dt(args.dt, file_dt),
+                     _column_names(args, names, 1 + (1 if u.ndim == 1 else u.shape[1])))
+    res, check, caught = _fit_and_check(args, record, options)
     _print_warnings(caught)
     _print_identified(args, res, check)
+    _print_order_test(args, res, u, y)
     _save_identified(args, res, check)
     return 0
+
+
+def _print_order_test(args, res, u, y):
+    """The order test corrected for correlated residuals, and its verdict.
+
+    Only where ``summary()`` prints the white-noise test (an ``output_error`` chain's fit);
+    the integer class is refitted on the record. Not with ``--json``.
+    """
+    from .exceptions import FohwError
+
+    if args.json or res.order_test() is None:
+        return
+    try:
+        from .analysis.lrtest import order_test as order_test_with_record
+
+        test = order_test_with_record(res, u, y)
+    except FohwError as exc:
+        print(f"Order test corrected for correlated residuals: not computed ({exc})")
+        return
+    print(f"Order test corrected for correlated residuals ({test.correction}): "
+          f"LR = {test.statistic_corrected:.4g}, p = {test.pvalue_corrected:.4g} "
+          f"(white residuals: p = {test.pvalue:.4g}). Verdict: {test.verdict or 'none'} "
+          "(fohw select holds a part back to validate it).")
 
 
 def _method_options(args):
@@ -616,7 +675,7 @@ def _method_options(args):
     return options
 
 
-def _fit_and_check(args, u, y, options, dt):
+def _fit_and_check(args, record, options):
     """Identify, then the free-run fit on the record: ``(result, check, caught warnings)``."""
     import time
     import warnings
@@ -626,20 +685,20 @@ def _fit_and_check(args, u, y, options, dt):
     from .exceptions import FohwError
 
     start = time.perf_counter()
-    _stage(args, f"identifying with {args.method} on {u.shape[0]} samples ...")
+    _stage(args, f"identifying with {args.method} on {record.n_samples} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")          # every warning, numpy's too, as one line
-        res = identify(u, y, na=args.na, nb=args.nb, f_basis=args.f_basis, g_basis=args.g_basis,
-                       method=args.method, alpha_bounds=args.alpha_bounds, options=options,
-                       offset=args.offset, operating_point=args.operating_point, dt=dt,
-                       output_map=args.output_map,
+        res = identify(record, na=args.na, nb=args.nb, f_basis=args.f_basis,
+                       g_basis=args.g_basis, method=args.method,
+                       alpha_bounds=args.alpha_bounds, options=options, offset=args.offset,
+                       operating_point=args.operating_point, output_map=args.output_map,
                        nk=args.nk, inputs=getattr(args, "inputs", None), progress=_bars(args))
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
         if res.model is not None or res.structure.n_inputs > 1:      # several: result.simulate
             try:
-                check = compare(res, u, y, initial="fitted")      # its own estimation record
+                check = compare(res, record, initial="fitted")    # its own estimation record
             except FohwError as exc:        # e.g. a constant output: no fit index
                 warnings.warn(f"no free-run fit on the estimation record: {exc}", stacklevel=1)
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
@@ -724,7 +783,9 @@ def _select(args):
     data, names, file_dt = read_table(args.data, _decimal(args))
     u, y = _input_output(args, data, names)
     candidates = _candidates(args)
-    sel, caught = _run_selection(args, u, y, candidates, _dt(args.dt, file_dt))
+    record = _record(args, u, y, _dt(args.dt, file_dt),
+                     _column_names(args, names, 1 + (1 if u.ndim == 1 else u.shape[1])))
+    sel, caught = _run_selection(args, record, candidates)
     from .exceptions import NothingSelectedWarning
 
     # with nothing selected, the error below says it in one line
@@ -782,7 +843,7 @@ def _candidates(args):
     return candidates
 
 
-def _run_selection(args, u, y, candidates, dt):
+def _run_selection(args, record, candidates):
     """Fit the candidates (in ``--jobs`` processes): ``(selection, caught warnings)``."""
     import time
     import warnings
@@ -792,16 +853,16 @@ def _run_selection(args, u, y, candidates, dt):
 
     start = time.perf_counter()
     _stage(args, f"fitting {len(candidates)} candidate{'s' * (len(candidates) != 1)} "
-           f"({args.method}) on {u.shape[0]} samples ...")
+           f"({args.method}) on {record.n_samples} samples ...")
     workers = min(args.jobs, len(candidates))
     pool = process_pool(workers) if workers > 1 else None
     try:
         with warnings.catch_warnings(record=True) as caught:
             for category in _fohw_warnings():
                 warnings.simplefilter("always", category)
-            sel = select_structure(u, y, candidates, validation=args.validation,
+            sel = select_structure(record, candidates, validation=args.validation,
                                    method=args.method, offset=args.offset,
-                                   operating_point=args.operating_point, dt=dt,
+                                   operating_point=args.operating_point,
                                    executor=pool, progress=_bars(args),
                                    **({"inputs": args.inputs} if args.inputs else {}))
     finally:
@@ -883,12 +944,16 @@ def _simulate(args):
     import numpy as np
 
     from .model.initial import initial_state, simulate_from
-    from .model.simulation import equation_noise, generic_model, simulate
+    from .model.simulation import equation_noise, generic_model, own_dt, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
-    data, names, _ = read_table(args.input, _decimal(args))
+    data, names, file_dt = read_table(args.input, _decimal(args))
     other = generic_model(loaded)
+    step = own_dt(loaded)
+    if file_dt is not None and step is not None and abs(file_dt - step) > 1e-12 * file_dt:
+        raise UsageError(f"{args.input} is sampled every {file_dt:g} (its Ts) but {args.model} "
+                         f"has dt = {step:g}: fohw does not change a sampling time silently.")
     if other is not None and args.initial is not None:   # a model (or fit) of another kind
         raise UsageError(f"--initial is for the lagged HammersteinWiener kind; {args.model} "
                          f"holds a {type(other).__name__}, simulated from its own initial state.")
@@ -939,7 +1004,7 @@ def _compare(args):
     from .model.simulation import generic_model
 
     _, loaded = _load_model_or_result(args.model)
-    data, names, _ = read_table(args.data, _decimal(args))
+    data, names, file_dt = read_table(args.data, _decimal(args))
     other = generic_model(loaded)
     if other is not None:                   # a model (or fit) of any kind: its inputs, then y
         if args.initial is not None:
@@ -951,11 +1016,12 @@ def _compare(args):
         n_in = loaded.structure.n_inputs if hasattr(loaded, "structure") else 1
     *inputs, y = _pick_columns(data, names, args.columns, n_in + 1, args.data)
     u = inputs[0] if n_in == 1 else np.column_stack(inputs)
+    record = _record(args, u, y, file_dt, _column_names(args, names, n_in + 1))
     _stage(args, f"scoring on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():
             warnings.simplefilter("always", category)
-        check = compare(loaded, u, y, initial=args.initial, n_init=args.n_init)
+        check = compare(loaded, record, initial=args.initial, n_init=args.n_init)
     _print_warnings(caught)
     if args.json:
         out = _fit_dict(check)

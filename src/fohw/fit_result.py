@@ -21,6 +21,8 @@ import numpy as np
 from .exceptions import ParameterError
 from .model.base import Model
 from .model.parameters import Parameters
+from .model.simulation import record_list, simulate
+from .record import describe_data
 from .results import IdentificationResult, Status
 
 __all__ = ["FitResult"]
@@ -165,7 +167,13 @@ class FitResult(metaclass=abc.ABCMeta):
                 for n, s in self.standard_errors().items()}
 
     def simulate(self, u, *, initial=None):
-        """The fitted model's free run for ``u`` (:meth:`fohw.Model.simulate`)."""
+        """The fitted model's free run for ``u`` (:meth:`fohw.Model.simulate`).
+
+        ``u`` may be a :class:`fohw.Record` (its input, at its sampling time, checked against
+        the model's) or a list of Records (a list of outputs): as :func:`fohw.simulate`.
+        """
+        if record_list(u) is not None:
+            return simulate(self.model, u, initial=initial)
         return self.model.simulate(u, initial=initial)
 
     # --- reading -----------------------------------------------------------------------------
@@ -187,12 +195,7 @@ class FitResult(metaclass=abc.ABCMeta):
                  f"noise variance = {self.noise_variance:.6g}, simulations = {self.nfev}",
                  f"  {self.message}"]
         if self.data:
-            d = self.data
-            inputs = ", ".join(f"{n} [{u}]" if u else n
-                               for n, u in zip(d["input_names"], d["input_units"]))
-            out = f"{d['output_name']} [{d['output_unit']}]" if d["output_unit"] else d["output_name"]
-            dt = "" if d.get("dt") is None else f", dt = {d['dt']:g} {d.get('time_unit', '')}".rstrip()
-            lines.append(f"  data: {len(d['records'])} record(s); input {inputs}; output {out}{dt}")
+            lines.append(f"  {describe_data(self.data)}")
         lines.append("")
         width = max(12, max((len(n) for n in self.parameters), default=0) + 2)
         lines.append(f"  {'parameter':<{width}}{'estimate':>14}{'std err':>14}")

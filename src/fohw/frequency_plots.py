@@ -9,10 +9,32 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bode_plot", "nyquist_plot"]
+__all__ = ["bode_plot", "nyquist_plot", "frequency_label"]
 
 
-def bode_plot(omega, responses, *, title=None, band=None, ax=None):
+def frequency_label(time_unit=None, hz=False):
+    """The label of a frequency axis in the data's time unit.
+
+    ``time_unit`` ``"s"`` gives ``rad/s`` (``Hz`` with ``hz=True``), another unit ``rad/<unit>``,
+    ``"sample"`` ``rad / sample`` (the sample is the time unit), ``None`` (unknown)
+    ``rad / time unit``.
+
+    Examples
+    --------
+    >>> from fohw.frequency_plots import frequency_label
+    >>> frequency_label("s"), frequency_label("s", hz=True), frequency_label("sample")
+    ('angular frequency ω [rad/s]', 'frequency f [Hz]', 'angular frequency ω [rad / sample]')
+    """
+    if hz:
+        unit = {"s": "Hz", "sample": "cycles / sample", None: "cycles / time unit",
+                "": "cycles / time unit"}.get(time_unit, f"1/{time_unit}")
+        return f"frequency f [{unit}]"
+    unit = {"sample": "rad / sample", None: "rad / time unit",
+            "": "rad / time unit"}.get(time_unit, f"rad/{time_unit}")
+    return f"angular frequency ω [{unit}]"
+
+
+def bode_plot(omega, responses, *, title=None, band=None, ax=None, time_unit=None, hz=False):
     """Bode diagram (magnitude in dB, phase in degrees) of one or more frequency responses.
 
     Parameters
@@ -28,6 +50,11 @@ def bode_plot(omega, responses, *, title=None, band=None, ax=None):
     ax : matplotlib Axes or sequence of two Axes, optional
         Where to draw: one Axes receives the magnitude only, two receive magnitude and phase
         (default: a new figure with both).
+    time_unit : str, optional
+        The unit of time of ``omega`` (``"s"``: rad/s; ``"sample"``: rad / sample; default
+        unknown: rad / time unit), for the axis label (:func:`frequency_label`).
+    hz : bool, optional
+        Draw against ``f = omega / (2 pi)`` (Hz when ``time_unit`` is ``"s"``).
 
     Returns
     -------
@@ -51,6 +78,9 @@ def bode_plot(omega, responses, *, title=None, band=None, ax=None):
     if not isinstance(responses, dict):
         responses = {None: responses}
     fig, axes = axes_for(ax, 2, figsize=(6.4, 5.6), sharex=True)
+    x_label = frequency_label(time_unit, hz)
+    if hz:
+        omega = omega / (2.0 * np.pi)
     styles = ["-", "--", ":", "-."]
     for i, (label, g) in enumerate(responses.items()):
         g = np.asarray(g, dtype=complex)
@@ -60,7 +90,7 @@ def bode_plot(omega, responses, *, title=None, band=None, ax=None):
             axes[1].semilogx(omega, np.degrees(np.unwrap(np.angle(g))), styles[i % 4],
                              label=label)
     axes[0].set_ylabel("magnitude [dB]")
-    axes[-1].set_xlabel("angular frequency ω [rad / time unit]")
+    axes[-1].set_xlabel(x_label)
     if len(axes) > 1:
         axes[1].set_ylabel("phase [deg]")
     for a in axes:

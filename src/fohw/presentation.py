@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .record import describe_data
+
 __all__ = ["ResultPresentation"]
 
 
@@ -61,6 +63,8 @@ class ResultPresentation:
                  f"g_basis = {self.g_basis!r}"]
         if not self.structure.is_paper_model:
             lines.append(f"  model: {self.structure.describe()}")
+        if self.data:
+            lines.append(f"  {describe_data(self.data)}")
         u0, y0 = self.operating_point
         if isinstance(u0, tuple):                    # several inputs
             if any(u0) or y0:
@@ -112,7 +116,7 @@ class ResultPresentation:
                 f"  static gain H(1) = {gain:.6g}{why}",
                 f"  stability: {block.stability()}"]
 
-    def bode(self, omega=None, *, others=None, title=None, ax=None):
+    def bode(self, omega=None, *, others=None, title=None, ax=None, hz=False):
         """Bode diagram of the linear block (:meth:`fohw.IdentificationResult.linear_block`).
 
         Parameters
@@ -127,11 +131,16 @@ class ResultPresentation:
             Figure title.
         ax : matplotlib Axes or sequence of two Axes, optional
             One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
+        hz : bool, optional
+            Against ``f = omega / (2 pi)`` (Hz for a record in seconds).
 
         Returns
         -------
         matplotlib.figure.Figure
-            Magnitude and phase axes (:func:`fohw.frequency_plots.bode_plot`); a new figure
+            Magnitude and phase axes (:func:`fohw.frequency_plots.bode_plot`), the frequency
+            in the record's time unit (rad/s for a :class:`fohw.Record` in seconds;
+            ``rad / sample`` at ``dt = 1`` without a record; ``rad / time unit`` for another
+            ``dt`` whose unit is unknown); a new figure
             is not registered with pyplot (no window; ``fig.savefig`` writes it) and shows as
             the last expression of a notebook cell.
         """
@@ -144,7 +153,9 @@ class ResultPresentation:
         for label, other in (others or {}).items():
             other = other if isinstance(other, LinearBlock) else linear_block(other)
             curves[label] = other.frequency_response(omega)
-        return bode_plot(omega, curves, title=title, ax=ax)
+        unit = (self.data or {}).get("time_unit") or (
+            "sample" if self.structure.dt == 1.0 and not (self.data or {}).get("dt") else None)
+        return bode_plot(omega, curves, title=title, ax=ax, time_unit=unit, hz=hz)
 
     def _estimate_table(self, names, est):
         """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""

@@ -14,7 +14,9 @@ import numpy as np
 from ._validation import check_array, check_same_length, check_scalar
 from .exceptions import DimensionError, ParameterError
 
-__all__ = ["Record", "Benchmark", "as_records", "UNIFORM_RTOL"]
+__all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "describe_data",
+           "check_sampling",
+           "UNIFORM_RTOL"]
 
 
 #: Time stamps that all lie within this fraction of their mean step of the uniform grid
@@ -370,6 +372,87 @@ def as_records(data, y=None, *, what="data"):
         raise ParameterError(f"`{what}` is a Record (or a list of them), which carries its output;"
                              f" do not also pass `y`.")
     return records
+
+
+def record_data(data, y=None, *, what="u", several=True):
+    """The data a verb was given, as ``(records, u, y)``: the one conversion every verb calls.
+
+    Parameters
+    ----------
+    data : array_like, Record, list of Record or DataFrame
+        What the verb got in place of ``u``.
+    y : array_like or None
+        What it got as ``y``.
+    what : str
+        The argument's name, for the messages.
+    several : bool
+        Whether the verb takes a list of Records (several experiments).
+
+    Returns
+    -------
+    records : list of Record or None
+        ``None`` for arrays (``u, y`` are then ``data, y`` as given).
+    u, y : ndarray or None
+        One record's samples; ``None, None`` for several records.
+
+    Raises
+    ------
+    ParameterError
+        A DataFrame as the data (without ``y``): which columns are the input and the output is
+        said with :meth:`Record.from_dataframe`, never guessed; a Record with ``y`` also given;
+        several records where the verb takes one.
+    """
+    if y is None and type(data).__name__ == "DataFrame":
+        raise ParameterError(
+            f"`{what}` is a pandas DataFrame: fohw does not guess which columns are the input "
+            "and the output. Build a record with fohw.Record.from_dataframe(frame, u=..., y=..., "
+            "time=... or dt=..., units=...) and pass it.")
+    records = as_records(data, y, what=what) if type(data).__name__ != "DataFrame" else None
+    if records is None:
+        return None, data, y
+    if len(records) == 1 and isinstance(data, Record):
+        return records, records[0].u, records[0].y
+    if not several:
+        raise ParameterError(f"`{what}` holds {len(records)} records; this takes one record (a "
+                             "fohw.Record or arrays). Fit several experiments with fohw.fit.")
+    return records, None, None
+
+
+def record_info(records):
+    """What the data were (names, units, sampling), as a result keeps it (``result.data``)."""
+    first = records[0]
+    return {"input_names": list(first.input_names), "input_units": list(first.input_units),
+            "output_name": first.output_name, "output_unit": first.output_unit,
+            "time_unit": first.time_unit, "dt": first.dt,
+            "records": [{"name": r.name, "n_samples": r.n_samples, "t0": r.t0,
+                         "uniform": r.uniform, "dt": r.dt} for r in records]}
+
+
+def describe_data(info):
+    """One line of what the data were (:func:`record_info`), as ``summary()`` prints it."""
+    inputs = ", ".join(f"{n} [{u}]" if u else n
+                       for n, u in zip(info["input_names"], info["input_units"]))
+    out = f"{info['output_name']} [{info['output_unit']}]" if info["output_unit"] else \
+        info["output_name"]
+    dt = "" if info.get("dt") is None else \
+        f", dt = {info['dt']:g} {info.get('time_unit', '')}".rstrip()
+    return f"data: {len(info['records'])} record(s); input {inputs}; output {out}{dt}"
+
+
+def check_sampling(records, dt, *, what="the model's dt"):
+    """Refuse records sampled at another step than ``dt`` (``None``: a model in samples).
+
+    fohw never changes a sampling time silently: a record at 4 s and a model at 1 s are two
+    different systems.
+    """
+    for k, r in enumerate(records):
+        if r.uniform and r.dt is not None and dt is not None and \
+                abs(r.dt - dt) > UNIFORM_RTOL * r.dt:
+            name = f" {r.name!r}" if r.name else (f" {k}" if len(records) > 1 else "")
+            raise ParameterError(
+                f"the record{name} is sampled every {r.dt!r} {r.time_unit}".rstrip()
+                + f" but {what} = {dt!r}; use dt={r.dt!r} (the record's sampling time): "
+                "fohw does not change it silently.")
 
 
 @dataclass(frozen=True, repr=False)

@@ -27,7 +27,7 @@ from .model.initial import initial_state, simulate_from
 from .model.parameters import Parameter, Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
-from .model.simulation import check_input_point
+from .model.simulation import check_input_point, check_record_sampling, record_list
 from .model.structure import Structure
 from .model.system import HammersteinWiener
 from .presentation import ResultPresentation
@@ -213,6 +213,12 @@ class IdentificationResult(ResultPresentation):
         ``{name: value}`` in :attr:`~fohw.model.output_map.SeriesMap.names` order (``h_lower``,
         …; data units);
         empty without an output map.
+    data : mapping
+        What the record was when :func:`fohw.identify` was given a :class:`fohw.Record`:
+        channel names and units (``input_names``, ``input_units``, ``output_name``,
+        ``output_unit``, ``time_unit``), ``dt`` and the record's ``name``, ``n_samples``,
+        ``t0`` (as :attr:`fohw.FitResult.data`); empty for arrays. The sampling time the
+        model uses is ``structure.dt``.
     details : mapping
         Method-specific outputs (read-only), keyed by :data:`DETAIL_KEYS` where they apply:
         ``theta_history``, ``alpha_sample_history``, ``alpha_history``, ``J_history``,
@@ -252,6 +258,7 @@ class IdentificationResult(ResultPresentation):
     options: Mapping = field(default_factory=dict)
     details: Mapping = field(default_factory=dict)
     output_map_params: Mapping = field(default_factory=dict)
+    data: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         def put(name, value):
@@ -305,6 +312,7 @@ class IdentificationResult(ResultPresentation):
                                  f"{list(names)} in that order; got {list(given)}.")
         put("output_map_params", types.MappingProxyType(
             {n: check_scalar(v, f"output_map_params[{n!r}]") for n, v in given.items()}))
+        put("data", types.MappingProxyType(dict(self.data)))
         put("details", types.MappingProxyType(
             {k: _readonly(v) if isinstance(v, np.ndarray) else v
              for k, v in self.details.items()}))
@@ -313,7 +321,8 @@ class IdentificationResult(ResultPresentation):
         # the mappings are read-only views, which pickle cannot store: rebuild from plain dicts
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         values.update(orders=dict(self.orders), options=dict(self.options),
-                      details=dict(self.details), output_map_params=dict(self.output_map_params))
+                      details=dict(self.details), output_map_params=dict(self.output_map_params),
+                      data=dict(self.data))
         return (_rebuild, (type(self), values))
 
     # ---- derived facts ------------------------------------------------------------------------
@@ -495,6 +504,7 @@ class IdentificationResult(ResultPresentation):
             "input_range": None if self.input_range is None else list(self.input_range),
             "options": {k: v for k, v in settings.items() if v is not ...},
             "details": {str(k): _detail_to_json(v) for k, v in self.details.items()},
+            "data": _setting_to_json(dict(self.data)),   # what the record was (names, units)
         } | extra
 
     @classmethod
@@ -510,6 +520,8 @@ class IdentificationResult(ResultPresentation):
         names = {f.name for f in dataclasses.fields(cls)}
         if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
             names.discard("output_map_params")
+        if isinstance(d, Mapping) and "data" not in d:         # files written before records
+            names.discard("data")
         if not isinstance(d, Mapping) or set(d) != names:
             missing = sorted(names - set(d)) if isinstance(d, Mapping) else sorted(names)
             unknown = sorted(set(d) - names) if isinstance(d, Mapping) else []
@@ -649,8 +661,10 @@ class IdentificationResult(ResultPresentation):
 
         Parameters
         ----------
-        u : array_like
-            Input.
+        u : array_like, Record or list of Record
+            Input; or a :class:`fohw.Record` (its input; its sampling time must be the
+            fit's ``dt``; with ``initial="estimate"`` its output is used), or a list of
+            Records (a list of outputs).
         initial : str, tuple or InitialState, optional
             What the signals did before ``u`` began (:mod:`fohw.model.initial` says what each
             choice assumes and costs): ``"rest"`` (the operating point; the default of a fit
@@ -682,6 +696,18 @@ class IdentificationResult(ResultPresentation):
             ``u`` leaves the estimation input's range (:attr:`input_range`) by more than 5 % of
             its span: the basis functions extrapolate there, and a polynomial does so fast.
         """
+        records = record_list(u)
+        if records is not None:
+            if y is not None:
+                raise ParameterError("`u` is a Record, which carries its output; do not also "
+                                     "pass `y`.")
+            estimates = initial == "estimate" if isinstance(initial, str) else (
+                isinstance(initial, tuple) and bool(initial) and initial[0] == "estimate")
+            for r in records:
+                check_record_sampling(self, r)
+            out = [self.simulate(r.u, initial=initial, y=r.y if estimates else None, **kwargs)
+                   for r in records]
+            return out if isinstance(u, (list, tuple)) else out[0]
         u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
         state = self.initial_state(u, y, initial)
         if self.input_range is not None:
@@ -710,16 +736,23 @@ class IdentificationResult(ResultPresentation):
         """
         return initial_state(self, u, y, initial)
 
-    def order_test(self):
-        """The likelihood-ratio test of the free orders against orders 0, without refitting.
+    def order_test(self, u=None, y=None, **kwargs):
+        """The likelihood-ratio test of the free orders against orders 0 (and its verdict).
 
-        For an ``"output_error"`` fit by the default chain of starts, which fits the integer
-        class it contains (``details["integer_sse"]``); None otherwise (use
-        :func:`fohw.lr_test` with both fits). An order not identified under the null (the
-        mixed class) has no p-value here (NaN): :func:`fohw.lr_test` with the record gives
-        Davies' bound or a bootstrap. See :func:`fohw.lr_statistic.order_test`.
+        Without the record: for an ``"output_error"`` fit by the default chain of starts,
+        which fits the integer class it contains (``details["integer_sse"]``), the
+        white-noise test without refitting; None otherwise (use :func:`fohw.lr_test` with
+        both fits). An order not identified under the null (the mixed class) has no p-value
+        here (NaN). With the estimation record (the integer class refitted, the test corrected
+        for correlated residuals beside the white-noise one, the verdict against a held-back
+        record): :func:`fohw.order_test` ``(result, u, y, validation=(u_val, y_val))``.
         """
-        return order_test(self)
+        if u is None and y is None and not kwargs:
+            return order_test(self)
+        # the refit lives with the tests (fohw.analysis), above this layer
+        raise ParameterError("result.order_test() takes no record; the test with the record "
+                             "(the integer class refitted, the corrected statistic, the verdict) "
+                             "is fohw.order_test(result, u, y, validation=(u_val, y_val)).")
 
 
 def _rebuild(cls, values):

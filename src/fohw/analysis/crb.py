@@ -43,8 +43,9 @@ from ..estimators.fit import free_jacobian, rank_rcond
 from ..exceptions import ParameterError
 from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
-from ..model.simulation import generic_model, simulate
+from ..model.simulation import check_record_sampling, generic_model, simulate
 from ..model.system import HammersteinWiener
+from ..record import record_data
 
 __all__ = ["crb", "CRBResult"]
 
@@ -156,8 +157,11 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
         ``noise_variance (S^T S)^{-1}`` with ``S`` the sensitivity of its free run
         (:func:`fohw.estimators.fit.free_jacobian`: the kind's exact Jacobian, else finite
         differences); ``parametrisation`` is then ``"free"`` and ``noise`` ``"output"``.
-    u : array_like, shape (N,)
-        The input of the experiment.
+    u : array_like, shape (N,), Record or list of Record
+        The input of the experiment; or a :class:`fohw.Record` (its input, its sampling time
+        checked against the model's); or a list of Records, several experiments: their
+        information adds up (the Jacobians' rows are stacked), so the joint bound is the
+        inverse of the sum of the records' information.
     noise_variance : float
         Variance ``sigma^2 > 0`` of the white Gaussian noise.
     parametrisation : {"theta", "structured", "free"}, optional
@@ -214,9 +218,20 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
     >>> round(tight.rms_relative_error, 3), round(tight.alpha_std, 4)
     (0.019, 0.0037)
     """
+    records, _, _ = record_data(u, None, what="u")
+    if records is not None:
+        for r in records:
+            check_record_sampling(model, r)
+            if r.t is not None:
+                raise ParameterError(f"the record{f' {r.name!r}' if r.name else ''} has "
+                                     "non-uniform time stamps; the bound is computed on a "
+                                     "uniform grid: resample the record first.")
+        inputs = [r.u for r in records]
+    else:
+        inputs = [u]
     other = generic_model(model)
     if other is not None:
-        return _crb_model(other, u, noise_variance, parametrisation, noise, n_realizations,
+        return _crb_model(other, inputs, noise_variance, parametrisation, noise, n_realizations,
                           random_state)
     if not isinstance(model, HammersteinWiener):
         raise ParameterError(f"`model` must be a HammersteinWiener or a fohw.Model; got "
@@ -228,7 +243,7 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
                              f"{parametrisation!r}.")
     if noise not in NOISE_MODELS:
         raise ParameterError(f"`noise` must be one of {NOISE_MODELS}; got {noise!r}.")
-    u = check_array(u, "u")
+    inputs = [check_array(x, "u") for x in inputs]
     sigma2 = check_scalar(noise_variance, "noise_variance", lower=0.0, lower_inclusive=False)
     structure = model.structure
     linear, nonlinear = model.linear, model.nonlinear
@@ -242,14 +257,15 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
 
         def jacobians():
             for _ in range(n_realizations):
-                v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
-                y = simulate(model, u, noise=v)
-                b = RegressorBuilder(u - u0, y - y0, structure=structure)
-                yield b.jacobian(linear, nonlinear)
+                for u in inputs:          # several records: their information adds up
+                    v = np.sqrt(sigma2) * rng.standard_normal(u.shape[0])
+                    y = simulate(model, u, noise=v)
+                    b = RegressorBuilder(u - u0, y - y0, structure=structure)
+                    yield b.jacobian(linear, nonlinear)
 
         # The information is R^T R / (n_realizations sigma2), R the triangle of the stacked G.
         root = triangular(jacobians(), n)
-        n_rows = n_realizations * u.shape[0]
+        n_rows = n_realizations * sum(u.shape[0] for u in inputs)
         variance = n_realizations * sigma2
     else:
         for name, value in (("n_realizations", n_realizations), ("random_state", random_state)):
@@ -257,8 +273,9 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
                 raise ParameterError(f"`{name}` is not used with noise='output' (the bound is "
                                      f"deterministic: no noise realisations); got {value!r}.")
         n_realizations = 0
-        _, root = simulation_jacobian(structure, linear, nonlinear, u - u0)   # S
-        n_rows, variance = u.shape[0], sigma2
+        root = np.vstack([simulation_jacobian(structure, linear, nonlinear, u - u0)[1]
+                          for u in inputs])                                  # S, stacked
+        n_rows, variance = root.shape[0], sigma2
     names = structure.linear_names + structure.nonlinear_names
     if parametrisation == "structured":
         x = np.r_[model.a, model.b, model.p[1:], model.q[1:], linear[n_theta:], nonlinear]
@@ -280,7 +297,8 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
                      theta_covariance=theta_cov)
 
 
-def _crb_model(model, u, noise_variance, parametrisation, noise, n_realizations, random_state):
+def _crb_model(model, inputs, noise_variance, parametrisation, noise, n_realizations,
+               random_state):
     """:func:`crb` of a model of any kind but the lagged one: its free parameters, output noise."""
     kind = type(model).__name__
     for name, value, allowed in (("parametrisation", parametrisation, GENERIC[0]),
@@ -294,12 +312,15 @@ def _crb_model(model, u, noise_variance, parametrisation, noise, n_realizations,
             raise ParameterError(f"`{name}` is not used for a {kind} (its bound is "
                                  f"deterministic: no noise realisations); got {value!r}.")
     sigma2 = check_scalar(noise_variance, "noise_variance", lower=0.0, lower_inclusive=False)
-    u = model.check_input(u)
+    inputs = [model.check_input(u) for u in inputs]
     names = model.parameters.free_names
     if not names:
         raise ParameterError(f"every parameter of the {kind} is fixed or tied: no free "
                              "parameter has a bound.")
-    yhat, jac, how = free_jacobian(model, u)
+    runs = [free_jacobian(model, u) for u in inputs]     # several records: rows stacked
+    yhat = np.concatenate([r[0] for r in runs])
+    jac = np.vstack([r[1] for r in runs])
+    how = runs[0][2]
     if not (np.all(np.isfinite(yhat)) and np.all(np.isfinite(jac))):
         raise ParameterError(f"the {kind}'s free run or its sensitivity on `u` is not finite: "
                              "no bound at a model that does not simulate this input.")

@@ -16,6 +16,7 @@ import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import
 from .._linalg import full_column_rank, rank_tolerance, triangular_factor
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import DimensionError, ParameterError
+from ..lr_statistic import effective_samples
 
 __all__ = ["fit_percent", "error_range", "rmse", "aic", "bic", "whiteness_test",
            "cross_correlation_test", "CorrelationTest", "effective_samples"]
@@ -537,59 +538,3 @@ def cross_correlation_test(residuals, u, *, max_lag=25, confidence=0.99, n_init=
                            n_outside=int(np.sum(np.abs(corr) > bound)), statistic=float(q),
                            p_value=pval, passed=pval >= 1 - confidence, method="prewhitened-F",
                            dof=rank, n_samples=m, prewhiten_order=p)
-
-
-def effective_samples(residuals, max_lag=None):
-    """Bartlett's effective sample size ``n / (1 + 2 sum_{k>=1} rho_k)`` of correlated residuals.
-
-    A likelihood-ratio statistic ``n log(RSS_r / RSS_f)`` and a profile interval assume white
-    residuals; with correlated ones (a free run's usually are) ``n`` overstates the
-    information. This estimate can be passed as ``n_effective`` to :func:`fohw.lr_test` and
-    :func:`fohw.profile_interval` for a more honest, still approximate, statistic.
-
-    Parameters
-    ----------
-    residuals : array_like, shape (n,)
-        At least 4 finite samples, not all equal.
-    max_lag : int, optional
-        Lags summed; default: up to the first non-positive autocorrelation (Geyer's initial
-        positive sequence, a common truncation), at most ``n // 4``.
-
-    Returns
-    -------
-    float
-        Between 1 and ``n`` (white residuals give about ``n``).
-
-    Notes
-    -----
-    ``rho_k`` is the sample autocorrelation at lag ``k`` (the mean removed, the biased
-    estimator ``sum_t r_t r_{t+k} / sum_t r_t^2``), computed by FFT with zero padding (a
-    linear, not circular, correlation). For an AR(1) with coefficient ``phi`` the sum gives
-    ``n (1 - phi) / (1 + phi)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from fohw.analysis.metrics import effective_samples
-    >>> e = np.random.default_rng(0).standard_normal(20_000)
-    >>> x = np.convolve(e, np.ones(10) / 10)[:20_000]     # a moving average: n_eff ~ n / 10
-    >>> 1500 < effective_samples(x) < 2500
-    True
-    """
-    r = check_array(residuals, "residuals", min_length=4)
-    if np.ptp(r) == 0:
-        raise ParameterError(f"`residuals` are constant ({float(r[0])!r} at all {r.size} samples): their "
-                             "autocorrelation is undefined.")
-    n = r.shape[0]
-    r = r - r.mean()
-    nfft = 1 << (2 * n - 1).bit_length()
-    spec = np.fft.rfft(r, nfft)
-    acf = np.fft.irfft(spec * np.conj(spec), nfft)[:n]
-    acf = acf / acf[0]
-    limit = n // 4 if max_lag is None else check_int(max_lag, "max_lag", minimum=1)
-    total = 0.0
-    for k in range(1, min(limit, n - 1) + 1):
-        if max_lag is None and acf[k] <= 0:
-            break
-        total += acf[k]
-    return float(min(max(n / (1.0 + 2.0 * total), 1.0), n))

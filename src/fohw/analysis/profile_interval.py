@@ -26,22 +26,26 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
 from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
-from ..estimators.fit import check_record, data_digest, fit
+from ..estimators.fit import check_record, data_digest, data_digest_of, fit
 from ..estimators.identify import identify
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
 from ..lr_statistic import LIKELIHOOD_METHODS, check_result, criterion, order_bounds
+from ..model.irregular import DEFAULT_REFINE
 from ..model.orders import Orders
+from ..model.simulation import record_list, simulate_record
+from ..record import check_sampling, record_data
 from ..results import IdentificationResult
 
 __all__ = ["ProfileInterval", "profile_interval", "refit", "orders_with", "criterion",
-           "check_data", "check_fit_record", "check_n_effective", "fit_weight", "sse_with_fixed",
-           "LIKELIHOOD_METHODS"]
+           "check_data", "check_fit_record", "records_digest", "check_n_effective", "fit_weight",
+           "sse_with_fixed", "LIKELIHOOD_METHODS"]
 
 
 
@@ -52,6 +56,9 @@ def check_data(result, u, y, name):
     The check recomputes the one-step criterion ``J`` of ``result`` on ``u, y``: a different
     record (or another operating point) gives another ``J``.
     """
+    records, u, y = record_data(u, y, what="u", several=False)
+    if records is not None:                 # one Record: its samples, at the fit's dt
+        check_sampling(records, result.structure.dt, what=f"`{name}`'s dt")
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
@@ -87,6 +94,14 @@ def check_fit_record(result, u, y, name):
     samples, ``dt`` and the ``sample_weight`` of its options); another record, a part of it or
     another step size is refused.
     """
+    records, u_one, _ = record_data(u, y, what="u")
+    if records is not None:
+        digest = records_digest(result, records)
+        if result.data_digest and digest != result.data_digest:
+            raise ParameterError(f"the record(s) given (at dt = {result.model.dt!r}) are not the "
+                                 f"data `{name}` was fitted to: their fingerprint is {digest}, "
+                                 f"the fit's {result.data_digest}.")
+        return (records[0] if u_one is not None else records), None
     if u is None or y is None:
         raise ParameterError(f"this needs the record `{name}` was fitted to: pass `u` and `y` "
                              "(fohw's results keep no data).")
@@ -103,6 +118,53 @@ def check_fit_record(result, u, y, name):
                              f"`{name}` was fitted to: their fingerprint is {digest}, the fit's "
                              f"{result.data_digest}.")
     return u, y
+
+
+def records_digest(result, records):
+    """The fingerprint :func:`fohw.fit` kept of ``records`` (its ``data_digest_of``).
+
+    Each record as the fit saw it: its input as the kind takes it, its share of the fit's
+    ``sample_weight``, its instants and the fit's ``warmup``.
+    """
+    weight = fit_weight(result)
+    sizes = [r.n_samples for r in records]
+    if weight is not None and weight.size != sum(sizes):
+        raise ParameterError(f"the records have {sum(sizes)} samples, but the fit's "
+                             f"sample_weight {weight.size}: they are not the data it was fitted to.")
+    warmup = int(result.options.get("warmup") or 0)
+    refine = result.options.get("refine")
+    bounds = np.cumsum([0] + sizes)
+    parts = []
+    for k, r in enumerate(records):
+        # as fohw.fit runs it: between the samples for instants or a first-order hold, with
+        # the fine step of the record's own instants under a warm-up
+        t = r.t if r.t is not None or r.intersample == "zoh" else r.time
+        step = None if t is None or not warmup else \
+            float(np.median(np.diff(t))) / (refine or DEFAULT_REFINE)
+        parts.append(SimpleNamespace(
+            u=result.model.check_input(r.u), y=r.y, t=t, warmup=warmup,
+            intersample=r.intersample, refine=refine, step=step,
+            weight=None if weight is None else weight[bounds[k]:bounds[k + 1]]))
+    return data_digest_of(parts, result.model.dt)
+
+
+def _free_run_sse(model, u, y, weight, warmup=0):
+    """Weighted SSE of ``model``'s free run on arrays, a Record or a list of Records."""
+    records = record_list(u)
+    if records is None:
+        r = y - np.asarray(model.simulate(u), dtype=float)
+    else:
+        runs = []
+        for rec in records:
+            if rec.t is None and warmup:
+                u_held = np.concatenate([np.repeat(rec.u[:1], warmup, axis=0), rec.u])
+                runs.append(np.asarray(model.simulate(u_held), dtype=float)[warmup:])
+            else:
+                runs.append(simulate_record(model, rec))
+        r = np.concatenate([rec.y for rec in records]) - np.concatenate(runs)
+    if weight is not None:
+        r = r * np.sqrt(weight)
+    return float(r @ r)
 
 
 def sse_with_fixed(result, u, y, values):
@@ -123,12 +185,9 @@ def sse_with_fixed(result, u, y, values):
         params = params.replace(name, value=float(value), fixed=True)
     model = result.model.with_parameters(params)
     if not params.free_names:
-        weight = fit_weight(result)
         with np.errstate(all="ignore"):
-            r = y - np.asarray(model.simulate(u), dtype=float)
-            if weight is not None:
-                r = r * np.sqrt(weight)
-        sse = float(r @ r)
+            sse = _free_run_sse(model, u, y, fit_weight(result),
+                                int(result.options.get("warmup") or 0))
         return sse if math.isfinite(sse) else math.inf
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -273,7 +332,9 @@ def profile_interval(result, name, level=0.95, *, u=None, y=None, n_grid=11, xto
         Coverage, in (0, 1).
     u, y : array_like
         The record ``result`` was fitted to (checked through its ``J``; for a FitResult,
-        through its ``data_digest``: the same samples at the same ``dt``).
+        through its ``data_digest``: the same samples at the same ``dt``). Or a
+        :class:`fohw.Record` as ``u`` (``y`` omitted); for a FitResult also the list of Records
+        it was fitted to (the refits are joint fits of them, with the fit's ``per_record``).
     n_grid : int
         Points of the coarse grid over the parameter's bounds (at least 3).
     xtol : float

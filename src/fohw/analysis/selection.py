@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import collections
 import csv
+import dataclasses
 import difflib
 import inspect
 import io
@@ -52,9 +53,11 @@ from ..exceptions import (
     SimulationDivergedError,
 )
 from ..model.base import Model
-from ..record import Record
+from ..model.simulation import check_record_sampling
+from ..record import Record, check_sampling, record_data, record_info
 from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
+from .order_verdict import verdict
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
 
 __all__ = ["select_structure", "Selection", "expand_candidates", "SCORES"]
@@ -66,7 +69,7 @@ SCORES = {"fit": ("fit", True), "rmse": ("rmse", False), "aic": ("aic", False),
 #: The columns of :attr:`Selection.rows` besides the candidate's own keywords.
 COLUMNS = ("candidate", "status", "fit", "rmse", "fit_estimation", "aic", "bic", "n_params",
            "estimated_orders", "in_range", "fit_status", "refit_status", "seconds", "reason",
-           "lr_pvalue", "lr_reference")
+           "lr_pvalue", "lr_reference", "lr_pvalue_corrected", "order_verdict")
 
 #: Every row ``status``: ``"ok"`` (scored), ``"diverged"``, ``"nan"``, ``"implausible"`` (the
 #: free run on the estimation input or the held-back part was not scored: it grew without
@@ -335,7 +338,10 @@ class Selection:
         of Self & Liang for orders on the boundary; NaN for the mixed class unless Davies'
         bound is cheap, a ``"varpro"`` fit of one order; :func:`lr_columns`),
         ``lr_reference`` (the reference distribution and the nested candidate, or why the
-        p-value was not computed).
+        p-value was not computed), ``lr_pvalue_corrected`` (the same test corrected for the
+        correlation of the residuals, :func:`fohw.lr_test`'s default ``correction``) and
+        ``order_verdict`` (that p-value read beside the held-back ``fit`` of the candidate
+        and of its nested one: :mod:`fohw.analysis.order_verdict`).
     best : IdentificationResult, FitResult or None
         The winner refitted on all the data given as estimation data (a
         :class:`fohw.FitResult` for model candidates). ``None`` means nothing
@@ -420,13 +426,15 @@ class Selection:
     def to_markdown(self, top=None, columns=None):
         """The table, ranked, as Markdown (``top`` rows; ``columns`` to choose them).
 
-        The default columns include ``lr_pvalue`` when some row has one.
+        The default columns include ``lr_pvalue``, ``lr_pvalue_corrected`` and
+        ``order_verdict`` when some row has a p-value.
         """
         cols = list(columns) if columns is not None else [
             "candidate", "status", "fit", "rmse", "fit_estimation", "estimated_orders",
             "fit_status", "refit_status", "in_range", "seconds", "reason"]
         if columns is None and any(np.isfinite(r.get("lr_pvalue", np.nan)) for r in self.rows):
-            cols.insert(cols.index("estimated_orders") + 1, "lr_pvalue")
+            at = cols.index("estimated_orders") + 1
+            cols[at:at] = ["lr_pvalue", "lr_pvalue_corrected", "order_verdict"]
         if columns is None:        # rows without an in_range, ... column leave it out
             cols = [c for c in cols if any(c in r for r in self.rows)]
         rows = self.ranked()[:top]
@@ -601,14 +609,20 @@ def check_candidates(own, common):
 
 
 def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None, score="fit",
-                     refit=True, executor=None, progress=None, envelope=ENVELOPE, **common):
+                     refit=True, executor=None, progress=None, envelope=ENVELOPE,
+                     hold_out="end", **common):
     """Choose a model structure by free-run simulation on data the fits never saw.
 
     Parameters
     ----------
-    u, y : array_like or Record
+    u, y : array_like, Record or list of Record
         The estimation data (``u`` may be a :class:`fohw.Record`, then ``y`` is omitted).
         Only this record is used to choose: the benchmark's validation record stays unseen.
+        A Record's sampling time is every candidate's: the ``dt`` of identify candidates
+        (another ``dt`` is refused), checked against a model candidate's own. A list of
+        Records (several experiments) takes model candidates, fitted jointly by
+        :func:`fohw.fit` (``**common`` such as ``per_record=``); ``hold_out`` says what is
+        held back.
     candidates : list of dict, dict of lists, list of Model or dict of Model
         Keyword arguments of :func:`fohw.identify` for each candidate, or a grid
         ``{"na": [1, 2, 3], "orders": [0, "mixed"], ...}`` (all combinations). ``na``,
@@ -654,6 +668,14 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
         run (on the estimation input or the held-back part) that goes more than ``envelope``
         times the measured output's range (max - min of every output given) outside that
         range is ``"implausible"``, not scored and never picked. None switches the test off.
+    hold_out : {"end", "records"}
+        For a list of records: ``"end"`` (default) holds back the end of each record
+        (``validation`` a fraction or a number of samples of each), every record simulated
+        in free run from its start through its held-back end (with its own ``per_record``
+        values); ``"records"`` holds back whole records at the end of the list
+        (``validation`` a fraction of the records, or an int number of records), simulated
+        from rest (not with ``per_record``, whose values belong to the fitted records). The
+        pooled held-back samples are scored (one fit %, one RMSE). Not used for one record.
     **common
         Keywords of :func:`fohw.identify` shared by every candidate (a candidate's own value
         wins), e.g. ``offset=True, operating_point="mean", dt=4.0``.
@@ -690,24 +712,35 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
     >>> [r["status"] for r in sel.rows], sel.best_row["na"]
     (['ok', 'ok'], 2)
     """
-    if isinstance(u, Record):
-        if y is not None and candidates is None:     # select_structure(record, candidates)
-            y, candidates = None, y
-        if y is not None:
-            raise ParameterError("`u` is a Record: give the output through it, not as `y`.")
-        u, y = u.u, u.y
-    if y is None:
+    if candidates is None and (isinstance(y, Mapping) or (
+            isinstance(y, (list, tuple)) and y and isinstance(y[0], (Mapping, Model)))):
+        y, candidates = None, y                       # select_structure(record, candidates)
+    records, u, y = record_data(u, y, what="u")
+    if records is None and y is None:
         raise ParameterError("`y` is missing: give u and y, or a Record as `u`.")
     if candidates is None:
         raise ParameterError("`candidates` is missing: a list of dicts of identify keywords "
                              "or a dict of lists (a grid).")
+    if hold_out not in HOLD_OUT:
+        raise ParameterError(f"`hold_out` must be one of {HOLD_OUT}; got {hold_out!r}.")
     models = model_candidates(candidates)
+    if records is not None:
+        common = _record_settings(records, validation, models, common)
     if models is not None:
         if method is not None:
             raise ParameterError(f"`method` is for identify keyword candidates; model "
                                  f"candidates are fitted by fohw.fit; got method={method!r}.")
-        return _select_models(u, y, models, validation, score, refit, executor, progress,
-                              envelope, common)
+        if records is not None and u is None:
+            return _select_records(records, models, validation, hold_out, score, refit,
+                                   executor, progress, envelope, common)
+        selection = _select_models(u, y, models, validation, score, refit, executor,
+                                   progress, envelope, common)
+        return _with_record_info(selection, records)
+    if records is not None and u is None:
+        raise ParameterError(
+            f"`u` holds {len(records)} records: several experiments are fitted by fohw.fit, so "
+            "give model candidates (e.g. fohw.HammersteinWiener start models, or any kind); "
+            "identify keyword candidates take one record.")
     u, names = split_inputs(u)
     if names is not None and "inputs" not in common:
         common = dict(common, inputs=names)
@@ -741,10 +774,201 @@ def select_structure(u, y=None, candidates=None, *, validation=0.25, method=None
             row, res = outcome
         rows.append(dict(c, candidate=_label(mine), **row))
         results.append(res)
-    lr_columns(rows, results, cands)
+    lr_columns(rows, results, cands, u_est, y_est)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
     _pick(selection, cands, u, y, refit and score_from > 0, factor)
+    _with_record_info(selection, records)
+    if selection.best is None:
+        warn_nothing_selected("select_structure", rows)
+    return selection
+
+
+def _with_record_info(selection, records):
+    """The refitted winner keeps what the record was (names, units, sampling)."""
+    if records is not None and selection.best is not None and \
+            selection.best is not selection.results[selection.best_index]:   # refitted on it
+        selection.best = dataclasses.replace(selection.best, data=record_info(records))
+    return selection
+
+
+#: What a list of records holds back (:func:`select_structure`'s ``hold_out``).
+HOLD_OUT = ("end", "records")
+
+
+def _record_settings(records, validation, models, common):
+    """Check the records' sampling against the candidates; identify candidates get its ``dt``.
+
+    A Record's sampling time is every candidate's (``fohw select`` reads it from the file the
+    same way): identify candidates are fitted at it, and a ``dt`` that says otherwise is
+    refused, as is a model candidate at another step.
+    """
+    extra = [validation] if isinstance(validation, Record) else (
+        list(validation) if isinstance(validation, (list, tuple)) and validation
+        and all(isinstance(v, Record) for v in validation) else [])
+    every = records + extra
+    if models is not None:
+        for _, m in models:
+            for r in every:
+                check_record_sampling(m, r)
+        return common
+    for r in every:
+        if not r.uniform:
+            raise ParameterError(
+                f"the record{f' {r.name!r}' if r.name else ''} has non-uniform time stamps; "
+                "identify candidates run on a uniform grid: resample it, or give model "
+                "candidates of a kind that simulates on time stamps.")
+    dts = {r.dt for r in every if r.dt is not None}
+    if not dts:
+        return common
+    if len(dts) > 1:
+        raise ParameterError(f"the records have different sampling times ({sorted(dts)}).")
+    dt = dts.pop()
+    if common.get("dt") is not None:
+        check_sampling(every, float(common["dt"]), what="`dt`")
+    out = dict(common, dt=dt)
+    if records[0].n_inputs > 1 and "inputs" not in common:
+        out["inputs"] = records[0].input_names
+    return out
+
+
+def _records_split(records, validation, hold_out):
+    """``(estimation records, scored records, score_from per scored record, description)``."""
+    n_rec = len(records)
+    if hold_out == "records":
+        if isinstance(validation, bool) or not isinstance(validation, numbers.Real):
+            raise ParameterError("`validation` with hold_out='records' is a fraction of the "
+                                 "records or a number of records; got "
+                                 f"{type(validation).__name__}.")
+        k = int(validation) if isinstance(validation, numbers.Integral) else \
+            int(round(validation * n_rec))
+        if not 1 <= k <= n_rec - 1:
+            raise ParameterError(f"`validation` = {validation!r} holds back {k} of {n_rec} "
+                                 "records; it must hold back at least 1 and leave at least 1.")
+        return (records[:n_rec - k], records[n_rec - k:], [0] * k,
+                f"the last {k} of {n_rec} records held back; each simulated from rest")
+    if isinstance(validation, (tuple, list, Record)):
+        raise ParameterError("`validation` with several records is a fraction or a number "
+                             "of samples held back at the end of each record.")
+    est, froms = [], []
+    for r in records:
+        parts = split_validation(r.u, r.y, validation)
+        est.append(r[:parts[4]])
+        froms.append(parts[4])
+    total = sum(r.n_samples - f for r, f in zip(records, froms))
+    return (est, records, froms, f"the end of each of {n_rec} records held back ({total} "
+            "samples in all); each simulated from its start")
+
+
+def _per_record_model(res, k):
+    """The fitted model of record ``k`` (its ``per_record`` values put in)."""
+    if not res.per_record:
+        return res.model
+    return res.model.with_parameters({n: v["values"][k] for n, v in res.per_record.items()})
+
+
+def _records_free_runs(res, scored, froms, reference, envelope):
+    """``(runs, status, reason)`` of each scored record's free run (``runs`` None unless ok)."""
+    runs = []
+    for k, r in enumerate(scored):
+        model = _per_record_model(res, k) if froms[k] else res.model
+        ysim, status, reason = model_free_run(model, r.u, reference, envelope)
+        if status != "ok":
+            return None, status, f"record {k}: {reason}"
+        runs.append(ysim)
+    return runs, "ok", ""
+
+
+@thin_solves
+def _fit_and_score_records(est, scored, froms, model, options, reference, envelope):
+    """One model candidate on several records: joint fit, free runs, the pooled held-back score.
+
+    Module level (it is pickled for process and dask executors). Never raises.
+    """
+    t0 = time.perf_counter()
+    row = _model_row()
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                res = fit(model, est, **options)
+            except Exception as exc:          # noqa: BLE001 - one candidate never loses the others
+                row.update(status="failed", reason=f"fit: {type(exc).__name__}: {exc}",
+                           seconds=time.perf_counter() - t0)
+                return row, None
+            n, d = res.n_samples, res.n_free
+            orders = [k for k in res.free_names if res.parameters[k].order]
+            row.update(n_params=d, fit_status=res.status.name, estimated_orders=", ".join(
+                f"{k}={res.parameters[k].value:.4g}" for k in orders))
+            if res.sse > 0:
+                row["aic"], row["bic"] = aic(res.sse / n, n, d), bic(res.sse / n, n, d)
+            runs, status, reason = _records_free_runs(res, scored, froms, reference, envelope)
+        notes = sorted({str(w.message).split("\n")[0] for w in caught})
+        row["seconds"] = time.perf_counter() - t0
+        if status != "ok":
+            row.update(status=status, reason="; ".join([reason, *notes]))
+            return row, res
+        y_score = np.concatenate([r.y[f:] for r, f in zip(scored, froms)])
+        y_sim = np.concatenate([s[f:] for s, f in zip(runs, froms)])
+        y_est = np.concatenate([r.y for r in est])
+        if np.ptp(y_est) > 0:
+            row["fit_estimation"] = fit_percent(y_est, y_est - res.residuals)
+        row["rmse"] = rmse(y_score, y_sim)
+        if np.ptp(y_score) > 0:
+            row["fit"] = fit_percent(y_score, y_sim)
+        else:
+            notes.append("the held-back output is constant: its fit % is undefined (NaN)")
+        row["reason"] = "; ".join(notes)
+        return row, res
+    except Exception as exc:                    # noqa: BLE001 - one candidate never loses the others
+        return _model_row(status="failed", reason=f"scoring: {type(exc).__name__}: {exc}",
+                          seconds=time.perf_counter() - t0), None
+
+
+def _select_records(records, models, validation, hold_out, score, refit, executor, progress,
+                    envelope, common):
+    """:func:`select_structure` of model candidates on several records (joint fits)."""
+    if score not in SCORES:
+        raise ParameterError(f"`score` must be one of {sorted(SCORES)}; got {score!r}.")
+    if not isinstance(refit, (bool, np.bool_)):
+        raise ParameterError(f"`refit` must be True or False; got {refit!r}.")
+    if hold_out == "records" and common.get("per_record"):
+        raise ParameterError("`per_record` parameters have values for the fitted records only, "
+                             "none for a held-back record: hold back the end of each record "
+                             "(hold_out='end'), or fit without per_record.")
+    factor = check_envelope(envelope)
+    est, scored, froms, described = _records_split(records, validation, hold_out)
+    reference = np.concatenate([r.y for r in records])
+    if score == "fit" and np.ptp(np.concatenate([r.y[f:] for r, f in zip(scored, froms)])) == 0:
+        raise ParameterError(f"the held-back output ({described}) is constant: no candidate can "
+                             "be ranked by its fit %; rank by score='rmse'.")
+    tasks = [(est, scored, froms, m, common, reference, factor) for _, m in models]
+    t0 = time.perf_counter()
+    outcomes = run_tasks(_fit_and_score_records, tasks, executor=executor, progress=progress,
+                         label="select_structure")
+    seconds = time.perf_counter() - t0
+    rows, results = [], []
+    for (label, m), outcome in zip(models, outcomes):
+        if isinstance(outcome, TaskError):
+            row, res = _model_row(status="failed", reason=f"executor: {outcome.message}"), None
+        else:
+            row, res = outcome
+        rows.append(dict(candidate=label, kind=type(m).__name__, **row))
+        results.append(res)
+    model_lr_columns(rows, results)
+    selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
+                          validation=described, seconds=seconds)
+
+    def refit_one(index):
+        start = None if results[index] is None else results[index].model
+        best = fit(models[index][1], records, start=start, **common)
+        runs = _records_free_runs(best, records, [1] * len(records), reference, factor)
+        return (best, *runs[1:])
+
+    def finish(row, best):
+        row["refit_status"] = best.status.name
+
+    pick_refitted(selection, refit_one, finish, refit=bool(refit))
     if selection.best is None:
         warn_nothing_selected("select_structure", rows)
     return selection
@@ -783,7 +1007,8 @@ def _model_row(**changes):
     return dict(dict(status="ok", fit=np.nan, rmse=np.nan, fit_estimation=np.nan, aic=np.nan,
                      bic=np.nan, n_params=0, estimated_orders="", fit_status="",
                      refit_status="", seconds=np.nan, reason="", lr_pvalue=np.nan,
-                     lr_reference=""), **changes)
+                     lr_reference="", lr_pvalue_corrected=np.nan, order_verdict=""),
+                **changes)
 
 
 def model_free_run(model, u, reference, envelope):
@@ -873,6 +1098,7 @@ def model_lr_columns(rows, results):
             warnings.simplefilter("always")
             test = lr_test(results[j], full)
         rows[i]["lr_pvalue"] = test.pvalue
+        _verdict_columns(rows, i, j, test)
         rows[i]["lr_reference"] = (f"{test.distribution}, {test.criterion} vs "
                                    f"{rows[j]['candidate']} ({test.hypothesis})"
                                    + "".join(f"; {w.message}" for w in caught))
@@ -953,7 +1179,14 @@ def _cheap_davies(full):
             and len(full.orders) == 1 and full.structure.past == "rest")
 
 
-def lr_columns(rows, results, cands):
+def _verdict_columns(rows, i, j, test):
+    """``lr_pvalue_corrected`` and ``order_verdict`` of row ``i`` tested against row ``j``."""
+    rows[i]["lr_pvalue_corrected"] = test.pvalue_corrected
+    rows[i]["order_verdict"] = verdict(test.pvalue_corrected, rows[j].get("fit", np.nan),
+                                       rows[i].get("fit", np.nan))
+
+
+def lr_columns(rows, results, cands, u=None, y=None):
     """Fill ``lr_pvalue`` and ``lr_reference`` of every row (in place).
 
     A row whose fit has free orders is tested by :func:`fohw.lr_test` against its nested
@@ -964,9 +1197,11 @@ def lr_columns(rows, results, cands):
     an order that is not identified under the null (the mixed class), Davies' (1987) bound
     only when it is cheap (a ``"varpro"`` fit of one order keeps the profile), else NaN and
     ``lr_reference`` says so. No nested candidate in the grid: NaN and an empty reference.
+    With the estimation part ``u, y``, the corrected p-value and the verdict too.
     """
     for row in rows:
         row["lr_pvalue"], row["lr_reference"] = np.nan, ""
+        row["lr_pvalue_corrected"], row["order_verdict"] = np.nan, ""
     fitted = [(i, r) for i, r in enumerate(results) if r is not None]
     for i, full in fitted:
         if not full.structure.orders.free:
@@ -987,11 +1222,15 @@ def lr_columns(rows, results, cands):
                 "reference='davies' or 'bootstrap', u=, y=)")
             continue
         try:
-            test = lr_test(results[nested], full)
+            try:                    # the record gives the residuals the correction needs
+                test = lr_test(results[nested], full, u=u, y=y)
+            except ParameterError:
+                test = lr_test(results[nested], full)
         except (ParameterError, ValueError, ArithmeticError) as exc:
             rows[i]["lr_reference"] = f"not computed {against}: {str(exc).split('. ')[0]}"
             continue
         rows[i]["lr_pvalue"] = test.pvalue
+        _verdict_columns(rows, i, nested, test)
         rows[i]["lr_reference"] = f"{test.distribution}, {test.criterion} {against}"
 
 

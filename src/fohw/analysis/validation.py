@@ -26,11 +26,13 @@ from .._validation import check_array, check_inputs, check_int, check_same_lengt
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
-from ..model.simulation import generic_model
+from ..model.simulation import check_record_sampling, generic_model, simulate_record
 from ..model.system import HammersteinWiener
+from ..record import record_data
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
-__all__ = ["Validation", "compare", "implausible_sample", "ENVELOPE", "FREE_RUN_STATUSES"]
+__all__ = ["Validation", "PooledValidation", "compare", "implausible_sample", "ENVELOPE",
+           "FREE_RUN_STATUSES"]
 
 #: Default plausibility factor: a free run is implausible when a sample lies more than
 #: ``ENVELOPE`` times the measured output's range (max - min) below its minimum or above its
@@ -149,7 +151,13 @@ class Validation:
         ``initial="estimate"`` the levels (and window) fitted to this record's output, and
         ``initial.n_estimated`` values so fitted.
     dt : float or None
-        The model's sampling time when it has one other than 1 (:meth:`plot`'s time axis).
+        The sampling time of :meth:`plot`'s time axis: the record's (a :class:`fohw.Record`
+        that gives one), else the model's when it has one other than 1.
+    time_unit, output_label : str
+        From a :class:`fohw.Record`: the unit of time (``"s"``) and the output's
+        ``"name [unit]"``, for :meth:`plot`'s labels (empty for arrays).
+    t : ndarray or None
+        The sampling instants of a record with non-uniform time stamps.
     """
 
     y: np.ndarray
@@ -168,6 +176,10 @@ class Validation:
     notes: tuple = ()
     initial: InitialState | None = None
     dt: float | None = None
+    time_unit: str = ""
+    output_label: str = ""
+    t: np.ndarray | None = None
+    t0: float = 0.0
 
     @property
     def fit(self) -> float:
@@ -235,8 +247,11 @@ class Validation:
             One Axes receives the outputs only; two receive the outputs and the errors
             (default: a new figure with both).
         dt : float, optional
-            Sampling time: the horizontal axis is then time in its unit (default: the model's
-            :attr:`dt` when it is not 1), else the sample index.
+            Sampling time: the horizontal axis is then time in its unit (default:
+            :attr:`dt`, the record's when :func:`compare` was given a :class:`fohw.Record`,
+            labelled ``time [unit]`` with its :attr:`time_unit`; else the model's when it is
+            not 1), else the sample index (``sample k``). A record's name and unit label the
+            output axis.
 
         Returns
         -------
@@ -248,7 +263,11 @@ class Validation:
 
         fig, axes = axes_for(ax, 2, figsize=(9, 5.5), sharex=True)
         dt = self.dt if dt is None else dt
-        t = np.arange(self.y.size) * (1.0 if dt is None else dt)
+        if self.t is not None:
+            t = np.asarray(self.t, dtype=float)
+        else:
+            t = (self.t0 if dt is not None else 0.0) + np.arange(self.y.size) * (
+                1.0 if dt is None else dt)
         axes[0].plot(t, self.y, "k", lw=1.2, label="measured")
         if self.simulated is not None:
             axes[0].plot(t, self.simulated, "C0", lw=1,
@@ -262,18 +281,23 @@ class Validation:
         above = dict(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8,
                      frameon=False, borderaxespad=0.2)
         axes[0].legend(**above)
-        axes[0].set_ylabel("output")
+        axes[0].set_ylabel(self.output_label or "output")
         if len(axes) > 1:
             if self.simulated is not None:
                 axes[1].plot(t, self.y - self.simulated, "C0", lw=0.8, label="free run")
             if self.predicted is not None:
                 axes[1].plot(t, self.y - self.predicted, "C1", lw=0.8, label="one step")
-            axes[1].set_ylabel("error")
+            unit = self.output_label.rsplit(" [", 1)[1][:-1] if self.output_label.endswith("]") \
+                else ""
+            axes[1].set_ylabel(f"error [{unit}]" if unit else "error")
             axes[1].legend(**above)
         if self.n_init:
             for a in axes:
                 a.axvspan(t[0], t[min(self.n_init, t.size - 1)], color="0.9")
-        axes[-1].set_xlabel("sample k" if dt is None else "time")
+        if dt is None and self.t is None:
+            axes[-1].set_xlabel("sample k")
+        else:
+            axes[-1].set_xlabel(f"time [{self.time_unit}]" if self.time_unit else "time")
         return fig
 
 
@@ -330,7 +354,7 @@ def _measure(what, fn, notes, *args, **kwargs):
         return np.nan
 
 
-def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
+def compare(model: Any, u: ArrayLike, y: ArrayLike | None = None, *,
             initial: Any = None, n_init: int = 0,
             max_lag: int = 25, confidence: float = 0.99,
             envelope: float = ENVELOPE) -> Validation:
@@ -347,7 +371,12 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
         the residual tests are of the free-run errors, and there is no separate one-step
         prediction (``predicted`` None, its fit NaN, a note says so).
     u, y : array_like
-        The validation record, in the data's units (at least 2 samples).
+        The validation record, in the data's units (at least 2 samples). Or a
+        :class:`fohw.Record` as ``u`` (``y`` omitted): its samples, checked against the
+        model's sampling time; its ``dt``, instants, names and units reach :meth:`Validation.plot`.
+        Or a list of Records: each scored alone (from ``initial``), and all pooled
+        (:class:`PooledValidation`). A DataFrame without ``y`` is refused (say its columns
+        with :meth:`fohw.Record.from_dataframe`).
     initial : str, tuple or InitialState, optional
         For a model of another kind: passed to its ``simulate`` (``"estimate"`` is refused).
         For the lagged kind, the state the free run starts from
@@ -376,9 +405,10 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
 
     Returns
     -------
-    Validation
+    Validation or PooledValidation
         A free run that diverges or is implausible is reported in ``status`` and ``diverged``
-        (with its sample and value), not raised, and its fit is NaN.
+        (with its sample and value), not raised, and its fit is NaN. A
+        :class:`PooledValidation` for a list of records.
 
     Raises
     ------
@@ -398,6 +428,14 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
     >>> v.fit_prediction > v.fit_simulation, v.diverged, v.status
     (True, '', 'ok')
     """
+    records, u, y = record_data(u, y, what="u")
+    if records is not None:
+        kw = dict(initial=initial, n_init=n_init, max_lag=max_lag, confidence=confidence,
+                  envelope=envelope)
+        each = [_compare_record(model, r, **kw) for r in records]
+        return each[0] if u is not None else PooledValidation(each)
+    if y is None:
+        raise ParameterError("`y` is missing: pass the measured output, or a fohw.Record as `u`.")
     other = generic_model(model)
     if other is not None:
         out = _compare_model(other, u, y, initial=initial, n_init=n_init,
@@ -408,6 +446,104 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike, *,
                           max_lag=max_lag, confidence=confidence, envelope=envelope)
     out.dt = _sampling_time(model)
     return out
+
+
+def _compare_record(model, record, **kw):
+    """:func:`compare` on one :class:`fohw.Record` (its sampling checked against the model's)."""
+    simulate_at = check_record_sampling(model, record)
+    other = generic_model(model)
+    if simulate_at is not None:         # non-uniform instants: the kind's simulator on them
+        if kw["initial"] is not None:
+            raise ParameterError(f"`initial` = {kw['initial']!r}: a record with non-uniform time "
+                                 "stamps is simulated from rest (the kind's simulate_at).")
+        out = _compare_model(_OnInstants(other, record), record.u, record.y, **kw)
+    else:
+        out = compare(model, record.u, record.y, **kw)
+    out.dt = record.dt if record.dt is not None else out.dt
+    out.t = None if record.t is None else np.array(record.t)
+    out.t0 = record.t0
+    out.time_unit = record.time_unit
+    out.output_label = record.label("y") if record.output_unit or \
+        record.output_name not in ("", "y") else ""
+    return out
+
+
+class _OnInstants:
+    """A model whose free run is its ``simulate_at`` on a record's non-uniform instants."""
+
+    def __init__(self, model, record):
+        self.model, self.record = model, record
+        self.kind_name = type(model).__name__
+
+    def check_input(self, u):
+        return self.model.check_input(u)
+
+    def simulate(self, u, *, initial=None):
+        return simulate_record(self.model, self.record)
+
+
+@dataclass
+class PooledValidation:
+    """:func:`compare` on several records: each record's :class:`Validation` and the pool.
+
+    Attributes
+    ----------
+    records : list of Validation
+        One per record, each scored alone (its own mean in its fit %).
+    fit_simulation, rmse_simulation : float
+        Over the pooled samples of every record (after each one's ``n_init``): fit %
+        ``100 (1 - ||y - ysim|| / ||y - mean y||)`` with the mean of the pooled output, and
+        the RMSE. NaN when a record's free run was not scored (its ``status`` says why).
+    """
+
+    records: list
+
+    def _pooled(self):
+        if any(v.simulated is None for v in self.records):
+            return None
+        y = np.concatenate([v.y[v.n_init:] for v in self.records])
+        ysim = np.concatenate([v.simulated[v.n_init:] for v in self.records])
+        return y, ysim
+
+    @property
+    def fit_simulation(self) -> float:
+        """The pooled free run's fit %."""
+        pooled = self._pooled()
+        return np.nan if pooled is None else fit_percent(*pooled)
+
+    @property
+    def rmse_simulation(self) -> float:
+        """The pooled free run's RMSE (the data's units)."""
+        pooled = self._pooled()
+        return np.nan if pooled is None else rmse(*pooled)
+
+    fit = fit_simulation
+    rmse = rmse_simulation
+
+    def __repr__(self):
+        return (f"PooledValidation({len(self.records)} records, N={sum(v.y.size for v in self.records)}:"
+                f" free run fit {self.fit_simulation:.1f} %, RMSE {self.rmse_simulation:.4g})")
+
+    def to_markdown(self, unit=""):
+        """One row per record and the pooled row (free run)."""
+        u = f" ({unit})" if unit else ""
+        out = [f"| record | samples | fit % | RMSE{u} |", "|---|---:|---:|---:|"]
+        for k, v in enumerate(self.records):
+            ok = v.simulated is not None
+            out.append(f"| {k} | {v.y.size} | {f'{v.fit_simulation:.1f}' if ok else v.status} | "
+                       f"{f'{v.rmse_simulation:.4g}' if ok else v.status} |")
+        out.append(f"| pooled | {sum(v.y.size for v in self.records)} | "
+                   f"{self.fit_simulation:.1f} | {self.rmse_simulation:.4g} |")
+        return "\n".join(out) + "\n"
+
+    def plot(self, ax=None):
+        """Each record's measured output and free run, one panel per record (shared labels)."""
+        from .._plotting import axes_for
+
+        fig, axes = axes_for(ax, len(self.records), figsize=(9, 2.2 * len(self.records) + 1))
+        for a, v in zip(axes, self.records):
+            v.plot(ax=a)
+        return fig
 
 
 def _checked_record(u, y, n_init, envelope):
@@ -457,7 +593,7 @@ def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelop
     Its one-step prediction is its free run (the noise is on the output), so the free run is
     scored and the residual tests are of its errors; ``initial`` goes to ``model.simulate``.
     """
-    kind = type(model).__name__
+    kind = getattr(model, "kind_name", type(model).__name__)
     if _is_estimate(initial):
         raise ParameterError(f"initial={initial!r} (the record's initial state fitted to its "
                              f"output) is for the lagged HammersteinWiener kind; a {kind} "

@@ -10,6 +10,7 @@ class are checked by :mod:`fohw.estimators.problem`.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
@@ -20,6 +21,7 @@ from ..exceptions import ParameterError
 from ..model.basis import BasisLike
 from ..model.orders import OrdersLike
 from ..model.output_map import OutputMapLike
+from ..record import check_sampling, record_data, record_info
 from ..results import IdentificationResult
 from . import hybrid, output_error, rls, structured, varpro
 from .options import MethodOptions
@@ -36,10 +38,10 @@ METHODS = tuple(_TABLE)
 OPTIONS = {name: m.options for name, m in _TABLE.items()}
 
 
-def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike,
+def identify(u: ArrayLike, y: ArrayLike | None = None, *, na: int, nb: int, f_basis: BasisLike,
              g_basis: BasisLike, method: str = "varpro", orders: OrdersLike = "commensurate",
              offset: bool = False, operating_point: str | PairLike | None = None,
-             past: str = "rest", dt: float = 1.0,
+             past: str = "rest", dt: float | None = None,
              alpha_bounds: PairLike | Mapping[str, PairLike] = (0.0, 1.0),
              output_map: OutputMapLike = None,
              options: Mapping[str, Any] | MethodOptions | None = None,
@@ -58,6 +60,11 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
         lists, or one value for every input; a list or tuple ``f_basis`` is then always one
         basis per input). Its coefficients are named ``<input>.b<lag>``, ``<input>.p2b<lag>``.
         A 1-D ``u`` (or one column) is the single-input model, exactly as before.
+        Or a :class:`fohw.Record` as ``u`` (``y`` omitted): its samples, its sampling time as
+        ``dt``, its input names as ``inputs``; its names and units are kept in
+        ``result.data``. A DataFrame without ``y`` is refused (say its columns with
+        :meth:`fohw.Record.from_dataframe`); several records are fitted by :func:`fohw.fit`
+        with a :class:`fohw.HammersteinWiener` model.
     na, nb : int
         Output and input lag orders: output terms at lags ``1 … na``, input terms at lags
         ``nk … nk + nb - 1``. ``nb``: one per input (a list) with several inputs, or one for all.
@@ -116,7 +123,8 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
         with the other parameters (``"varpro"``, ``"structured"``, ``"output_error"``).
     dt : float, optional
         Sampling time ``h > 0`` (Eq. 4): coefficients and orders then have a continuous-time
-        reading. Default 1.
+        reading. Default: the record's sampling time for a :class:`fohw.Record` (another
+        ``dt`` is refused), else 1.
     alpha_bounds : (float, float) or dict, optional
         Interval for every free order, ``0 <= low < high <= 2`` (default ``(0, 1)``, as in the
         paper), or ``{name: (low, high)}`` per free order. The batch methods may end on a bound
@@ -195,6 +203,25 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     >>> paper.status.name, paper.nit
     ('NOT_TESTED', 1)
     """
+    records, u, y = record_data(u, y, what="u", several=False)
+    info = {}
+    if records is not None:
+        rec = records[0]
+        if not rec.uniform:
+            raise ParameterError(
+                f"the record{f' {rec.name!r}' if rec.name else ''} has non-uniform time stamps; "
+                "the lagged kind runs on a uniform grid: resample it (e.g. numpy.interp at "
+                "t[0] + k*dt), or fit a kind that simulates on time stamps with fohw.fit.")
+        if rec.dt is not None:
+            if dt is not None:
+                check_sampling(records, float(dt), what="`dt`")
+            dt = rec.dt
+        if inputs is None and rec.n_inputs > 1:
+            inputs = rec.input_names
+        info = record_info(records)
+    elif y is None:
+        raise ParameterError("`y` is missing: pass the output samples, or a fohw.Record as `u`.")
+    dt = 1.0 if dt is None else dt
     if method not in _TABLE:
         raise ParameterError(f"`method` must be one of {METHODS}; got {method!r}.")
     declared = _TABLE[method]
@@ -212,7 +239,9 @@ def identify(u: ArrayLike, y: ArrayLike, *, na: int, nb: int, f_basis: BasisLike
     if progress is not None and not isinstance(progress, bool):
         raise ParameterError(f"`progress` must be True, False or None; got {progress!r}.")
     with heartbeat(f"identify ({method})", progress):
-        return fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
-                          orders=orders, offset=offset, operating_point=operating_point,
-                          past=past, dt=dt, alpha_bounds=alpha_bounds, output_map=output_map,
-                          executor=executor, nk=nk, inputs=inputs)
+        result = fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis,
+                            g_basis=g_basis, orders=orders, offset=offset,
+                            operating_point=operating_point, past=past, dt=dt,
+                            alpha_bounds=alpha_bounds, output_map=output_map,
+                            executor=executor, nk=nk, inputs=inputs)
+    return dataclasses.replace(result, data=info) if info else result

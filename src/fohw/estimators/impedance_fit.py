@@ -1,7 +1,7 @@
 """Fitting an equivalent circuit to a measured impedance spectrum, alone or with a time record.
 
 Not in the paper: the frequency-domain counterpart of :func:`fohw.fit` for
-:class:`fohw.EquivalentCircuit` (issue 37). The circuit's impedance about zero current is
+:class:`fohw.EquivalentCircuit`. The circuit's impedance about zero current is
 ``Z(f) = R0 + sum_e Z_e(j 2 pi f)`` (:meth:`fohw.EquivalentCircuit.impedance`; with ``capacity``
 the open-circuit voltage's capacitor ``(dOCV/dsoc + b) / (3600 Q s)`` is added). Both fits run on
 the engine every fohw fit runs on: bounded nonlinear least squares

@@ -449,7 +449,7 @@ def load_model(path: str | os.PathLike, *, f_basis: Basis | None = None,
 
 # ---- results ----------------------------------------------------------------------------------
 #: ``output_map_params`` is written only for a structure with a series output map.
-_OPTIONAL_RESULT_FIELDS = ("output_map_params",)
+_OPTIONAL_RESULT_FIELDS = ("output_map_params", "data")
 _RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(IdentificationResult)
                        if f.name not in _OPTIONAL_RESULT_FIELDS)
 _V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
@@ -500,7 +500,7 @@ def _check_result_fields(d, version, path):
     if _array_field(d, "theta", path) is None:
         raise DataFileError(f"{path}: field 'theta' is missing (null).")
     _array_field(d, "covariance", path)
-    for key in ("structure", "options", "details"):
+    for key in ("structure", "options", "details") + (("data",) if "data" in d else ()):
         if not isinstance(d[key], dict):
             _bad(d, key, "an object", path)
     for key, value in d["details"].items():

@@ -1,4 +1,4 @@
-"""Simulating a model on non-uniform sampling instants ``t_0 < t_1 < … < t_{N-1}`` (issue 35).
+"""Simulating a model on non-uniform sampling instants ``t_0 < t_1 < … < t_{N-1}``.
 
 Every model kind simulates on a uniform grid of step ``dt`` (sample alignment of
 :mod:`fohw.model.transfer`: ``u[k]`` stands for the input on ``(t_{k-1}, t_k]``). A record whose

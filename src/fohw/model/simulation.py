@@ -38,7 +38,8 @@ from .gl import gl_weights, gl_weights_unchecked, past_transient
 from .kernels import HalfMerge, causal_convolve, divide_and_conquer
 from .structure import Structure
 
-__all__ = ["simulate", "generic_model", "simulate_predictor", "equation_noise", "free_run",
+__all__ = ["simulate", "simulate_record", "check_record_sampling", "record_list", "own_dt",
+           "generic_model", "simulate_predictor", "equation_noise", "free_run",
            "forcing", "recursion", "accumulators", "output_terms", "Accumulators", "apply_output_map",
            "check_input_point", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
 
@@ -77,6 +78,9 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
         Input signal, finite, in the model's units (its operating point is subtracted inside
         and the output's added back). Shape ``(N, m)`` for a structure (or result) with ``m``
         inputs (:attr:`Structure.n_inputs`; its ``operating_point`` then ``((u0_1, …), y0)``).
+        Or a :class:`fohw.Record`: its input, at its sampling time (a record sampled at
+        another step than the model's is refused; non-uniform instants need a kind that
+        simulates on them); or a list of Records (a list of outputs, one per record).
     params : array_like or dict, optional
         With a Structure only (and required): its linear parameters, then its nonlinear ones
         (:attr:`Structure.linear_names` then :attr:`Structure.nonlinear_names`: theta in the
@@ -161,6 +165,13 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
     """
     kinds = ("a HammersteinWiener, an identification result or a Structure with `params` (or "
              "a fohw.Model of any other kind, or its fohw.FitResult)")
+    records = record_list(u)
+    if records is not None:
+        kwargs = dict(params=params, operating_point=operating_point, noise=noise,
+                      noise_std=noise_std, random_state=random_state,
+                      divergence_threshold=divergence_threshold, initial=initial)
+        out = [simulate_record(model, r, **kwargs) for r in records]
+        return out if isinstance(u, (list, tuple)) else out[0]
     other = generic_model(model)
     if other is not None:
         lagged = {"params": params, "operating_point": operating_point, "noise": noise,
@@ -207,6 +218,84 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
+
+
+def record_list(data):
+    """``data`` as a list of :class:`fohw.Record`, or ``None`` when it is not one or a list of them.
+
+    The Record lives in a layer above the model's; it is known here by its fields.
+    """
+    def is_record(obj):
+        return all(hasattr(obj, n) for n in ("u", "y", "t", "dt", "intersample", "input_names"))
+
+    if is_record(data):
+        return [data]
+    if isinstance(data, (list, tuple)) and data and all(is_record(r) for r in data):
+        return list(data)
+    return None
+
+
+def own_dt(model):
+    """The step a model (or result, or structure) keeps as a setting; None for one in samples."""
+    structure = model if isinstance(model, Structure) else getattr(model, "structure", None)
+    if isinstance(structure, Structure):
+        return float(structure.dt)
+    other = generic_model(model)
+    if other is None:
+        return None
+    try:
+        config = other.config()
+    except ParameterError:                      # a setting no file holds (a Python OCV map)
+        return None if type(other).dt is Model.dt else float(other.dt)
+    return float(other.dt) if "dt" in config else None
+
+
+def check_record_sampling(model, record):
+    """A record's sampling checked against ``model``: its ``simulate_at`` on instants, or None.
+
+    Refuses a :class:`fohw.Record` sampled at another step than ``model``'s, and non-uniform
+    instants where the kind has no ``simulate_at``. fohw never changes a sampling time
+    silently: a record at 4 s and a model at 1 s are two different systems.
+    """
+    dt = own_dt(model)
+    named = f" {record.name!r}" if record.name else ""
+    # 1e-6: fohw.record.UNIFORM_RTOL (a layer above the model's), the tolerance fohw.fit uses
+    if record.t is None and record.dt is not None and dt is not None \
+            and abs(record.dt - dt) > 1e-6 * record.dt:
+        raise ParameterError(
+            f"the record{named} is sampled every {record.dt!r} {record.time_unit}".rstrip()
+            + f" but the model has dt = {dt!r}; use a model at dt={record.dt!r} (the record's "
+            "sampling time): fohw does not change it silently.")
+    if record.t is None and record.intersample == "zoh":
+        return None                     # held between uniform samples: the kind's simulate
+    other = generic_model(model)
+    simulate_at = getattr(other, "simulate_at", None)
+    if simulate_at is None:
+        raise ParameterError(
+            f"the record{named} has non-uniform time stamps (or a first-order hold) and a "
+            f"{type(other or model).__name__} has no simulator between samples (`simulate_at`); "
+            "resample the record to a uniform grid (e.g. numpy.interp at t[0] + k*dt) or use a "
+            "kind that simulates on time stamps.")
+    return simulate_at
+
+
+def simulate_record(model, record, **kwargs):
+    """:func:`simulate` on a :class:`fohw.Record`: its input, at its sampling.
+
+    The sampling is checked by :func:`check_record_sampling`; non-uniform instants (and a
+    first-order hold) are run by the kind's ``simulate_at`` with the record's ``intersample``,
+    from rest, as :func:`fohw.fit` runs them.
+    """
+    simulate_at = check_record_sampling(model, record)
+    if simulate_at is not None:
+        given = [k for k, v in kwargs.items() if (v if k == "noise_std" else v is not None)]
+        if given:
+            raise ParameterError(f"{', '.join(given)}: not taken on time stamps (the kind's "
+                                 "simulate_at runs from rest, noise-free).")
+        u = generic_model(model).check_input(record.u)
+        return np.asarray(simulate_at(u, np.asarray(record.time), intersample=record.intersample),
+                          dtype=float)
+    return simulate(model, record.u, **kwargs)
 
 
 def measured_history(initial, what):
