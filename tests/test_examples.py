@@ -31,6 +31,8 @@ EXAMPLES = {
     "input_lessons.py": ["input_lessons.md"],
     "battery.py": ["battery.md", "battery_structures.csv", "battery_impedance.csv",
                    "battery_fit.png", "battery_nyquist.png", "battery_profile.png"],
+    "battery_pulses.py": ["battery_pulses.md", "battery_pulses.csv", "battery_pulses_alpha.csv",
+                          "battery_pulses.png"],
 }
 
 

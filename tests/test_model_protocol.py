@@ -127,8 +127,31 @@ def equivalent_circuit():
     return true, start, u, 1e-4, "alpha1"
 
 
+def circuit_tables():
+    """A cell whose R0, R1 and tau1 vary with SOC and temperature on a 2 x 2 table (a ZARC of
+    order 0.6 shared by all), driven by 20 s current steps in [-5, 5] A over 1600 s while the
+    temperature steps through 5, 15, 25 and 35 degC and the SOC runs from 0.75 down to about 0.3
+    (so every breakpoint is visited), 0.2 mV noise; no smoothing (its penalty is tested in
+    tests/test_circuit_tables.py)."""
+    rng = np.random.default_rng(24)
+    i = np.repeat(rng.uniform(-5.0, 3.0, 80), 20)
+    soc = np.clip(0.75 + np.cumsum(np.r_[0.0, i[:-1]]) / (3600 * 0.5), 0.0, 1.0)
+    temp = np.repeat([5.0, 15.0, 25.0, 35.0], 400)
+    u = np.column_stack([i, soc, temp])
+    ocv = fohw.OCVTable([0.0, 1.0], [3.3, 4.2])
+    grid = dict(soc_points=[0.3, 0.7], temperature_points=[5.0, 35.0], ocv=ocv,
+                tau_bounds=(1.0, 500.0))
+    true = fohw.CircuitTables(["zarc"], values={"a": 0.0, "R0": [[0.04, 0.02], [0.03, 0.015]],
+                                                "R1": [[0.02, 0.012], [0.015, 0.01]],
+                                                "tau1": [[40.0, 25.0], [30.0, 20.0]], "alpha1": 0.6},
+                              **grid)
+    start = fohw.CircuitTables(["zarc"], **grid)
+    return true, start, u, 2e-4, "alpha1"
+
+
 #: One factory per kind: ``() -> (true_model, start_model, u, noise_std, order_name)``.
-KINDS = [fractional_lag, fractional_hw, fractional_tf, hammerstein_wiener, equivalent_circuit]
+KINDS = [fractional_lag, fractional_hw, fractional_tf, hammerstein_wiener, equivalent_circuit,
+         circuit_tables]
 
 
 def _case(factory, seed):

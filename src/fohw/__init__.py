@@ -51,6 +51,7 @@ from .io.text import read_record
 from .model.base import Model, register_model
 from .model.basis import Basis, InputBases, as_basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
+from .model.circuit_tables import CircuitTables
 from .model.gl import gl_difference, gl_weights, gl_weights_derivative
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
@@ -175,5 +176,6 @@ __all__ = [
     "RC",
     "ZARC",
     "Warburg",
+    "CircuitTables",
     "end_with_parent",
 ]

@@ -31,6 +31,12 @@ def one_blas_thread():
     if ThreadpoolController is None:
         return nullcontext()
     if _controller is None:
+        # The controller sees the BLAS libraries loaded when it is made: scipy's own OpenBLAS
+        # (scipy.linalg, loaded on first use) is another library than numpy's, so load it first
+        # (else scipy's SVDs and triangular solves kept 2 threads: 0.35 s per SVD of a 1000 x 37
+        # Jacobian on the busy 2-core machine against 2 ms).
+        import scipy.linalg  # noqa: F401
+
         _controller = ThreadpoolController()
     return _controller.limit(limits=1, user_api="blas")
 

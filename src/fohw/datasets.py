@@ -22,7 +22,7 @@ from .record import Benchmark, Record
 
 __all__ = ["SimulatedData", "paper_model", "paper_example", "load_daisy",
            "robot_arm", "cascaded_tanks", "SHIPPED", "shipped_file", "BatteryCell",
-           "battery_cell"]
+           "battery_cell", "PulseTest", "pybamm_pulses"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -632,3 +632,129 @@ def battery_cell():
                        impedance_f=d["impedance_f"], impedance_soc=d["impedance_soc"],
                        impedance=d["impedance_Z"], impedance_fit=d["impedance_Zhat"],
                        thetahat=d["thetahat"], path=path)
+
+
+PULSES_SHA256 = "60a5acf9d8b6e5902e09c335a7ba3a3effef2dd4a2a811e622115ef6af7816d8"
+PULSES_FILENAME = "pybamm_pulses.npz"
+
+
+@dataclass(frozen=True, repr=False)
+class PulseTest:
+    """One simulated pulse test of a cell: current, voltage, state of charge, temperature.
+
+    Returned by :func:`pybamm_pulses`. ``u`` is the input of :class:`fohw.CircuitTables`
+    (``[current, soc, temperature]``), ``y`` the voltage.
+
+    Attributes
+    ----------
+    i, v, soc, temperature : ndarray, shape (N,)
+        Current [A] (positive = charge), terminal voltage [V], coulomb-counted state of charge,
+        cell temperature [degC].
+    dt : float
+        Sampling time [s].
+    ambient : float
+        The ambient (and initial) temperature [degC].
+    soc0 : float
+        The initial state of charge.
+    """
+
+    i: np.ndarray
+    v: np.ndarray
+    soc: np.ndarray
+    temperature: np.ndarray
+    dt: float
+    ambient: float
+    soc0: float
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return self.i.shape[0]
+
+    @property
+    def u(self) -> np.ndarray:
+        """``[current, soc, temperature]``, shape ``(N, 3)``."""
+        return np.column_stack([self.i, self.soc, self.temperature])
+
+    @property
+    def y(self) -> np.ndarray:
+        """The voltage [V]."""
+        return self.v
+
+    def record(self) -> Record:
+        """The test as a :class:`fohw.Record` (inputs current, soc, temperature; output voltage)."""
+        return Record(self.u, self.v, dt=self.dt, name=f"T{self.ambient:g}_soc{self.soc0:g}",
+                      input_name=("current", "soc", "temperature"), input_unit=("A", "", "degC"),
+                      output_name="voltage", output_unit="V", time_unit="s",
+                      source="PyBaMM DFN (Chen2020), benchmarks/generate_pybamm_pulses.py")
+
+    def __repr__(self):
+        return (f"PulseTest(T = {self.ambient:g} degC, soc0 = {self.soc0:g}, {self.n_samples} samples "
+                f"at {self.dt:g} s)")
+
+
+def pybamm_pulses(temperatures=None, socs=None, *, every=1):
+    """Pulse tests of an LG M50 cell simulated by PyBaMM (DFN, ``Chen2020``), shipped with fohw.
+
+    Fifteen records, one per ambient temperature (0, 10, 25, 35, 45 degC) and initial state of
+    charge (0.3, 0.5, 0.8): rest 10 s, discharge at 1C (5 A) 10 s, rest 40 s, charge at 1C 10 s,
+    rest 40 s, sampled at 0.1 s (1101 samples). Made by
+    ``benchmarks/generate_pybamm_pulses.py`` with PyBaMM 26.10.1.1 (its docstring says how); fohw
+    reads the file without PyBaMM. In ``Chen2020`` only the exchange-current densities depend
+    on temperature.
+
+    Parameters
+    ----------
+    temperatures, socs : sequence of float, optional
+        Keep the records at these ambient temperatures [degC] / initial states of charge
+        (default all).
+    every : int, optional
+        Keep every ``every``-th sample (a divisor of 100: 1, 2, 4, 5, 10, ...; default 1). The
+        current changes only at multiples of 10 s, so the kept samples are the same record at
+        the step ``0.1 every`` s exactly (each sample's current is still the one held over the
+        interval before it); ``every=5`` gives 221 samples at 0.5 s.
+
+    Returns
+    -------
+    records : list of PulseTest
+        Temperature-major order.
+    ocv : fohw.OCVTable
+        The cell's open-circuit voltage at states of charge 0.05 to 0.95 (no entropic term).
+
+    Examples
+    --------
+    >>> import fohw
+    >>> records, ocv = fohw.datasets.pybamm_pulses(temperatures=[25.0])
+    >>> [(r.ambient, r.soc0) for r in records]
+    [(25.0, 0.3), (25.0, 0.5), (25.0, 0.8)]
+    >>> records[0].u.shape, round(float(ocv(0.5)), 4)
+    ((1101, 3), 3.7509)
+    """
+    from .model.circuit import OCVTable
+
+    every = check_int(every, "every", minimum=1)
+    if 100 % every:
+        raise ParameterError(f"`every` must divide 100 (the current changes every 100 samples); "
+                             f"got {every}.")
+    path = _packaged(PULSES_FILENAME, PULSES_SHA256)
+    with np.load(path, allow_pickle=False) as data:
+        d = {k: data[k] for k in data.files}
+    dt, capacity = float(d["dt"]), float(d["capacity_ah"])
+    keep_t = None if temperatures is None else {float(t) for t in temperatures}
+    keep_s = None if socs is None else {float(s) for s in socs}
+    for name, keep, have in (("temperatures", keep_t, d["temperature_c"]), ("socs", keep_s, d["soc0"])):
+        if keep is not None and not keep <= set(have.tolist()):
+            raise ParameterError(f"`{name}` must be among {sorted(set(have.tolist()))}; got "
+                                 f"{sorted(keep)}.")
+    records = []
+    for k in range(d["current"].shape[0]):
+        amb, soc0 = float(d["temperature_c"][k]), float(d["soc0"][k])
+        if (keep_t is not None and amb not in keep_t) or (keep_s is not None and soc0 not in keep_s):
+            continue
+        i = d["current"][k].astype(np.float64)
+        soc = soc0 + np.concatenate([[0.0], np.cumsum(i[:-1])]) * dt / (3600.0 * capacity)
+        keep = slice(None, None, every)
+        records.append(PulseTest(i=i[keep], v=d["voltage_uv"][k][keep] / 1e6, soc=soc[keep],
+                                 temperature=d["cell_temperature_uk"][k][keep] / 1e6, dt=dt * every,
+                                 ambient=amb, soc0=soc0))
+    return records, OCVTable(d["ocv_soc"], d["ocv_volts"])

@@ -36,6 +36,7 @@ import numpy as np
 
 from .. import _linalg
 from .._plausible import free_run_problem
+from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import (
     ConvergenceWarning,
@@ -408,6 +409,22 @@ def rank_rcond(how, n_rows, n_cols):
     return exact if how == "exact" else max(exact, FD_RCOND)
 
 
+def penalty_terms(model, n_free=None, t_matrix=None):
+    """``(r, J)`` of a kind's :meth:`~fohw.Model.penalty` (``J`` over the free parameters), or empty.
+
+    The residuals a kind adds to the squared simulation error (a regularisation); ``J`` is
+    ``d r / d free`` through the tie matrix.
+    """
+    out = model.penalty()
+    params = model.parameters
+    if t_matrix is None:
+        t_matrix = params.tie_matrix()
+    if out is None:
+        return np.zeros(0), np.zeros((0, t_matrix.shape[1] if n_free is None else n_free))
+    r, jac = (np.asarray(x, dtype=float) for x in out)
+    return r, np.atleast_2d(jac).reshape(r.size, -1) @ t_matrix
+
+
 def _order_grid(model, grid):
     """``model`` with its free orders moved to each point of a grid inside their bounds."""
     params = model.parameters
@@ -428,6 +445,7 @@ def _order_grid(model, grid):
             for combo in itertools.product(*axes)]
 
 
+@thin_solves
 def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_starts=3,
         max_nfev=200, tol=1e-10, exact_jacobian=True, per_record=(), warmup=0, refine=None):
     """Fit any :class:`fohw.Model` to a record (or several) by simulation (output) error.
@@ -540,7 +558,9 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
              for m in list(_hook(model.starts, u_hook, y, weight)) + extra]
     y_scale = max(float(np.max(np.abs(y))), 1e-300)
-    penalty = np.full(y.size, PENALTY * y_scale)
+    # A kind's regularisation (Model.penalty): its residuals follow the records'.
+    n_pen = penalty_terms(model)[0].size
+    penalty = np.full(y.size + n_pen, PENALTY * y_scale)
     lower0, upper0 = params.free_bounds()
     pr_index = [names.index(n) for n in per_record]
     lower = np.r_[lower0, np.repeat(lower0[pr_index], n_rec - 1)]
@@ -629,7 +649,14 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
             return penalty
         if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
             return penalty
+        if n_pen:
+            return np.concatenate([(y - yhat) * sw, penalty_at(x)[0]])
         return (y - yhat) * sw
+
+    def penalty_at(x):
+        """The kind's penalty at the first record's model: ``(r, J)``, ``J`` over the full vector."""
+        r, j = penalty_terms(at(np.asarray(x, dtype=float)), len(names), t_matrix)
+        return r, np.concatenate([j, np.zeros((r.size, n_x - len(names)))], axis=1)
 
     def jacobian(x):
         try:
@@ -639,10 +666,12 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
                 else:
                     jac = full_jacobian(np.asarray(x, dtype=float))[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-            return np.zeros((y.size, n_x))
+            return np.zeros((y.size + n_pen, n_x))
         if weight is not None:
             jac = jac * sw[:, None]
-        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size, n_x))
+        if n_pen:
+            jac = np.concatenate([jac, -penalty_at(x)[1]])
+        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size + n_pen, n_x))
 
     # Starts: each base, its orders on a grid, each also with its linear part solved.
     candidates = []
@@ -703,8 +732,15 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
         yhat, jac, how_cov = full_jacobian(np.asarray(x, dtype=float))
     if weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
-    if ls.status == 3 and not sse < sse0 * (1.0 - 1e-9) and \
-            not stationary(jac, (y - yhat) * sw, x, lower, upper):
+    crit_r = (y - yhat) * sw
+    if n_pen:   # the regularised criterion: its rows join the covariance's Gram matrix
+        pen_r, pen_j = penalty_at(x)
+        messages.append(f"Regularisation ({type(model).__name__}.penalty): {float(pen_r @ pen_r):.6g} "
+                        "added to the squared error; the covariance is s^2 (J^T J + P^T P)^-1.")
+        jac, crit_r = np.concatenate([jac, -pen_j]), np.concatenate([crit_r, pen_r])
+        sse = float(np.sum(((y - yhat) * sw) ** 2))     # the records' part only
+    if ls.status == 3 and not float(crit_r @ crit_r) < sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, crit_r, x, lower, upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")

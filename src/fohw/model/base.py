@@ -150,8 +150,9 @@ class Model(abc.ABC):
     :meth:`jacobian` (exact ``d yhat / d parameters``; finite differences otherwise),
     :meth:`starts` and :meth:`linear_start` (where :func:`fohw.fit` starts), :meth:`config`
     (the settings that are not parameters, for files), :meth:`check_settings` (bounds or ties
-    the kind cannot hold), :meth:`check_fitted` (a kind's own sanity check of a fitted
-    model) and :meth:`simulate_at` (non-uniform instants).
+    the kind cannot hold), :meth:`penalty` (a regularisation added to the fit's criterion),
+    :meth:`check_fitted` (a kind's own sanity check of a fitted model) and :meth:`simulate_at`
+    (non-uniform instants).
 
     Examples
     --------
@@ -253,6 +254,15 @@ class Model(abc.ABC):
 
     def linear_start(self, u, y):
         """A start whose linear parameters are solved for ``y`` (or ``None``: no such step)."""
+        return None
+
+    def penalty(self):
+        """``(r, J)``: residuals the kind adds to a fit's squared error (a regularisation), or ``None``.
+
+        ``r`` (shape ``(m,)``) at the model's values and ``J = d r / d value`` (shape ``(m,
+        n_parameters)``, :attr:`parameters` order); :func:`fohw.fit` minimises
+        ``sum (y - yhat)^2 + r @ r``. ``None`` (the default): no penalty.
+        """
         return None
 
     def check_settings(self, parameters):
