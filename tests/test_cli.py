@@ -402,6 +402,6 @@ def test_identify_prints_the_corrected_order_test(tmp_path, capsys):
                  "--g-basis", "1", "--method", "output_error"]) == 0
     out = capsys.readouterr().out
     res = fohw.identify(d.u, d.y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error")
-    t = res.order_test(d.u, d.y)
+    t = fohw.order_test(res, d.u, d.y)
     assert f"Order test corrected for correlated residuals ({t.correction})" in out
     assert f"p = {t.pvalue_corrected:.4g}" in out and f"Verdict: {t.verdict}" in out

@@ -1049,7 +1049,7 @@ def _compare(args):
 
 def _data(args):
     """``fohw data``: list the records, or write one to ``--out`` (default stdout)."""
-    from .datasets import BATTERY_FILENAME, SHIPPED
+    from .datasets import BATTERY_FILENAME, PULSES_FILENAME, SHIPPED
 
     if args.name is None:
         for name, (filename, _, what) in SHIPPED.items():
@@ -1057,6 +1057,9 @@ def _data(args):
         print(f"{'battery':15s} {BATTERY_FILENAME}: an LG M50LT lithium-ion cell's drive cycle "
               "(164 953 samples at 0.15 s; written as columns t, i, v, soc), its open-circuit "
               "voltage and impedance spectra (all of it: fohw.datasets.battery_cell())")
+        print(f"{'pybamm_pulses':15s} {PULSES_FILENAME}: 15 pulse records of an LG M50 cell "
+              "simulated with PyBaMM (DFN, Chen2020) at 5 temperatures x 3 states of charge "
+              "(read them in Python: fohw.datasets.pybamm_pulses())")
         print(f"{'paper_example':15s} simulated (Section 6.1, Eq. 57): columns u, y; --samples N "
               "(default 2000), --seed S")
         print("write one with `fohw data NAME --out FILE`, or read a text record in place as "
