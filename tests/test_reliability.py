@@ -739,18 +739,20 @@ def _cell(sign=1.0):
 def test_the_other_current_sign_is_named_not_called_rank_deficient(elements):
     """Issue 34 #15: a discharge-positive current (the other convention) ended in 'no grid point
     gave non-negative resistances; widen `tau_bounds`', then in a rank-deficiency warning about
-    tau1 and alpha1 ("remove a basis function or a lag"). Every resistance fits to 0 there: the
-    fit is FAILED and the warning's first sentence names the sign convention."""
+    tau1 and alpha1 ("remove a basis function or a lag"). Issue 37: the record is checked against
+    the circuit's `current_sign` before any fit, and the refusal names the other convention."""
     u, v = _cell(sign=-1.0)
     model = fohw.EquivalentCircuit(list(elements), tau_bounds=(1.0, 500.0))
-    with pytest.warns(fohw.ConvergenceWarning) as record:
-        fit = fohw.fit(model, u, v)
-    assert fit.status == fohw.Status.FAILED
-    assert str(record[0].message).startswith("fohw.fit(EquivalentCircuit): Every resistance of "
-                                              "the fitted circuit is 0")
-    assert "Check the sign convention" in fit.message
+    with pytest.raises(fohw.ParameterError, match="current_sign='discharge_positive'") as err:
+        fohw.fit(model, u, v)
+    assert "tau_bounds" not in str(err.value) and "rank" not in str(err.value)
     good = fohw.fit(model, *_cell())                 # the same record in the fit's convention
     assert good.converged and good.parameters["R0"].value > 0.01
+    flipped = fohw.EquivalentCircuit(list(elements), tau_bounds=(1.0, 500.0),
+                                     current_sign="discharge_positive")
+    same = fohw.fit(flipped, u, v)                   # the other record, its convention declared
+    assert same.converged
+    assert same.parameters["R0"].value == pytest.approx(good.parameters["R0"].value, rel=1e-6)
 
 
 FUZZ = settings(max_examples=15, deadline=None, derandomize=True)

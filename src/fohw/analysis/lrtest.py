@@ -727,9 +727,10 @@ def order_test(full, u=None, y=None, *, correction="sandwich", validation=None, 
     >>> data = fohw.datasets.paper_example(300, random_state=0)
     >>> kw = dict(na=1, nb=1, f_basis=1, g_basis=1, method="output_error")
     >>> full = fohw.identify(data.u[:200], data.y[:200], orders="commensurate", **kw)
-    >>> t = full.order_test(data.u[:200], data.y[:200],
+    >>> t = fohw.order_test(full, data.u[:200], data.y[:200],
     ...                     validation=(data.u[200:], data.y[200:]))
-    >>> t.correction.split(":")[0], t.verdict in fohw.analysis.order_verdict.VERDICTS
+    >>> from fohw.analysis.order_verdict import VERDICTS
+    >>> t.correction.split(":")[0], t.verdict in VERDICTS
     ('sandwich', True)
     """
     if u is None and y is None:
