@@ -236,6 +236,21 @@ def test_an_identify_that_failed_exits_non_zero(tanks, capsys, monkeypatch):
     assert status == 2 and err.splitlines()[-1].startswith("fohw: error: the fit FAILED"), err
 
 
+def test_an_implausible_identify_fit_is_not_saved(tmp_path, capsys):
+    """Issue 36: a fit whose free run on its own record explodes (the paper example lifted by 3
+    with neither offset nor operating point: its y^3 map must explain the level) is IMPLAUSIBLE;
+    `--save` wrote it as if it were sound. Now the figure is drawn, the file is not."""
+    d = fohw.datasets.paper_example(400, random_state=0)
+    path = tmp_path / "lifted.txt"
+    np.savetxt(path, np.column_stack([d.u, d.y + 3.0]))
+    model, figure = tmp_path / "model.json", tmp_path / "fit.png"
+    status = main(["identify", str(path), "--na", "2", "--nb", "2", "--f-basis", "2",
+                   "--g-basis", "3", "--save", str(model), "--plot", str(figure), "-q"])
+    err = capsys.readouterr().err
+    assert status == 2 and "fohw: error: the fit is IMPLAUSIBLE" in err, err
+    assert "nothing was saved" in err and not model.exists() and figure.exists()
+
+
 def test_stage_messages_go_to_stderr_when_it_is_not_a_terminal(tanks):
     """Long runs printed nothing unless stderr was a terminal (40 s of silence on a first run):
     stage messages now go to stderr in pipes too; stdout keeps the results; -q silences them."""

@@ -742,13 +742,18 @@ def _print_identified(args, res, check):
 
 
 def _save_identified(args, res, check):
-    """``--save`` and ``--plot``; an error, and nothing written, if the fit FAILED."""
+    """``--save`` and ``--plot``; an error, and nothing written, if the fit FAILED.
+
+    An IMPLAUSIBLE fit (its free run leaves the data's range) is plotted if asked, and not
+    saved: an error says why.
+    """
     from .results import Status
 
     if res.status == Status.FAILED:
         raise UsageError(f"the fit FAILED ({res.message.rstrip('.')}); nothing was saved or "
                          "plotted (the estimates above are the optimiser's last point).")
-    if args.save:
+    implausible = res.status == Status.IMPLAUSIBLE
+    if args.save and not implausible:
         from .io.jsonio import save_result
 
         save_result(res, args.save)
@@ -760,6 +765,12 @@ def _save_identified(args, res, check):
         fig.suptitle(f"fohw identify ({res.method}) on the estimation record: free run and "
                      "one-step prediction", fontsize=10)
         save_figure(fig, args.plot, dpi=120)
+    if args.save and implausible:
+        # the figure (if asked) shows why; a model file would be used as if it were sound
+        raise UsageError(f"the fit is IMPLAUSIBLE ({res.message.rstrip('.')}); nothing was "
+                         f"saved to {args.save}: its free run on its own record leaves the "
+                         "data's range (give an offset or an operating point, or other "
+                         "candidates).")
 
 
 def _fit_dict(check):
