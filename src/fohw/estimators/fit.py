@@ -52,7 +52,8 @@ from ..results import Status
 from ._common import bounded_least_squares
 
 __all__ = ["fit", "prepare_data", "data_digest_of", "records_jacobian", "free_jacobian",
-           "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE", "PENALTY", "FD_RCOND"]
+           "central_differences", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
+           "PENALTY", "FD_RCOND"]
 
 #: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model, summed
 #: over the start models: a kind's :meth:`~fohw.Model.starts` may return several).
@@ -195,19 +196,15 @@ class _Data:
             [np.ones(e.y.size) if e.weight is None else e.weight for e in experiments])
         self.bounds = np.cumsum([0] + [e.y.size for e in experiments])
 
-    def simulate(self, model):
-        return np.concatenate([e.simulate(model) for e in self.experiments])
-
 
 def _record_info(records):
     """What the data were (names, units, sampling), kept on the result."""
     first = records[0]
-    info = {"input_names": list(first.input_names), "input_units": list(first.input_units),
+    return {"input_names": list(first.input_names), "input_units": list(first.input_units),
             "output_name": first.output_name, "output_unit": first.output_unit,
             "time_unit": first.time_unit, "dt": first.dt,
             "records": [{"name": r.name, "n_samples": r.n_samples, "t0": r.t0,
                          "uniform": r.uniform, "dt": r.dt} for r in records]}
-    return info
 
 
 #: Record fields that must agree across the records of one fit (one system, one set of units).
@@ -320,26 +317,24 @@ def free_jacobian(model, u, *, exact=True):
     ``how`` is ``"exact"`` when the kind's :meth:`~fohw.Model.jacobian` gave it, else
     ``"finite differences"`` (central, step ``eps**(1/3) max(|p|, 1)``, one-sided at a bound).
     """
-    params = model.parameters
-    t = params.tie_matrix()
-    out = model.jacobian(u) if exact else None
-    if out is not None:
-        yhat, jac = out
-        return np.asarray(yhat, dtype=float), np.asarray(jac, dtype=float) @ t, "exact"
-    x = params.free_values()
-    lo, hi = params.free_bounds()
-    yhat = np.asarray(model.simulate(u), dtype=float)
+    return records_jacobian(model, [_Experiment(u, None, None)], exact=exact)
+
+
+def central_differences(run, x, lower, upper):
+    """``(run(x), d run / d x)`` by central differences, one-sided at a bound.
+
+    The step is ``eps**(1/3) max(|x_j|, 1)``; ``run`` maps a parameter vector to the output.
+    """
+    yhat = run(x)
     cols = []
     for j in range(x.size):
         step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
         up, down = x.copy(), x.copy()
-        up[j] = min(x[j] + step, hi[j])
-        down[j] = max(x[j] - step, lo[j])
-        y_up = model.with_parameters(params.with_free(up)).simulate(u)
-        y_down = model.with_parameters(params.with_free(down)).simulate(u)
-        cols.append((np.asarray(y_up) - np.asarray(y_down)) / (up[j] - down[j]))
+        up[j] = min(x[j] + step, upper[j])
+        down[j] = max(x[j] - step, lower[j])
+        cols.append((run(up) - run(down)) / (up[j] - down[j]))
     jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
-    return yhat, jac, "finite differences"
+    return yhat, jac
 
 
 def records_jacobian(model, experiments, *, exact=True):
@@ -354,22 +349,12 @@ def records_jacobian(model, experiments, *, exact=True):
     if all(o is not None for o in outs):
         return (np.concatenate([o[0] for o in outs]),
                 np.vstack([np.asarray(o[1], dtype=float) @ t for o in outs]), "exact")
-    x = params.free_values()
-    lo, hi = params.free_bounds()
 
     def run(v):
         m = model.with_parameters(params.with_free(v))
         return np.concatenate([e.simulate(m) for e in experiments])
 
-    yhat = run(x)
-    cols = []
-    for j in range(x.size):
-        step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
-        up, down = x.copy(), x.copy()
-        up[j] = min(x[j] + step, hi[j])
-        down[j] = max(x[j] - step, lo[j])
-        cols.append((run(up) - run(down)) / (up[j] - down[j]))
-    jac = np.column_stack(cols) if cols else np.zeros((yhat.size, 0))
+    yhat, jac = central_differences(run, params.free_values(), *params.free_bounds())
     return yhat, jac, "finite differences"
 
 
@@ -620,15 +605,7 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
             yhat, jac = run(x, True)
             if jac is not None:
                 return yhat, jac, "exact"
-        yhat, _ = run(x, False)
-        cols = []
-        for j in range(n_x):
-            step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1.0)
-            up, down = x.copy(), x.copy()
-            up[j] = min(x[j] + step, upper[j])
-            down[j] = max(x[j] - step, lower[j])
-            cols.append((run(up, False)[0] - run(down, False)[0]) / (up[j] - down[j]))
-        jac = np.column_stack(cols) if cols else np.zeros((y.size, 0))
+        yhat, jac = central_differences(lambda v: run(v, False)[0], x, lower, upper)
         return yhat, jac, "finite differences"
 
     # In the local search the solver asks for the Jacobian at (nearly) every point whose residual
