@@ -464,10 +464,11 @@ class CircuitTables(Model):
 
     # --- regularisation -----------------------------------------------------------------------
     def _pairs(self):
+        """``(first, second)`` flat indices of the neighbouring breakpoints (SOC pairs first)."""
         ns, nt = self.soc_points.size, self.temperature_points.size
         idx = np.arange(ns * nt).reshape(ns, nt)
-        return ([(idx[s, t], idx[s + 1, t]) for s in range(ns - 1) for t in range(nt)]
-                + [(idx[s, t], idx[s, t + 1]) for s in range(ns) for t in range(nt - 1)])
+        return (np.concatenate([idx[:-1, :].ravel(), idx[:, :-1].ravel()]),
+                np.concatenate([idx[1:, :].ravel(), idx[:, 1:].ravel()]))
 
     def penalty(self):
         """``(r, J)``: the smoothing residuals ``sqrt(smoothing) (ln p_b - ln p_b')`` and their Jacobian.
@@ -477,8 +478,8 @@ class CircuitTables(Model):
         (:attr:`parameters` order). ``None`` when ``smoothing`` is 0 or the tables have one
         breakpoint. :func:`fohw.fit` adds ``r @ r`` to the squared simulation error.
         """
-        pairs = self._pairs()
-        if self.smoothing == 0.0 or not pairs:
+        first, second = self._pairs()
+        if self.smoothing == 0.0 or not first.size:
             return None
         names = list(self.parameters.names)
         c = math.sqrt(self.smoothing)
@@ -488,13 +489,12 @@ class CircuitTables(Model):
                 continue
             flat = self.tables[table].ravel()
             col0 = names.index(_table_names(table, self.soc_points, self.temperature_points)[0])
-            for b, b2 in pairs:
-                rows.append(c * (math.log(flat[b]) - math.log(flat[b2])))
-                j = np.zeros(len(names))
-                j[col0 + b] = c / flat[b]
-                j[col0 + b2] = -c / flat[b2]
-                jac.append(j)
-        return np.array(rows), np.array(jac)
+            rows.append(c * (np.log(flat[first]) - np.log(flat[second])))
+            j = np.zeros((first.size, len(names)))
+            j[np.arange(first.size), col0 + first] = c / flat[first]
+            j[np.arange(first.size), col0 + second] = -c / flat[second]
+            jac.append(j)
+        return np.concatenate(rows), np.concatenate(jac)
 
     # --- starts -------------------------------------------------------------------------------
     @thin_solves
