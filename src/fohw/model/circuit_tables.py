@@ -32,6 +32,7 @@ effect, when records sit at the breakpoints).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -517,9 +518,10 @@ class CircuitTables(Model):
         sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
                                                                                  "sample_weight"))
         w = self._weights(soc, temp)
+        overpotential = y - self._ocv(soc)
         # the record against the current's sign convention (the circuit's own check)
-        EquivalentCircuit([], current_sign=self.current_sign).check_sign(i, y - self._ocv(soc), sw)
-        target = (y - self._ocv(soc)) * sw
+        EquivalentCircuit([], current_sign=self.current_sign).check_sign(i, overpotential, sw)
+        target = overpotential * sw
         params = self.parameters
         grids = []
         for e, kind in enumerate(self.kinds, start=1):
@@ -542,7 +544,7 @@ class CircuitTables(Model):
         base = np.concatenate([w, w * i[:, None]], axis=1)
         cache = {}
         found = []
-        for combo in _product(grids):
+        for combo in itertools.product(*grids):
             if any(combo[k][0] is not None and combo[k + 1][0] is not None
                    and combo[k][0] >= combo[k + 1][0] for k in range(len(combo) - 1)
                    if self.kinds[k] == self.kinds[k + 1]):
@@ -603,8 +605,3 @@ class CircuitTables(Model):
                 f"{self.soc_points.tolist()}, temperature points {self.temperature_points.tolist()}, "
                 f"{len(self.parameters)} parameters)")
 
-
-def _product(grids):
-    import itertools
-
-    return itertools.product(*grids)
