@@ -2,7 +2,7 @@
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fractional_hw.py [--baseline REV] [--rounds 3]
 
-The workloads are the fits of ``tests/test_fotf_hw.py`` and ``docs/transfer_functions.md``:
+The workloads are the fits of ``tests/test_wiener.py`` and ``docs/transfer_functions.md``:
 ``u -> u + 0.3 u^2 -> 1 / (2 s^0.6 + 1) -> h``, ``u`` uniform on [-2, 2], noise 0.01, ``dt =
 0.05``, from the start ``den_orders = [0.5, 0.0]``, with ``h`` the identity, ``x - 0.2 x^2``
 (N = 1000 and 2000) and a saturation. Each is timed in fresh processes, alternately with the

@@ -32,6 +32,8 @@ import numpy as np
 from scipy.special import erfcx
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+from transfer_function_figures import _start  # noqa: E402
+
 import fohw  # noqa: E402
 
 SYSTEMS = {
@@ -111,15 +113,6 @@ def load_old_fohw(src):
     sys.modules["fohw_old"] = module
     spec.loader.exec_module(module)
     return module
-
-
-def _start(num_orders, den_orders, h, bounds=None):
-    G = fohw.FractionalTF(np.ones(len(num_orders)), num_orders, np.ones(len(den_orders)), den_orders,
-                          dt=h)
-    p = G.parameters
-    for name, bound in (bounds or {}).items():
-        p = p.replace(name, bounds=bound)
-    return G.with_parameters(p)
 
 
 def fit_workloads(old):

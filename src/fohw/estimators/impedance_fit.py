@@ -40,7 +40,7 @@ from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
 from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
-from ..model.circuit import EquivalentCircuit, check_spectrum, make_element, scan_combinations
+from ..model.circuit import EquivalentCircuit, check_spectrum, scan_combinations, unit_columns
 from ..results import Status
 from ._common import bounded_least_squares
 from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian, rank_rcond
@@ -168,12 +168,7 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
         base_names.append("b")
         base_cols.append(unit)
         offset = offset + ocv_slope * unit
-    units = {}
-    for kind, g in zip(kinds, grids):
-        for tau, alpha in g:
-            if (kind, tau, alpha) not in units:
-                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
-                units[(kind, tau, alpha)] = e.impedance(f, dt)
+    units = unit_columns(kinds, grids, lambda e: e.impedance(f, dt))
     names = base_names + [f"{'sigma' if kind == 'warburg' else 'R'}{e}"
                           for e, kind in enumerate(kinds, start=1)]
     found = []

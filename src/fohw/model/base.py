@@ -249,11 +249,19 @@ class Model(abc.ABC):
         return None
 
     def starts(self, u, y):
-        """Candidate start models for :func:`fohw.fit` (default: the model itself)."""
+        """Candidate start models for :func:`fohw.fit` (default: the model itself).
+
+        A kind whose scan can weight the samples declares a keyword ``sample_weight``
+        (``starts(u, y, *, sample_weight=None)``); :func:`fohw.fit` passes its
+        ``sample_weight`` only to a hook that declares it (so does :meth:`linear_start`).
+        """
         return [self]
 
     def linear_start(self, u, y):
-        """A start whose linear parameters are solved for ``y`` (or ``None``: no such step)."""
+        """A start whose linear parameters are solved for ``y`` (or ``None``: no such step).
+
+        May declare ``sample_weight`` like :meth:`starts`.
+        """
         return None
 
     def penalty(self):

@@ -1114,6 +1114,20 @@ def _check_rest(initial):
                              "column u[:, 1].")
 
 
+def unit_columns(kinds, grids, column):
+    """``{(kind, tau, alpha): column(element)}`` for every distinct grid point, unit resistance.
+
+    The linear columns the grid scans share (a held ``tau`` of ``None`` builds with 1).
+    """
+    out = {}
+    for kind, g in zip(kinds, grids):
+        for tau, alpha in g:
+            if (kind, tau, alpha) not in out:
+                out[(kind, tau, alpha)] = column(
+                    make_element(kind, 1.0, tau if tau is not None else 1.0, alpha))
+    return out
+
+
 def scan_combinations(kinds, grids, fixed):
     """The combinations of grid points the scan visits, generated without the skipped ones.
 
@@ -1145,12 +1159,7 @@ def _scan(kinds, cubic, i, soc, y, dt, fixed, grids, keep, sw):
     """Best grid points by linear least squares of the linear parameters: ``[(combo, coef)]``."""
     base = [np.ones_like(i), soc, i] + ([i ** 3] if cubic else [])
     base_names = ["a", "b", "R0"] + (["c3"] if cubic else [])
-    responses = {}
-    for kind, g in zip(kinds, grids):
-        for tau, alpha in g:
-            if (kind, tau, alpha) not in responses:
-                e = make_element(kind, 1.0, tau if tau is not None else 1.0, alpha)
-                responses[(kind, tau, alpha)] = e.unit_response(i, dt)
+    responses = unit_columns(kinds, grids, lambda e: e.unit_response(i, dt))
     keys = list(responses)
     cols = np.column_stack(base + [responses[k] for k in keys]) * sw[:, None]
     y = y * sw

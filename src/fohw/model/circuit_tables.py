@@ -32,6 +32,7 @@ effect, when records sit at the breakpoints).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -464,10 +465,11 @@ class CircuitTables(Model):
 
     # --- regularisation -----------------------------------------------------------------------
     def _pairs(self):
+        """``(first, second)`` flat indices of the neighbouring breakpoints (SOC pairs first)."""
         ns, nt = self.soc_points.size, self.temperature_points.size
         idx = np.arange(ns * nt).reshape(ns, nt)
-        return ([(idx[s, t], idx[s + 1, t]) for s in range(ns - 1) for t in range(nt)]
-                + [(idx[s, t], idx[s, t + 1]) for s in range(ns) for t in range(nt - 1)])
+        return (np.concatenate([idx[:-1, :].ravel(), idx[:, :-1].ravel()]),
+                np.concatenate([idx[1:, :].ravel(), idx[:, 1:].ravel()]))
 
     def penalty(self):
         """``(r, J)``: the smoothing residuals ``sqrt(smoothing) (ln p_b - ln p_b')`` and their Jacobian.
@@ -477,8 +479,8 @@ class CircuitTables(Model):
         (:attr:`parameters` order). ``None`` when ``smoothing`` is 0 or the tables have one
         breakpoint. :func:`fohw.fit` adds ``r @ r`` to the squared simulation error.
         """
-        pairs = self._pairs()
-        if self.smoothing == 0.0 or not pairs:
+        first, second = self._pairs()
+        if self.smoothing == 0.0 or not first.size:
             return None
         names = list(self.parameters.names)
         c = math.sqrt(self.smoothing)
@@ -488,13 +490,12 @@ class CircuitTables(Model):
                 continue
             flat = self.tables[table].ravel()
             col0 = names.index(_table_names(table, self.soc_points, self.temperature_points)[0])
-            for b, b2 in pairs:
-                rows.append(c * (math.log(flat[b]) - math.log(flat[b2])))
-                j = np.zeros(len(names))
-                j[col0 + b] = c / flat[b]
-                j[col0 + b2] = -c / flat[b2]
-                jac.append(j)
-        return np.array(rows), np.array(jac)
+            rows.append(c * (np.log(flat[first]) - np.log(flat[second])))
+            j = np.zeros((first.size, len(names)))
+            j[np.arange(first.size), col0 + first] = c / flat[first]
+            j[np.arange(first.size), col0 + second] = -c / flat[second]
+            jac.append(j)
+        return np.concatenate(rows), np.concatenate(jac)
 
     # --- starts -------------------------------------------------------------------------------
     @thin_solves
@@ -517,9 +518,10 @@ class CircuitTables(Model):
         sw = np.ones(i.size) if sample_weight is None else np.sqrt(check_array(sample_weight,
                                                                                  "sample_weight"))
         w = self._weights(soc, temp)
+        overpotential = y - self._ocv(soc)
         # the record against the current's sign convention (the circuit's own check)
-        EquivalentCircuit([], current_sign=self.current_sign).check_sign(i, y - self._ocv(soc), sw)
-        target = (y - self._ocv(soc)) * sw
+        EquivalentCircuit([], current_sign=self.current_sign).check_sign(i, overpotential, sw)
+        target = overpotential * sw
         params = self.parameters
         grids = []
         for e, kind in enumerate(self.kinds, start=1):
@@ -542,7 +544,7 @@ class CircuitTables(Model):
         base = np.concatenate([w, w * i[:, None]], axis=1)
         cache = {}
         found = []
-        for combo in _product(grids):
+        for combo in itertools.product(*grids):
             if any(combo[k][0] is not None and combo[k + 1][0] is not None
                    and combo[k][0] >= combo[k + 1][0] for k in range(len(combo) - 1)
                    if self.kinds[k] == self.kinds[k + 1]):
@@ -603,8 +605,3 @@ class CircuitTables(Model):
                 f"{self.soc_points.tolist()}, temperature points {self.temperature_points.tolist()}, "
                 f"{len(self.parameters)} parameters)")
 
-
-def _product(grids):
-    import itertools
-
-    return itertools.product(*grids)
