@@ -736,7 +736,7 @@ def order_test(full, u=None, y=None, *, correction="sandwich", validation=None, 
     if u is None and y is None:
         if validation is not None:
             raise ParameterError("`validation` needs the estimation record too: "
-                                 "order_test(u, y, validation=(u_val, y_val)).")
+                                 "fohw.order_test(full, u, y, validation=(u_val, y_val)).")
         return order_test_without_record(full)
     full = check_result(full, "full")
     u, y = check_data(full, u, y, "full")
