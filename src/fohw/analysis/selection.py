@@ -56,7 +56,7 @@ from ..exceptions import (
 from ..model.base import Model
 from ..model.simulation import check_record_sampling
 from ..record import Record, check_sampling, record_data, record_info
-from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
+from .lrtest import cancelled_orders, davies_from_fit, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .order_verdict import verdict
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
@@ -1258,12 +1258,6 @@ def warn_nothing_selected(who, rows):
         stacklevel=3)
 
 
-def _cheap_davies(full):
-    """Whether lr_test's Davies bound reads its profile from the fit (no refits)."""
-    return (full.method == "varpro" and full.alpha_profile is not None
-            and len(full.orders) == 1 and full.structure.past == "rest")
-
-
 def _verdict_columns(rows, i, j, test):
     """``lr_pvalue_corrected`` and ``order_verdict`` of row ``i`` tested against row ``j``."""
     rows[i]["lr_pvalue_corrected"] = test.pvalue_corrected
@@ -1300,7 +1294,7 @@ def lr_columns(rows, results, cands, u=None, y=None):
         if nested is None:
             continue
         against = f"vs {rows[nested]['candidate']}"
-        if unidentified and not _cheap_davies(full):
+        if unidentified and not davies_from_fit(full):
             rows[i]["lr_reference"] = (
                 f"not computed {against}: order(s) {', '.join(unidentified)} not identified "
                 "under the null and Davies' bound needs refits here; call fohw.lr_test(..., "
