@@ -150,22 +150,28 @@ def _data_path(path):
 
 
 def _pick_columns(data, names, spec, count, path, flag="--columns", what="input and output"):
-    """Column indices from ``--columns`` ("0,1" or header names), ``count`` of them."""
-    if data.shape[1] < count:
+    """The columns ``--columns`` picks ("0,1" or header names), ``count`` of them."""
+    return [data[:, i] for i in _column_indices(data.shape[1], names, spec, count, path, flag,
+                                                what)]
+
+
+def _column_indices(width, names, spec, count, path, flag="--columns", what="input and output"):
+    """Column indices from ``--columns`` ("0,1" or header names) of ``width`` columns."""
+    if width < count:
         needs = ("the input and the output" if count == 2 and what == "input and output" else
                  "the inputs and the output" if what == "input and output" else
                  "one per input" if count > 1 else "the input")
-        raise UsageError(f"{path} has {data.shape[1]} signal column(s); this command needs "
+        raise UsageError(f"{path} has {width} signal column(s); this command needs "
                          f"{count} ({needs}).")
     if spec is None:
         lower = [n.lower() for n in names] if names else []
         if count == 2 and what == "input and output" and "u" in lower and "y" in lower:
             idx = [lower.index("u"), lower.index("y")]
-        elif data.shape[1] == count:
+        elif width == count:
             idx = list(range(count))
         else:
             have = f" ({', '.join(names)})" if names else ""
-            raise UsageError(f"{path} has {data.shape[1]} columns{have}: say which to use with "
+            raise UsageError(f"{path} has {width} columns{have}: say which to use with "
                              f"{flag} (numbers from 0 or header names).")
     else:
         parts = [p.strip() for p in spec.split(",")]
@@ -185,10 +191,10 @@ def _pick_columns(data, names, spec, count, path, flag="--columns", what="input 
         raise UsageError(f"{flag} names the same column twice ({spec!r}): the input and the "
                          "output must be different columns.")
     for i in idx:
-        if not 0 <= i < data.shape[1]:
+        if not 0 <= i < width:
             raise UsageError(f"{flag}: column {i} does not exist; {path} has "
-                             f"{data.shape[1]} column(s) (numbered from 0).")
-    return [data[:, i] for i in idx]
+                             f"{width} column(s) (numbered from 0).")
+    return idx
 
 
 def _basis_arg(text):
@@ -613,18 +619,14 @@ def _record(args, u, y, dt, columns=None):
 
 
 def _column_names(args, names, count, spec=None):
-    """The header names of the columns ``--columns`` picks (None where a column has none)."""
-    spec = args.columns if spec is None else spec
+    """The header names of the columns ``--columns`` picks (None without a header).
+
+    The indices :func:`_pick_columns` took (it has checked them; a header names every column).
+    """
     if names is None:
         return None
-    if spec is None:
-        lower = [n.lower() for n in names]
-        if count == 2 and "u" in lower and "y" in lower:
-            return [names[lower.index("u")], names[lower.index("y")]]
-        return list(names[:count]) if len(names) == count else None
-    parts = [p.strip() for p in spec.split(",")]
-    return [names[int(p)] if p.lstrip("-").isdigit() and 0 <= int(p) < len(names) else
-            (p if p in names else None) for p in parts]
+    spec = args.columns if spec is None else spec
+    return [names[i] for i in _column_indices(len(names), names, spec, count, args.data)]
 
 
 def _identify(args):

@@ -167,15 +167,19 @@ def _criterion_text(name, n_effective, n):
     return f"{name}; n_effective = {float(n_effective):.4g} of {n} samples"
 
 
+def davies_from_fit(full):
+    """Whether the Davies bound reads its profile from ``full`` (varpro's, no refits)."""
+    return (full.method == "varpro" and full.alpha_profile is not None
+            and len(full.orders) == 1 and full.structure.past == "rest")
+
+
 def _davies_profile(full, rss_r, n, u, y, n_grid):
     """``LR(nu)`` on a grid of the single unidentified order (and at the estimate)."""
     (name,) = full.orders
     est = float(full.orders[name])
     stat_f = statistic(rss_r, criterion(full)[0], n)
-    prof = full.alpha_profile
-    if full.method == "varpro" and prof is not None and len(full.orders) == 1 \
-            and full.structure.past == "rest":
-        grid, J = prof
+    if davies_from_fit(full):
+        grid, J = full.alpha_profile
         values = [statistic(rss_r, j * full.n_samples, n) for j in J]
     else:
         u, y = check_data(full, u, y, "full")
@@ -736,7 +740,7 @@ def order_test(full, u=None, y=None, *, correction="sandwich", validation=None, 
     if u is None and y is None:
         if validation is not None:
             raise ParameterError("`validation` needs the estimation record too: "
-                                 "order_test(u, y, validation=(u_val, y_val)).")
+                                 "fohw.order_test(full, u, y, validation=(u_val, y_val)).")
         return order_test_without_record(full)
     full = check_result(full, "full")
     u, y = check_data(full, u, y, "full")

@@ -56,7 +56,7 @@ from ..exceptions import (
 from ..model.base import Model
 from ..model.simulation import check_record_sampling
 from ..record import Record, check_sampling, record_data, record_info
-from .lrtest import cancelled_orders, lr_test, nested_fits, null_orders
+from .lrtest import cancelled_orders, davies_from_fit, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse
 from .order_verdict import verdict
 from .validation import ENVELOPE, check_envelope, implausible_message, implausible_sample
@@ -1001,26 +1001,18 @@ def _fit_and_score_records(est, scored, froms, model, options, reference, envelo
                           seconds=time.perf_counter() - t0), None
 
 
-def _select_records(records, models, validation, hold_out, score, refit, executor, progress,
-                    envelope, common):
-    """:func:`select_structure` of model candidates on several records (joint fits)."""
+def _check_score_refit(score, refit):
+    """A ParameterError unless ``score`` is one of SCORES and ``refit`` a bool."""
     if score not in SCORES:
         raise ParameterError(f"`score` must be one of {sorted(SCORES)}; got {score!r}.")
     if not isinstance(refit, (bool, np.bool_)):
         raise ParameterError(f"`refit` must be True or False; got {refit!r}.")
-    if hold_out == "records" and common.get("per_record"):
-        raise ParameterError("`per_record` parameters have values for the fitted records only, "
-                             "none for a held-back record: hold back the end of each record "
-                             "(hold_out='end'), or fit without per_record.")
-    factor = check_envelope(envelope)
-    est, scored, froms, described = _records_split(records, validation, hold_out)
-    reference = np.concatenate([r.y for r in records])
-    if score == "fit" and np.ptp(np.concatenate([r.y[f:] for r, f in zip(scored, froms)])) == 0:
-        raise ParameterError(f"the held-back output ({described}) is constant: no candidate can "
-                             "be ranked by its fit %; rank by score='rmse'.")
-    tasks = [(est, scored, froms, m, common, reference, factor) for _, m in models]
+
+
+def _score_models(worker, tasks, models, score, described, executor, progress):
+    """The :class:`Selection` (no best yet) of model candidates scored by ``worker``."""
     t0 = time.perf_counter()
-    outcomes = run_tasks(_fit_and_score_records, tasks, executor=executor, progress=progress,
+    outcomes = run_tasks(worker, tasks, executor=executor, progress=progress,
                          label="select_structure")
     seconds = time.perf_counter() - t0
     rows, results = [], []
@@ -1034,6 +1026,32 @@ def _select_records(records, models, validation, hold_out, score, refit, executo
     model_lr_columns(rows, results)
     selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
                           validation=described, seconds=seconds)
+    return selection
+
+
+def _note_refit_status(row, best):
+    """A kept refit's status in its row (``pick_refitted``'s ``finish``)."""
+    row["refit_status"] = best.status.name
+
+
+def _select_records(records, models, validation, hold_out, score, refit, executor, progress,
+                    envelope, common):
+    """:func:`select_structure` of model candidates on several records (joint fits)."""
+    _check_score_refit(score, refit)
+    if hold_out == "records" and common.get("per_record"):
+        raise ParameterError("`per_record` parameters have values for the fitted records only, "
+                             "none for a held-back record: hold back the end of each record "
+                             "(hold_out='end'), or fit without per_record.")
+    factor = check_envelope(envelope)
+    est, scored, froms, described = _records_split(records, validation, hold_out)
+    reference = np.concatenate([r.y for r in records])
+    if score == "fit" and np.ptp(np.concatenate([r.y[f:] for r, f in zip(scored, froms)])) == 0:
+        raise ParameterError(f"the held-back output ({described}) is constant: no candidate can "
+                             "be ranked by its fit %; rank by score='rmse'.")
+    tasks = [(est, scored, froms, m, common, reference, factor) for _, m in models]
+    selection = _score_models(_fit_and_score_records, tasks, models, score, described,
+                              executor, progress)
+    results = selection.results
 
     def refit_one(index):
         start = None if results[index] is None else results[index].model
@@ -1041,12 +1059,9 @@ def _select_records(records, models, validation, hold_out, score, refit, executo
         runs = _records_free_runs(best, records, [1] * len(records), reference, factor)
         return (best, *runs[1:])
 
-    def finish(row, best):
-        row["refit_status"] = best.status.name
-
-    pick_refitted(selection, refit_one, finish, refit=bool(refit))
+    pick_refitted(selection, refit_one, _note_refit_status, refit=bool(refit))
     if selection.best is None:
-        warn_nothing_selected("select_structure", rows)
+        warn_nothing_selected("select_structure", selection.rows)
     return selection
 
 
@@ -1207,10 +1222,7 @@ def _select_models(u, y, models, validation, score, refit, executor, progress, e
     for _, m in models:                        # every input checked before any fit
         check_same_length(m.check_input(u), y, "u", "y")
     u = np.asarray(u, dtype=float)
-    if score not in SCORES:
-        raise ParameterError(f"`score` must be one of {sorted(SCORES)}; got {score!r}.")
-    if not isinstance(refit, (bool, np.bool_)):
-        raise ParameterError(f"`refit` must be True or False; got {refit!r}.")
+    _check_score_refit(score, refit)
     factor = check_envelope(envelope)
     u_est, y_est, u_sim, y_score, score_from, described = split_validation(u, y, validation)
     if score == "fit" and np.ptp(y_score) == 0:
@@ -1221,33 +1233,18 @@ def _select_models(u, y, models, validation, score, refit, executor, progress, e
     reference = np.r_[y, y_score] if score_from == 0 else y
     tasks = [(u_est, y_est, u_sim, y_score, score_from, m, common, reference, factor)
              for _, m in models]
-    t0 = time.perf_counter()
-    outcomes = run_tasks(_fit_and_score_model, tasks, executor=executor, progress=progress,
-                         label="select_structure")
-    seconds = time.perf_counter() - t0
-    rows, results = [], []
-    for (label, m), outcome in zip(models, outcomes):
-        if isinstance(outcome, TaskError):
-            row, res = _model_row(status="failed", reason=f"executor: {outcome.message}"), None
-        else:
-            row, res = outcome
-        rows.append(dict(candidate=label, kind=type(m).__name__, **row))
-        results.append(res)
-    model_lr_columns(rows, results)
-    selection = Selection(rows=rows, best=None, best_index=None, results=results, score=score,
-                          validation=described, seconds=seconds)
+    selection = _score_models(_fit_and_score_model, tasks, models, score, described,
+                              executor, progress)
+    results = selection.results
 
     def refit_one(index):
         start = None if results[index] is None else results[index].model
         best = fit(models[index][1], u, y, start=start, **common)
         return (best, *model_free_run(best.model, u, y, factor)[1:])
 
-    def finish(row, best):
-        row["refit_status"] = best.status.name
-
-    pick_refitted(selection, refit_one, finish, refit=bool(refit) and score_from > 0)
+    pick_refitted(selection, refit_one, _note_refit_status, refit=bool(refit) and score_from > 0)
     if selection.best is None:
-        warn_nothing_selected("select_structure", rows)
+        warn_nothing_selected("select_structure", selection.rows)
     return selection
 
 
@@ -1259,12 +1256,6 @@ def warn_nothing_selected(who, rows):
         f"{who} selected nothing: of {len(rows)} candidates, {text}; "
         "Selection.rows give each one's status and reason (Selection.best is None)."),
         stacklevel=3)
-
-
-def _cheap_davies(full):
-    """Whether lr_test's Davies bound reads its profile from the fit (no refits)."""
-    return (full.method == "varpro" and full.alpha_profile is not None
-            and len(full.orders) == 1 and full.structure.past == "rest")
 
 
 def _verdict_columns(rows, i, j, test):
@@ -1303,7 +1294,7 @@ def lr_columns(rows, results, cands, u=None, y=None):
         if nested is None:
             continue
         against = f"vs {rows[nested]['candidate']}"
-        if unidentified and not _cheap_davies(full):
+        if unidentified and not davies_from_fit(full):
             rows[i]["lr_reference"] = (
                 f"not computed {against}: order(s) {', '.join(unidentified)} not identified "
                 "under the null and Davies' bound needs refits here; call fohw.lr_test(..., "
@@ -1342,7 +1333,7 @@ def _pick(selection, cands, u, y, refit, envelope):
             row["reason"] = ("refit on all the data ended RANK_DEFICIENT (its summary() names "
                              "the parameters)" + (f"; {row['reason']}" if row["reason"] else ""))
 
-    pick_refitted(selection, refit_one, finish, refit=refit,
+    pick_refitted(selection, refit_one, _note_refit_status, refit=refit,
                   keep=lambda w: not issubclass(w.category, ExtrapolationWarning))
 
 

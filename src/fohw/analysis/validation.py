@@ -500,6 +500,14 @@ def _replayed(caught):
     return not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
 
 
+def _in_envelope(ysim, status, diverged, reference, factor):
+    """``(ysim, status, diverged)``, or ``(None, "implausible", why)`` outside the envelope."""
+    found = implausible_sample(ysim, reference, factor)
+    if found is None:
+        return ysim, status, diverged
+    return None, "implausible", implausible_message(found, factor)
+
+
 def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelope):
     """:func:`compare` of a result or a :class:`fohw.HammersteinWiener` (the lagged kind)."""
     is_model = isinstance(model, HammersteinWiener)
@@ -514,10 +522,7 @@ def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelo
     in_range = _replayed(caught)
     if ysim is not None:
         reference = y if state.history is None else np.r_[state.history[1], y]
-        found = implausible_sample(ysim, reference, factor)
-        if found is not None:
-            ysim, status = None, "implausible"
-            diverged = implausible_message(found, factor)
+        ysim, status, diverged = _in_envelope(ysim, status, diverged, reference, factor)
     yhat = _one_step(model, u, y) if is_model else model.predict(u, y)
     return _scored(u, y, ysim, yhat, y - yhat, status, diverged, in_range, state, [],
                    n_init=n_init, max_lag=max_lag, confidence=confidence)
@@ -539,10 +544,7 @@ def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelop
     ysim, status, diverged, caught = _free_run(model, u, initial)
     in_range = _replayed(caught)
     if ysim is not None:
-        found = implausible_sample(ysim, y, factor)
-        if found is not None:
-            ysim, status = None, "implausible"
-            diverged = implausible_message(found, factor)
+        ysim, status, diverged = _in_envelope(ysim, status, diverged, y, factor)
     notes = [f"one-step prediction: a {kind} is an output-error model (the noise on the "
              "output), whose one-step prediction is its free run; the residual tests are of "
              "the free-run errors"]
