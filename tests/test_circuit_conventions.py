@@ -128,6 +128,7 @@ def test_the_default_scan_reaches_the_relaxation_of_a_pulse():
     assert model.parameters["tau2"].bounds == (dt, np.inf)
     taus = sorted({s.parameters["tau2"].value for s in model.starts(u, v)})
     assert taus[-1] > 15.0 / 2
+    assert taus[-1] == pytest.approx(400 * dt, rel=1e-12)   # the documented top: N dt
     fit = fohw.fit(model, u, v)
     assert fit.converged
     se = fit.standard_errors()
