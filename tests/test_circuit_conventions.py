@@ -4,22 +4,10 @@ projection of infeasible starts, and one message per way a record cannot be fitt
 import numpy as np
 import pytest
 import scipy.optimize
+from circuit_records import ocv, record  # tests/circuit_records.py (conftest's path)
 
 import fohw
 from fohw.model.circuit import RC, ZARC, EquivalentCircuit
-
-
-def record(n=2000, seed=0, hold=20):
-    """Current (positive = charge) held over blocks, and its coulomb count from SOC 0.8 (5 Ah)."""
-    rng = np.random.default_rng(seed)
-    i = np.repeat(rng.uniform(-3, 1.2, n // hold + 1), hold)[:n]
-    soc = 0.8 + np.concatenate([[0.0], np.cumsum(i[:-1])]) / (3600 * 5.0)
-    return np.column_stack([i, soc])
-
-
-def ocv(soc):
-    return 3.3 + 0.9 * soc - 0.3 * (soc - 0.5) ** 2
-
 
 TRUE = EquivalentCircuit([ZARC(0.012, 60.0, 0.5)], r0=0.015, a=0.01, ocv=ocv)
 
@@ -140,6 +128,7 @@ def test_the_default_scan_reaches_the_relaxation_of_a_pulse():
     assert model.parameters["tau2"].bounds == (dt, np.inf)
     taus = sorted({s.parameters["tau2"].value for s in model.starts(u, v)})
     assert taus[-1] > 15.0 / 2
+    assert taus[-1] == pytest.approx(400 * dt, rel=1e-12)   # the documented top: N dt
     fit = fohw.fit(model, u, v)
     assert fit.converged
     se = fit.standard_errors()

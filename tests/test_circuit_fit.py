@@ -6,21 +6,10 @@ import numpy as np
 import pytest
 import scipy.optimize
 import scipy.stats
+from circuit_records import ocv, record  # tests/circuit_records.py (conftest's path)
 
 import fohw
 from fohw.model.circuit import RC, ZARC, EquivalentCircuit
-
-
-def record(n=3000, seed=0, hold=20):
-    rng = np.random.default_rng(seed)
-    i = np.repeat(rng.uniform(-3, 1.2, n // hold + 1), hold)[:n]
-    soc = 0.8 + np.concatenate([[0.0], np.cumsum(i[:-1])]) / (3600 * 5.0)
-    return np.column_stack([i, soc])
-
-
-def ocv(soc):
-    return 3.3 + 0.9 * soc - 0.3 * (soc - 0.5) ** 2
-
 
 TRUE = EquivalentCircuit([RC(0.004, 6.0), ZARC(0.012, 150.0, 0.55)], r0=0.015, a=0.01, b=-0.02,
                          c3=-1e-4, ocv=ocv)

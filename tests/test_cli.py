@@ -334,6 +334,7 @@ def test_fohw_data_writes_the_shipped_records(tmp_path, capsys):
     np.testing.assert_array_equal(tanks.y, fohw.datasets.cascaded_tanks().estimation.y)
     arm = fohw.read_record(tmp_path / "robot_arm.txt")
     np.testing.assert_array_equal(arm.u, fohw.datasets.robot_arm().u)
+    np.testing.assert_array_equal(arm.y, fohw.datasets.robot_arm().y)
     assert main(["data", "paper_example", "--samples", "300", "--seed", "3", "--out",
                  str(tmp_path / "p.csv")]) == 0
     rec = fohw.read_record(tmp_path / "p.csv")

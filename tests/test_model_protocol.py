@@ -341,6 +341,13 @@ def test_lr_test_corrects_for_correlated_residuals_and_gives_a_verdict(case):
     scored = fohw.lr_test(null, case.fit, u=case.u, y=case.y)   # with it: the score direction
     assert "along the score direction" in scored.correction, scored.correction
     assert 0 <= scored.pvalue_corrected <= 1
+    for test in (t, scored):
+        # an interior null (the truth): the corrected p-value is the chi^2_1 tail of the
+        # corrected statistic, and the verdict reads that p-value
+        assert test.boundary == ()
+        assert test.pvalue_corrected == pytest.approx(
+            scipy.stats.chi2.sf(test.statistic_corrected, 1), rel=1e-9)
+        assert test.verdict == fohw.analysis.order_verdict.verdict(test.pvalue_corrected)
     half = case.y.size // 2
     held = fohw.lr_test(null, case.fit, validation=(case.u[half:], case.y[half:]))
     assert len(held.validation) == 2 and np.all(np.isfinite(held.validation))
