@@ -47,7 +47,7 @@ from ..exceptions import (
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..model.irregular import DEFAULT_REFINE, jacobian_at
-from ..record import UNIFORM_RTOL, as_records
+from ..record import UNIFORM_RTOL, as_records, record_info
 from ..results import Status
 from ._common import bounded_least_squares
 
@@ -197,16 +197,6 @@ class _Data:
         self.bounds = np.cumsum([0] + [e.y.size for e in experiments])
 
 
-def _record_info(records):
-    """What the data were (names, units, sampling), kept on the result."""
-    first = records[0]
-    return {"input_names": list(first.input_names), "input_units": list(first.input_units),
-            "output_name": first.output_name, "output_unit": first.output_unit,
-            "time_unit": first.time_unit, "dt": first.dt,
-            "records": [{"name": r.name, "n_samples": r.n_samples, "t0": r.t0,
-                         "uniform": r.uniform, "dt": r.dt} for r in records]}
-
-
 #: Record fields that must agree across the records of one fit (one system, one set of units).
 SHARED_FIELDS = ("input_names", "input_units", "output_name", "output_unit", "time_unit")
 
@@ -293,7 +283,7 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
     u_all = np.concatenate([e.u.reshape(e.u.shape[0], -1) for e in experiments])
     y_all = np.concatenate([e.y for e in experiments])
     check_record(model, u_all if model.n_inputs > 1 else u_all[:, 0], y_all)
-    return experiments, _record_info(records)
+    return experiments, record_info(records)
 
 
 def data_digest_of(experiments, dt):
