@@ -194,7 +194,7 @@ def test_structured_fit_is_exact_on_noise_free_data():
     assert r.method == "structured" and r.converged
     assert r.relative_error(model.theta) < 1e-8
     assert abs(r.alpha - 0.6) < 1e-8
-    np.testing.assert_allclose(r.model.q, model.q, atol=1e-8)
+    np.testing.assert_allclose(r.shared_model.q, model.q, atol=1e-8)
 
 
 def test_structured_fit_of_a_general_structure_is_exact_on_noise_free_data():
@@ -214,7 +214,7 @@ def test_structured_standard_errors_are_those_of_the_structured_jacobian():
     independently of the estimator (information_matrix of theta(a, b, p, q))."""
     data = fohw.datasets.paper_example(1500, random_state=9)
     r = fohw.identify(data.u, data.y, method="structured", **STRUCT)
-    m = r.model
+    m = r.shared_model
     x = np.r_[m.a, m.b, m.p[1:], m.q[1:], r.alpha]
     layout = m.layout
 

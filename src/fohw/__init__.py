@@ -62,6 +62,7 @@ from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
 from .model.structure import Structure
 from .model.system import HammersteinWiener
+from .model.theta_hw import ThetaHW
 from .model.transfer import FractionalTF
 from .model.wiener import FractionalHW
 from .record import Benchmark, Record
@@ -118,6 +119,7 @@ __all__ = [
     "EstimationDivergedError",
     "FohwError",
     "HammersteinWiener",
+    "ThetaHW",
     "HybridIdentifier",
     "HybridOptions",
     "IdentificationResult",
