@@ -75,7 +75,7 @@ class _Context:
     """What every check gets: a fresh model per call, the input and the tolerance."""
 
     def __init__(self, factory, u, rtol):
-        self.factory, self.given_u, self.rtol = factory, u, rtol
+        self.factory, self.given_u, self.rtol, self.kind = factory, u, rtol, None
 
     def model(self):
         if isinstance(self.factory, Model):
@@ -569,21 +569,18 @@ def _context(factory, u, rtol):
     if not (math.isfinite(rtol) and rtol > 0):
         raise ParameterError(f"`rtol` must be positive and finite; got {rtol!r}.")
     ctx = _Context(factory, u, rtol)
-    ctx.model()                                 # a factory that gives no model: refused now
+    ctx.kind = type(ctx.model()).kind_name()    # a factory that gives no model: refused now
     return ctx
 
 
 def _run(ctx, name):
     """Run one check; its outcome (``"passed"`` or ``"not applicable: ..."``), or raise."""
-    kind = type(ctx.model()).kind_name()
     try:
         outcome = _CHECKS[name](ctx)
     except _Failed as failed:
-        raise ModelCheckError(name, kind, str(failed)) from None
-    except ModelCheckError:
-        raise
+        raise ModelCheckError(name, ctx.kind, str(failed)) from None
     except Exception as exc:
-        raise ModelCheckError(name, kind, f"{type(exc).__name__}: {exc}") from exc
+        raise ModelCheckError(name, ctx.kind, f"{type(exc).__name__}: {exc}") from exc
     return outcome or "passed"
 
 
