@@ -255,7 +255,7 @@ LAYERS = (
     ("estimators", lambda top: top == "estimators"),
     ("io", lambda top: top in ("io", "datasets")),
     ("analysis", lambda top: top == "analysis"),
-    ("application", lambda top: top in ("cli", "paper", "__main__")),
+    ("application", lambda top: top in ("cli", "paper", "__main__", "testing")),
 )
 
 

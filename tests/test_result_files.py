@@ -257,9 +257,68 @@ GOLDEN_FITS = {      # as the golden files were made
 }
 
 
+#: Fits that end where a polish converged to the floating-point floor of its criterion: which
+#: point of that floor they end at depends on the rounding of the machine's BLAS kernel
+#: (:func:`_same_optimum_at_the_floor`); every other golden fit is compared at rtol 1e-9.
+AT_THE_FLOOR = {"varpro"}
+EPS = np.finfo(float).eps
+
+
+def _mahalanobis(a, b, covariance):
+    """``sqrt(d' C^-1 d)`` for ``d`` = a's estimates - b's (the covariance's order).
+
+    The length of ``d`` in standard deviations of the estimates.
+    """
+    d = np.r_[a.linear, a.nonlinear] - np.r_[b.linear, b.nonlinear]
+    return float(np.linalg.norm(np.linalg.solve(np.linalg.cholesky(covariance), d)))
+
+
+def _same_optimum_at_the_floor(new, old, kw):
+    """Today's fit and the file's end at the same optimum, each at the floor of its criterion.
+
+    Near the optimum the cost is ``F* (1 + d^2 / (N - p))`` for an estimate ``d`` standard
+    deviations (Mahalanobis, in the file's covariance) away; the cost is known to ``eps F*``,
+    so no stopping rule tells apart estimates within ``sqrt(eps (N - p))`` of the optimum
+    (2.5e-7 at N = 300, p = 11), and two fits that end there may differ by twice that. It is
+    a bound, measured: 2.7e-8 on OpenBLAS's Haswell kernel (5e-12 on its Sandybridge one, on
+    which the file's nfev comes back; 5e-8 on its Prescott one and with numpy's AVX2 loops
+    off). That today's polish ended at the floor, not at its ftol slack (``tol`` 1e-10 allows
+    ``sqrt(tol (N - p))`` = 1.7e-4), is checked by polishing again with ``tol`` = eps.
+    The search's counts are compared exactly; the polish's ``nfev`` may differ with the same
+    ``nit`` and stopping message: a last trial step whose change of the cost is below its
+    rounding is accepted on one kernel and rejected on another (51 in the file, 52 today).
+    """
+    n_estimates = old.covariance.shape[0]
+    floor = np.sqrt(EPS * (old.n_samples - n_estimates))
+    assert _mahalanobis(new, _fit(**kw, tol=EPS), old.covariance) <= 2 * floor
+    assert _mahalanobis(new, old, old.covariance) <= 2 * floor
+    # The covariance moves with the estimate by the model's curvature in standardised units
+    # (below 1 where Wald errors mean anything): whitened, it moved 1.6e-9 for 2.7e-8.
+    white = np.linalg.inv(np.linalg.cholesky(old.covariance))
+    assert np.linalg.norm(white @ (new.covariance - old.covariance) @ white.T, 2) <= 2 * floor
+    # The Brent search took the same steps; its points agree within its smallest step
+    # (scipy's bounded search: sqrt(eps) |alpha| + xatol / 3); measured 2.6e-10.
+    assert new.alpha_history.shape == old.alpha_history.shape
+    assert new.alpha_profile.shape == old.alpha_profile.shape
+    step = np.sqrt(EPS) * np.abs(old.alpha_history) + new.options["alpha_xtol"] / 3
+    assert np.all(np.abs(new.alpha_history - old.alpha_history) <= step)
+    assert new.message == old.message
+    # nfev = the grid's points + one per Brent step and per accepted polish step (both in nit)
+    # + the polish's rejected trial steps, which are where the two may differ: 0 in the file,
+    # 1 today (3 on OpenBLAS's Prescott kernel).
+    for r in (new, old):
+        assert r.nfev - r.nit - r.alpha_profile.shape[1] >= 0
+
+
 @pytest.mark.parametrize("name", GOLDEN)
 def test_todays_fit_is_the_one_the_golden_file_holds(name):
-    """No number moved: today's fit of the same data matches the old file (golden tolerances)."""
+    """No number moved: today's fit of the same data matches the old file (golden tolerances).
+
+    The criterion, its profile and its history agree at rtol 1e-9, and so does everything else
+    except where a fit ends at the floor of its criterion (:data:`AT_THE_FLOOR`): there the
+    estimates, their covariance and the search's points agree within what that floor and the
+    search's own step resolve.
+    """
     old = fohw.load_result(DATA / f"result_{name}.json")
     kw = dict(GOLDEN_FITS[name])
     if name == "output_error_mixed":
@@ -268,14 +327,20 @@ def test_todays_fit_is_the_one_the_golden_file_holds(name):
         varpro = {k: v for k, v in kw.items() if k not in ("method", "max_nfev")}
         kw["start"] = _fit(method="varpro", **varpro)
     new = _fit(**kw)
-    assert (new.method, new.status, new.nit, new.nfev) == (old.method, old.status, old.nit,
-                                                           old.nfev)
+    assert (new.method, new.status, new.nit) == (old.method, old.status, old.nit)
     named_start = {"start"} if "start" in kw else set()      # says which start was given
     assert set(new.details) - named_start == set(old.details)
     assert list(new.orders) == list(old.orders)
-    for name_ in ("theta", "J", "offset", "past", "covariance", "noise_variance",
-                  "alpha_history", "J_history", "theta_history", "alpha_sample_history",
-                  "alpha_profile", "nonlinear"):
+    at_rtol = ("J", "noise_variance", "J_history", "alpha_profile", "theta_history",
+               "alpha_sample_history")
+    if name in AT_THE_FLOOR:
+        _same_optimum_at_the_floor(new, old, kw)
+        at_rtol += ("offset",) * (not old.structure.offset) \
+            + ("past",) * (old.structure.past != "estimate")     # not estimated: as given
+    else:
+        assert new.nfev == old.nfev
+        at_rtol += ("theta", "offset", "past", "covariance", "alpha_history", "nonlinear")
+    for name_ in at_rtol:
         a, b = getattr(new, name_), getattr(old, name_)
         if a is None or b is None:
             assert a is b, name_

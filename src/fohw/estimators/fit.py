@@ -31,6 +31,7 @@ import hashlib
 import inspect
 import itertools
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
@@ -209,30 +210,49 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
     """
     records = as_records(u, y, what="u")
     if records is None:
-        if y is None:
-            raise ParameterError("`y` is missing: pass the output samples, or a fohw.Record (or "
-                                 "a list of Records) as the data.")
-        if refine is not None:
-            raise ParameterError(f"`refine` = {refine!r} is for records with time stamps or a "
-                                 "first-order hold; arrays are simulated at the model's own step.")
-        uu, yy = check_record(model, u, y)
-        weight = None if sample_weight is None else check_weight(sample_weight, yy)
-        return [_Experiment(uu, yy, weight, warmup=warmup)], None
+        return [_array_experiment(model, u, y, sample_weight, warmup, refine)], None
     if not isinstance(model, Model):
         raise ParameterError(f"`model` must be a fohw.Model (a model kind); got "
                              f"{type(model).__name__}.")
-    several = isinstance(u, (list, tuple))
+    weights = _record_weights(records, sample_weight, several=isinstance(u, (list, tuple)))
+    _check_shared_fields(records)
+    _check_sampling(model, records)
+    experiments = _record_experiments(model, records, weights, warmup, refine)
+    u_all = np.concatenate([e.u.reshape(e.u.shape[0], -1) for e in experiments])
+    y_all = np.concatenate([e.y for e in experiments])
+    check_record(model, u_all if model.n_inputs > 1 else u_all[:, 0], y_all)
+    return experiments, record_info(records)
+
+
+def _array_experiment(model, u, y, sample_weight, warmup, refine):
+    """The one experiment of arrays ``u, y`` (checked; ``refine`` refused: no time stamps)."""
+    if y is None:
+        raise ParameterError("`y` is missing: pass the output samples, or a fohw.Record (or "
+                             "a list of Records) as the data.")
+    if refine is not None:
+        raise ParameterError(f"`refine` = {refine!r} is for records with time stamps or a "
+                             "first-order hold; arrays are simulated at the model's own step.")
+    uu, yy = check_record(model, u, y)
+    weight = None if sample_weight is None else check_weight(sample_weight, yy)
+    return _Experiment(uu, yy, weight, warmup=warmup)
+
+
+def _record_weights(records, sample_weight, *, several):
+    """One ``sample_weight`` entry (or None) per record; a list of records takes a list."""
     if sample_weight is None:
-        weights = [None] * len(records)
-    elif several:
-        if not isinstance(sample_weight, (list, tuple)) or len(sample_weight) != len(records):
-            got = (f"{len(sample_weight)} entries" if isinstance(sample_weight, (list, tuple))
-                   else type(sample_weight).__name__)
-            raise ParameterError(f"`sample_weight` must be a list of one array (or None) per "
-                                 f"record ({len(records)}) for a list of records; got {got}.")
-        weights = list(sample_weight)
-    else:
-        weights = [sample_weight]
+        return [None] * len(records)
+    if not several:
+        return [sample_weight]
+    if not isinstance(sample_weight, (list, tuple)) or len(sample_weight) != len(records):
+        got = (f"{len(sample_weight)} entries" if isinstance(sample_weight, (list, tuple))
+               else type(sample_weight).__name__)
+        raise ParameterError(f"`sample_weight` must be a list of one array (or None) per "
+                             f"record ({len(records)}) for a list of records; got {got}.")
+    return list(sample_weight)
+
+
+def _check_shared_fields(records):
+    """Raise unless the records agree on :data:`SHARED_FIELDS` (the first disagreement named)."""
     first = records[0]
     for k, r in enumerate(records[1:], 1):
         for field in SHARED_FIELDS:
@@ -241,6 +261,10 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
                     f"record {k}{_named(r.name)} has {field} {getattr(r, field)!r}, record 0 "
                     f"{getattr(first, field)!r}: the records of one fit measure the same channels "
                     "in the same units (convert them first).")
+
+
+def _check_sampling(model, records):
+    """Raise unless the uniform records are sampled at the model's ``dt`` (or share one)."""
     has_dt = "dt" in model.config()
     model_dt = model.dt
     dts = []
@@ -257,6 +281,10 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
     if dts and not has_dt and max(dts) - min(dts) > UNIFORM_RTOL * max(dts):
         raise ParameterError(f"the records have different sampling times ({sorted(set(dts))}); a "
                              f"{type(model).__name__} runs in samples, so they must share one.")
+
+
+def _record_experiments(model, records, weights, warmup, refine):
+    """The experiments of the records, each checked (input, weights, a run on its instants)."""
     experiments = []
     for k, (r, w) in enumerate(zip(records, weights)):
         label = f"record {k}{_named(r.name)}"
@@ -280,10 +308,7 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
         raise ParameterError(f"`refine` = {refine!r} is for records with time stamps or a "
                              "first-order hold; these records are uniform and held, simulated at "
                              "the model's own step.")
-    u_all = np.concatenate([e.u.reshape(e.u.shape[0], -1) for e in experiments])
-    y_all = np.concatenate([e.y for e in experiments])
-    check_record(model, u_all if model.n_inputs > 1 else u_all[:, 0], y_all)
-    return experiments, record_info(records)
+    return experiments
 
 
 def data_digest_of(experiments, dt):
@@ -502,7 +527,6 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     experiments, info = prepare_data(model, u, y, sample_weight,
                                      check_int(warmup, "warmup", minimum=0), refine)
     data = _Data(experiments)
-    y, weight = data.y, data.weight
     u_hook = (np.concatenate([e.u for e in experiments]) if len(experiments) > 1
               else experiments[0].u)
     order_grid = check_int(order_grid, "order_grid", minimum=1)
@@ -510,137 +534,231 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
     tol = check_scalar(tol, "tol", lower=np.finfo(float).eps, upper=1.0, upper_inclusive=False)
     params = model.parameters
+    per_record = _check_free(params, per_record, data)
+    bases = _start_models(model, params, start, u_hook, data)
+    problem = _Problem(model, params, data, per_record, exact_jacobian)
+    table = _ranked_starts(problem, _candidates(model, params, bases, order_grid, u_hook, data))
+    estimate = _search(problem, table, n_starts=n_starts, tol=tol, max_nfev=max_nfev)
+    fitted = problem.at(estimate.x)
+    verdict = _verdict(problem, estimate, max_nfev)
+    warning = _warning(type(model).__name__, verdict)
+    if warning is not None:
+        # issued here, not in a stage, so that stacklevel=2 names the frame that calls fit
+        # (thin_solves's wrapper) as it always did
+        warnings.warn(warning[0], warning[1], stacklevel=2)
+    options = dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev, tol=tol,
+                   exact_jacobian=exact_jacobian,
+                   sample_weight=None if data.weight is None else data.weight.tolist(),
+                   per_record=list(per_record), warmup=experiments[0].warmup, refine=refine)
+    return _result(problem, fitted, table, estimate.x, verdict, options=options, info=info)
+
+
+def _check_free(params, per_record, data):
+    """``per_record`` checked (:func:`_check_per_record`), with the model's free parameters.
+
+    Raises naming what is wrong: nothing free, or no more samples (of positive weight) than
+    free values (the shared ones and each per-record one's copies for records 1, 2, ...).
+    """
     names = params.free_names
     if not names:
         raise ParameterError("every parameter of the model is fixed or tied: nothing to fit. Free "
                              "some with model.with_parameters(parameters) (Parameter(fixed=False)).")
-    n_rec = len(experiments)
+    n_rec = len(data.experiments)
     per_record = _check_per_record(per_record, params, n_rec)
-    extra_names = [f"{n}[{r}]" for n in per_record for r in range(1, n_rec)]
-    sw = 1.0 if weight is None else np.sqrt(weight)
-    n_used = y.size if weight is None else int(np.count_nonzero(weight))
+    extra_names = _extra_names(per_record, n_rec)
+    n_used = _n_used(data)
     n_x = len(names) + len(extra_names)
     if n_used <= n_x:
-        raise DimensionError(f"`y` has {n_used} samples{'' if weight is None else ' of positive weight'} "
+        raise DimensionError(f"`y` has {n_used} samples"
+                             f"{'' if data.weight is None else ' of positive weight'} "
                              f"for {n_x} free parameters ({', '.join(list(names) + extra_names)}); "
                              "need more samples than parameters.")
+    return per_record
+
+
+def _extra_names(per_record, n_rec):
+    """The per-record values beyond record 0's, named ``name[r]``: each name's records in turn."""
+    return [f"{n}[{r}]" for n in per_record for r in range(1, n_rec)]
+
+
+def _n_used(data):
+    """Samples in the criterion: all, or those of positive weight."""
+    return data.y.size if data.weight is None else int(np.count_nonzero(data.weight))
+
+
+def _start_models(model, params, start, u, data):
+    """The kind's starts (:meth:`~fohw.Model.starts`), then the user's ``start`` models.
+
+    Each with the user's settings (fixed flags, bounds, ties: those of ``params``), which hold
+    for every start. Raises if a ``start`` is not of the model's kind and parameters.
+    """
     extra = [] if start is None else [start] if isinstance(start, Model) else list(start)
     for s in extra:
         if type(s) is not type(model) or s.parameters.names != params.names:
             raise ParameterError(f"`start` must hold models of the same kind and parameters as "
                                  f"`model` ({type(model).__name__}); got {type(s).__name__}.")
-    # The user's settings (fixed flags, bounds, ties) hold for every start.
-    bases = [m.with_parameters(params.with_values(m.parameters.valuesdict()))
-             for m in list(_hook(model.starts, u_hook, y, weight)) + extra]
-    y_scale = max(float(np.max(np.abs(y))), 1e-300)
-    # A kind's regularisation (Model.penalty): its residuals follow the records'.
-    n_pen = penalty_terms(model)[0].size
-    penalty = np.full(y.size + n_pen, PENALTY * y_scale)
-    lower0, upper0 = params.free_bounds()
-    pr_index = [names.index(n) for n in per_record]
-    lower = np.r_[lower0, np.repeat(lower0[pr_index], n_rec - 1)]
-    upper = np.r_[upper0, np.repeat(upper0[pr_index], n_rec - 1)]
-    counter = {"nfev": 0}
-    has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
-    t_matrix = params.tie_matrix()
+    return [m.with_parameters(params.with_values(m.parameters.valuesdict()))
+            for m in list(_hook(model.starts, u, data.y, data.weight)) + extra]
 
-    def column(i, r):
+
+class _Problem:
+    """The criterion of one fit: the free vector, its models, residual and Jacobian.
+
+    The free vector ``x`` holds the model's free values (``names``), then each per-record
+    parameter's values for records 1, 2, ... (``extra_names``; record 0's is among ``names``):
+    :meth:`column` says where, :meth:`at` makes the model of a record, :meth:`extend` makes a
+    vector from the model's free values. :meth:`residual` and :meth:`jacobian` are those the
+    search runs on: the weighted simulation errors of every record, stacked, then the kind's
+    penalty rows (:meth:`~fohw.Model.penalty`); a run that fails or leaves the range
+    (:data:`ESCAPE`) has the constant residual ``escaped``. ``nfev`` counts the residuals.
+    """
+
+    def __init__(self, model, params, data, per_record, exact_jacobian):
+        self.model, self.params, self.data = model, params, data
+        self.experiments = data.experiments
+        self.y, self.weight = data.y, data.weight
+        self.names = names = params.free_names
+        self.n_rec = n_rec = len(data.experiments)
+        self.per_record = per_record
+        self.extra_names = _extra_names(per_record, n_rec)
+        self.sw = 1.0 if self.weight is None else np.sqrt(self.weight)
+        self.n_used = _n_used(data)
+        self.n_x = len(names) + len(self.extra_names)
+        self.y_scale = max(float(np.max(np.abs(self.y))), 1e-300)
+        # A kind's regularisation (Model.penalty): its residuals follow the records'.
+        self.n_pen = penalty_terms(model)[0].size
+        self.escaped = np.full(self.y.size + self.n_pen, PENALTY * self.y_scale)
+        self.lower0, self.upper0 = params.free_bounds()
+        self.pr_index = [names.index(n) for n in per_record]
+        self.lower = self.extend(self.lower0)
+        self.upper = self.extend(self.upper0)
+        self.nfev = 0
+        self.has_exact = exact_jacobian and type(model).jacobian is not Model.jacobian
+        self.t_matrix = params.tie_matrix()
+        # In the local search the solver asks for the Jacobian at (nearly) every point whose
+        # residual it computed; a kind's exact Jacobian comes with its output, so both are
+        # computed at once there and the Jacobian kept for the solver's call at the same x.
+        self._last = {}
+
+    def column(self, i, r):
         """Index in the full vector of per-record parameter ``i``'s value for record ``r``."""
-        return pr_index[i] if r == 0 else len(names) + i * (n_rec - 1) + r - 1
+        return self.pr_index[i] if r == 0 else len(self.names) + i * (self.n_rec - 1) + r - 1
 
-    def at(x, r=0):
+    def at(self, x, r=0):
         """The model of record ``r`` at the full vector ``x`` (shared, then per-record values)."""
-        x = np.clip(x, lower, upper)
-        free = x[:len(names)].copy()
-        for i in range(len(per_record)):
-            free[pr_index[i]] = x[column(i, r)]
-        return model.with_parameters(params.with_free(free))
+        x = np.clip(x, self.lower, self.upper)
+        free = x[:len(self.names)].copy()
+        for i in range(len(self.per_record)):
+            free[self.pr_index[i]] = x[self.column(i, r)]
+        return self.model.with_parameters(self.params.with_free(free))
 
-    def extend(x0):
+    def extend(self, x0):
         """A shared-parameter vector with each per-record copy at its record-0 value."""
         x0 = np.asarray(x0, dtype=float)
-        return np.r_[x0, np.repeat(x0[pr_index], n_rec - 1)]
+        return np.r_[x0, np.repeat(x0[self.pr_index], self.n_rec - 1)]
 
-    def run(x, with_jacobian):
+    def run(self, x, with_jacobian):
         """``(yhat, J)`` over every record at ``x`` (``J`` over the full vector, or ``None``)."""
         parts, jacs = [], []
         m = None
-        for r, e in enumerate(experiments):
-            if m is None or per_record:
-                m = at(x, r)
-            out = e.jacobian(m, has_exact) if with_jacobian else None
+        for r, e in enumerate(self.experiments):
+            if m is None or self.per_record:
+                m = self.at(x, r)
+            out = e.jacobian(m, self.has_exact) if with_jacobian else None
             if with_jacobian and out is None:
                 return None, None
             if out is None:
                 parts.append(e.simulate(m))
             else:
                 parts.append(out[0])
-                jacs.append(out[1] @ t_matrix)
+                jacs.append(out[1] @ self.t_matrix)
         yhat = np.concatenate(parts)
         if not with_jacobian:
             return yhat, None
-        jac = np.zeros((y.size, n_x))
-        for r, j in enumerate(jacs):
-            rows = slice(data.bounds[r], data.bounds[r + 1])
-            jac[rows, :len(names)] = j
-            for i in range(len(per_record)):
-                if r:
-                    jac[rows, column(i, r)] = j[:, pr_index[i]]
-                    jac[rows, pr_index[i]] = 0.0
-        return yhat, jac
+        return yhat, self._stack(jacs)
 
-    def full_jacobian(x):
+    def _stack(self, jacs):
+        """The records' Jacobians (over the model's free values) as one over the full vector."""
+        n_names = len(self.names)
+        jac = np.zeros((self.y.size, self.n_x))
+        for r, j in enumerate(jacs):
+            rows = slice(self.data.bounds[r], self.data.bounds[r + 1])
+            jac[rows, :n_names] = j
+            for i in range(len(self.per_record)):
+                if r:
+                    jac[rows, self.column(i, r)] = j[:, self.pr_index[i]]
+                    jac[rows, self.pr_index[i]] = 0.0
+        return jac
+
+    def full_jacobian(self, x):
         """``(yhat, J, how)`` at ``x``: exact where the kind gives it, else central differences."""
-        if has_exact:
-            yhat, jac = run(x, True)
+        if self.has_exact:
+            yhat, jac = self.run(x, True)
             if jac is not None:
                 return yhat, jac, "exact"
-        yhat, jac = central_differences(lambda v: run(v, False)[0], x, lower, upper)
+        yhat, jac = central_differences(lambda v: self.run(v, False)[0], x, self.lower, self.upper)
         return yhat, jac, "finite differences"
 
-    # In the local search the solver asks for the Jacobian at (nearly) every point whose residual
-    # it computed; a kind's exact Jacobian comes with its output, so both are computed at once
-    # there and the Jacobian kept for the solver's call at the same x.
-    last = {}
+    def residual(self, x, with_jacobian=False):
+        """The search's residual at ``x`` (``escaped`` where the run fails or leaves the range).
 
-    def residual(x, with_jacobian=False):
-        counter["nfev"] += 1
+        With ``with_jacobian`` the kind's exact Jacobian is computed with the run and kept for
+        :meth:`jacobian` at the same ``x``.
+        """
+        self.nfev += 1
         try:
             with np.errstate(all="ignore"):
-                yhat, jac = run(x, with_jacobian and has_exact)
+                yhat, jac = self.run(x, with_jacobian and self.has_exact)
                 if jac is not None:
-                    last["x"], last["jac"] = np.array(x, dtype=float), jac
+                    self._last["x"], self._last["jac"] = np.array(x, dtype=float), jac
                 elif yhat is None:
-                    yhat, _ = run(x, False)
+                    yhat, _ = self.run(x, False)
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-            return penalty
-        if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * y_scale:
-            return penalty
-        if n_pen:
-            return np.concatenate([(y - yhat) * sw, penalty_at(x)[0]])
-        return (y - yhat) * sw
+            return self.escaped
+        if not np.all(np.isfinite(yhat)) or np.max(np.abs(yhat)) > ESCAPE * self.y_scale:
+            return self.escaped
+        if self.n_pen:
+            return np.concatenate([(self.y - yhat) * self.sw, self.penalty_at(x)[0]])
+        return (self.y - yhat) * self.sw
 
-    def penalty_at(x):
+    def sse(self, r):
+        """``r @ r`` of a :meth:`residual`; ``inf`` for ``escaped``."""
+        return float(r @ r) if r is not self.escaped else np.inf
+
+    def penalty_at(self, x):
         """The kind's penalty at the first record's model: ``(r, J)``, ``J`` over the full vector."""
-        r, j = penalty_terms(at(np.asarray(x, dtype=float)), len(names), t_matrix)
-        return r, np.concatenate([j, np.zeros((r.size, n_x - len(names)))], axis=1)
+        r, j = penalty_terms(self.at(np.asarray(x, dtype=float)), len(self.names), self.t_matrix)
+        return r, np.concatenate([j, np.zeros((r.size, self.n_x - len(self.names)))], axis=1)
 
-    def jacobian(x):
+    def jacobian(self, x):
+        """``d residual / d x`` (zeros where it is not finite or cannot be computed)."""
+        zeros = (self.y.size + self.n_pen, self.n_x)
         try:
             with np.errstate(all="ignore"):
-                if "x" in last and np.array_equal(last["x"], x):
-                    jac = last["jac"]
+                if "x" in self._last and np.array_equal(self._last["x"], x):
+                    jac = self._last["jac"]
                 else:
-                    jac = full_jacobian(np.asarray(x, dtype=float))[1]
+                    jac = self.full_jacobian(np.asarray(x, dtype=float))[1]
         except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-            return np.zeros((y.size + n_pen, n_x))
-        if weight is not None:
-            jac = jac * sw[:, None]
-        if n_pen:
-            jac = np.concatenate([jac, -penalty_at(x)[1]])
-        return -jac if np.all(np.isfinite(jac)) else np.zeros((y.size + n_pen, n_x))
+            return np.zeros(zeros)
+        if self.weight is not None:
+            jac = jac * self.sw[:, None]
+        if self.n_pen:
+            jac = np.concatenate([jac, -self.penalty_at(x)[1]])
+        return -jac if np.all(np.isfinite(jac)) else np.zeros(zeros)
 
-    # Starts: each base, its orders on a grid, each also with its linear part solved.
+    def where(self, k):
+        """Sample ``k`` of the stacked records, named by its record."""
+        r = int(np.searchsorted(self.data.bounds, k, side="right")) - 1
+        return f"sample k = {int(k - self.data.bounds[r])}" + (
+            f" of record {r}" if self.n_rec > 1 else "")
+
+
+def _candidates(model, params, bases, order_grid, u, data):
+    """The start candidates: each base, its orders on a grid, each also with its linear part solved.
+
+    Raises if the scans of the bases together exceed :data:`MAX_SCAN` points.
+    """
     candidates = []
     scanned = 0
     for base in bases:
@@ -653,130 +771,200 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
                 "use a smaller grid (order_grid=1 skips the scan).")
         for m in grid:
             candidates.append(m)
-            try:
-                with np.errstate(all="ignore"):
-                    solved = _hook(m.linear_start, u_hook, y, weight)
-            except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
-                solved = None
+            solved = _linear_start(m, params, u, data)
             if solved is not None:
-                candidates.append(solved.with_parameters(params.with_values(
-                    {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None})))
+                candidates.append(solved)
+    return candidates
+
+
+def _linear_start(m, params, u, data):
+    """``m`` with its linear parameters solved (:meth:`~fohw.Model.linear_start`), or None."""
+    try:
+        with np.errstate(all="ignore"):
+            solved = _hook(m.linear_start, u, data.y, data.weight)
+    except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+        solved = None
+    if solved is None:
+        return None
+    return solved.with_parameters(params.with_values(
+        {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None}))
+
+
+def _ranked_starts(problem, candidates):
+    """``[(sse, x)]``: the candidates' free vectors inside the bounds by simulation error, lowest first.
+
+    A free vector met twice keeps its first SSE; one whose run fails ranks last, at ``inf``.
+    Every candidate inside the bounds is simulated (and counted in ``problem.nfev``).
+    """
     ranked = {}
     for m in candidates:
         x = m.parameters.free_values()
-        if np.any(x < lower0) or np.any(x > upper0):
+        if np.any(x < problem.lower0) or np.any(x > problem.upper0):
             continue
-        r = residual(extend(x))
-        sse = float(r @ r) if r is not penalty else np.inf
+        sse = problem.sse(problem.residual(problem.extend(x)))
         ranked.setdefault(tuple(x.tolist()), sse)
-    table = sorted(((sse, x) for x, sse in ranked.items()), key=lambda row: row[0])
-    order_names = [n for n in names if params[n].order]
-    starts = tuple(({n: x[names.index(n)] for n in order_names}, sse) for sse, x in table)
+    return sorted(((sse, x) for x, sse in ranked.items()), key=lambda row: row[0])
+
+
+class _Estimate(NamedTuple):
+    """The best refinement of :func:`_search`."""
+
+    sse: float              # the search's criterion at x (penalty rows included)
+    x: np.ndarray           # the full vector, active entries on their bound
+    status: Status          # bounded_least_squares's
+    ls: object              # scipy's OptimizeResult
+    sse0: float             # the criterion at its start
+
+
+def _search(problem, table, *, n_starts, tol, max_nfev):
+    """Bounded least squares from each of the ``n_starts`` best finite starts; the lowest end.
+
+    Raises if no start of ``table`` (:func:`_ranked_starts`) has a finite simulation error.
+    """
     best = None
     for sse0, x0 in table[:n_starts]:
         if not np.isfinite(sse0):
             continue
-        x, status, ls = bounded_least_squares(lambda x: residual(x, True), extend(x0),
-                                              jac=jacobian, lower=lower, upper=upper, ftol=tol,
+        x, status, ls = bounded_least_squares(lambda x: problem.residual(x, True),
+                                              problem.extend(x0), jac=problem.jacobian,
+                                              lower=problem.lower, upper=problem.upper, ftol=tol,
                                               xtol=tol, gtol=tol, max_nfev=max_nfev)
         # The solver's last residual is at ls.x; x differs only where it was put on a bound.
-        r = ls.fun if np.array_equal(x, ls.x) else residual(x)
-        sse = float(r @ r) if r is not penalty else np.inf
-        if best is None or sse < best[0]:
-            best = (sse, x, status, ls, sse0)
+        r = ls.fun if np.array_equal(x, ls.x) else problem.residual(x)
+        sse = problem.sse(r)
+        if best is None or sse < best.sse:
+            best = _Estimate(sse, x, status, ls, sse0)
     if best is None:
         raise ParameterError(
-            f"no start of the {type(model).__name__} gave a finite simulation of this record "
-            f"({len(table)} tried); give a start whose free run stays bounded (`start=`), or "
-            "narrower bounds on its parameters.")
-    sse, x, status, ls, sse0 = best
-    fitted = at(x)
-    messages = [f"simulation-error fit (scipy.optimize.least_squares): {ls.message}"]
+            f"no start of the {type(problem.model).__name__} gave a finite simulation of this "
+            f"record ({len(table)} tried); give a start whose free run stays bounded (`start=`), "
+            "or narrower bounds on its parameters.")
+    return best
+
+
+class _Verdict(NamedTuple):
+    """What :func:`_verdict` concludes about an estimate."""
+
+    status: Status
+    messages: list          # the solver's message first, then one sentence per finding
+    sse: float              # the records' squared error (the penalty's rows left out)
+    yhat: np.ndarray        # the free run at the estimate, records stacked
+    how: str                # how the Jacobian was obtained ("exact" or "finite differences")
+    full_cov: np.ndarray    # the covariance of the full vector, or None
+
+
+def _verdict(problem, estimate, max_nfev):
+    """The status, messages and covariance of an estimate.
+
+    ``FAILED`` for a search that made no step from its start and does not end at a stationary
+    point (:func:`stationary`) or whose model the kind's :meth:`~fohw.Model.check_fitted`
+    refuses; ``IMPLAUSIBLE`` for a free run outside the envelope; ``RANK_DEFICIENT`` for a
+    Jacobian without full column rank (the parameters named). Otherwise the estimate's status.
+    """
+    x, status = estimate.x, estimate.status
+    messages = [f"simulation-error fit (scipy.optimize.least_squares): {estimate.ls.message}"]
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
+    y, sw, sse = problem.y, problem.sw, estimate.sse
     with np.errstate(all="ignore"):
-        yhat, jac, how_cov = full_jacobian(np.asarray(x, dtype=float))
-    if weight is not None:                  # the criterion's Jacobian and residual
+        yhat, jac, how = problem.full_jacobian(np.asarray(x, dtype=float))
+    if problem.weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
     crit_r = (y - yhat) * sw
-    if n_pen:   # the regularised criterion: its rows join the covariance's Gram matrix
-        pen_r, pen_j = penalty_at(x)
-        messages.append(f"Regularisation ({type(model).__name__}.penalty): {float(pen_r @ pen_r):.6g} "
-                        "added to the squared error; the covariance is s^2 (J^T J + P^T P)^-1.")
+    if problem.n_pen:   # the regularised criterion: its rows join the covariance's Gram matrix
+        pen_r, pen_j = problem.penalty_at(x)
+        messages.append(f"Regularisation ({type(problem.model).__name__}.penalty): "
+                        f"{float(pen_r @ pen_r):.6g} added to the squared error; the covariance "
+                        "is s^2 (J^T J + P^T P)^-1.")
         jac, crit_r = np.concatenate([jac, -pen_j]), np.concatenate([crit_r, pen_r])
         sse = float(np.sum(((y - yhat) * sw) ** 2))     # the records' part only
-    if ls.status == 3 and not float(crit_r @ crit_r) < sse0 * (1.0 - 1e-9) and \
-            not stationary(jac, crit_r, x, lower, upper):
+    if estimate.ls.status == 3 and not float(crit_r @ crit_r) < estimate.sse0 * (1.0 - 1e-9) and \
+            not stationary(jac, crit_r, x, problem.lower, problem.upper):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
-    all_names = list(names) + extra_names
-    full_cov = None
-
-    def where(k):
-        r = int(np.searchsorted(data.bounds, k, side="right")) - 1
-        return f"sample k = {int(k - data.bounds[r])}" + (f" of record {r}" if n_rec > 1 else "")
-
-    absurd = free_run_problem(yhat, y, where=where)
+    absurd = free_run_problem(yhat, y, where=problem.where)
     if absurd:
-        status = Status.IMPLAUSIBLE
-        messages.append(absurd)
-        covariance = None
-    else:
-        note = None
-        for r, e in enumerate(experiments):
-            note = at(x, r).check_fitted(e.u, e.y)
-            if note:
-                note = note if n_rec == 1 else f"Record {r}: {note}"
-                break
+        return _Verdict(Status.IMPLAUSIBLE, messages + [absurd], sse, yhat, how, None)
+    status, notes, full_cov = _covariance(problem, x, jac, sse, how, status)
+    return _Verdict(status, messages + notes, sse, yhat, how, full_cov)
+
+
+def _covariance(problem, x, jac, sse, how, status):
+    """``(status, notes, full_cov)``: the kind's check of its fitted models, then the covariance.
+
+    ``s^2 (J^T J)^-1`` of the criterion's Jacobian ``jac`` (``s^2`` the records' ``sse`` over
+    the degrees of freedom); ``None`` and ``RANK_DEFICIENT`` (``FAILED`` after a refusal of
+    :meth:`~fohw.Model.check_fitted`) when ``jac`` has dependent columns, named.
+    """
+    notes = []
+    note = None
+    for r, e in enumerate(problem.experiments):
+        note = problem.at(x, r).check_fitted(e.u, e.y)
         if note:
-            status = Status.FAILED
-            messages.append(note)
-        inverse, fac = _linalg.inverse_gram(jac, rcond=rank_rcond(how_cov, *jac.shape))
-        if inverse is None:
-            # the kind's own sentence (check_fitted) names the cause: it stays FAILED, first
-            status = Status.FAILED if note else Status.RANK_DEFICIENT
-            cols = ", ".join(all_names[i] for i in fac.dependent)
-            messages.append(f"Rank deficient: rank {fac.rank} of {fac.n_columns}; the columns of "
-                            f"{cols} are linear combinations of the others (the output's "
-                            "sensitivities to the free parameters), so those parameters are not "
-                            "identifiable from this record (fix one of them, or fit a record "
-                            "whose input excites them).")
-            covariance = None
-        else:
-            full_cov = sse / (n_used - n_x) * inverse
-            covariance = full_cov[:len(names), :len(names)]
+            note = note if problem.n_rec == 1 else f"Record {r}: {note}"
+            break
+    if note:
+        status = Status.FAILED
+        notes.append(note)
+    inverse, fac = _linalg.inverse_gram(jac, rcond=rank_rcond(how, *jac.shape))
+    if inverse is None:
+        # the kind's own sentence (check_fitted) names the cause: it stays FAILED, first
+        status = Status.FAILED if note else Status.RANK_DEFICIENT
+        all_names = list(problem.names) + problem.extra_names
+        cols = ", ".join(all_names[i] for i in fac.dependent)
+        notes.append(f"Rank deficient: rank {fac.rank} of {fac.n_columns}; the columns of "
+                     f"{cols} are linear combinations of the others (the output's "
+                     "sensitivities to the free parameters), so those parameters are not "
+                     "identifiable from this record (fix one of them, or fit a record "
+                     "whose input excites them).")
+        return status, notes, None
+    return status, notes, sse / (problem.n_used - problem.n_x) * inverse
+
+
+def _warning(kind, verdict):
+    """``(text, category)`` of the warning a fit with this verdict raises, or None."""
+    if verdict.status == Status.RANK_DEFICIENT:
+        return f"fohw.fit({kind}): {verdict.messages[-1]}", RankDeficiencyWarning
+    if verdict.status in (Status.MAX_ITER, Status.FAILED, Status.IMPLAUSIBLE):
+        return f"fohw.fit({kind}): {' '.join(verdict.messages[1:])}", ConvergenceWarning
+    return None
+
+
+def _result(problem, fitted, table, x, verdict, *, options, info):
+    """The :class:`~fohw.FitResult` of an estimate ``x`` and its verdict."""
+    names, full_cov = problem.names, verdict.full_cov
     per = {}
-    for i, n in enumerate(per_record):
-        idx = [column(i, r) for r in range(n_rec)]
+    for i, n in enumerate(problem.per_record):
+        idx = [problem.column(i, r) for r in range(problem.n_rec)]
         per[n] = {"values": [float(x[j]) for j in idx],
                   "standard_errors": None if full_cov is None else
                   [float(np.sqrt(full_cov[j, j])) for j in idx]}
-    message = " ".join(messages)
+    order_names = [n for n in names if problem.params[n].order]
+    starts = tuple(({n: x0[names.index(n)] for n in order_names}, sse) for sse, x0 in table)
+    return FitResult(model=fitted, parameters=fitted.parameters,
+                     covariance=None if full_cov is None else full_cov[:len(names), :len(names)],
+                     status=verdict.status, sse=verdict.sse, n_samples=problem.n_used,
+                     message=_message(problem, x, verdict), nfev=problem.nfev,
+                     jacobian=verdict.how, starts=starts, residuals=problem.y - verdict.yhat,
+                     data_digest=data_digest_of(problem.experiments, problem.model.dt),
+                     options=options, data=info or {}, per_record=per,
+                     n_per_record=len(problem.extra_names))
+
+
+def _message(problem, x, verdict):
+    """The result's message: the verdict's sentences, then the free values on a bound."""
+    message = " ".join(verdict.messages)
     at_bound = [f"{n} = {v:.6g} (its {'lower' if v <= lo else 'upper'} bound)"
-                for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi]
+                for n, v, lo, hi in zip(problem.names, x, problem.lower, problem.upper)
+                if v <= lo or v >= hi]
     if at_bound:
         message += (" At a bound" + (", where the criterion's gradient points outside the "
                                      "bounds (a minimum within them)"
-                                     if status == Status.CONVERGED else "")
+                                     if verdict.status == Status.CONVERGED else "")
                     + f": {', '.join(at_bound)}.")
-    if status == Status.RANK_DEFICIENT:
-        warnings.warn(f"fohw.fit({type(model).__name__}): {messages[-1]}", RankDeficiencyWarning,
-                      stacklevel=2)
-    elif status in (Status.MAX_ITER, Status.FAILED, Status.IMPLAUSIBLE):
-        warnings.warn(f"fohw.fit({type(model).__name__}): {' '.join(messages[1:])}",
-                      ConvergenceWarning, stacklevel=2)
-    return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
-                     status=status, sse=sse, n_samples=n_used, message=message,
-                     nfev=counter["nfev"], jacobian=how_cov, starts=starts, residuals=y - yhat,
-                     data_digest=data_digest_of(experiments, model.dt),
-                     options=dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev,
-                                  tol=tol, exact_jacobian=exact_jacobian,
-                                  sample_weight=None if weight is None else weight.tolist(),
-                                  per_record=list(per_record), warmup=experiments[0].warmup,
-                                  refine=refine),
-                     data=info or {}, per_record=per, n_per_record=len(extra_names))
+    return message
 
 
 def _check_per_record(per_record, params, n_records):
