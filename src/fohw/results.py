@@ -24,7 +24,7 @@ from .lr_statistic import order_test
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
-from .model.parameters import Parameter, Parameters
+from .model.parameters import Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.simulation import check_input_point, check_record_sampling, record_list
@@ -463,12 +463,11 @@ class IdentificationResult(ResultPresentation):
     def parameters(self) -> Parameters:
         """The estimates as :class:`fohw.Parameters` (:attr:`estimate_names`, the order of ``covariance``).
 
-        The free orders are marked ``order=True``; this is the vocabulary every kind's result
-        shares (:class:`fohw.FitResult`).
+        The fitted model's own (:attr:`model`): the free orders marked ``order=True`` with the
+        bounds the fit held them in (``alpha_bounds``), one statement of each bound; this is the
+        vocabulary every kind's result shares (:class:`fohw.FitResult`).
         """
-        orders = set(self.orders)
-        return Parameters(Parameter(n, float(v), order=n in orders)
-                          for n, v in zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        return self.model.parameters
 
     @property
     def sse(self) -> float:
