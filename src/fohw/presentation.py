@@ -122,8 +122,9 @@ class ResultPresentation:
             Angular frequencies, ``0 < omega dt <= pi`` (default: three decades up to the
             Nyquist frequency ``pi / dt``).
         others : dict of str to model, optional
-            Further lagged models (a ``HammersteinWiener``, a result or a ``LinearBlock``) drawn on
-            the same axes, e.g. the true model beside the estimate.
+            Further models of any kind with a frequency response (a ``HammersteinWiener``, a
+            result or a ``LinearBlock``, ...) drawn on the same axes, e.g. the true model beside
+            the estimate (:func:`fohw.frequency_plots.bode`, which draws this figure).
         title : str, optional
             Figure title.
         ax : matplotlib Axes or sequence of two Axes, optional
