@@ -34,6 +34,18 @@ _G34 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0])
 _CIRC34 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015)
 
 
+class _NoResponse(fohw.Model, register=False):
+    """A kind with the three required members only: no frequency response."""
+
+    parameters = fohw.Parameters([fohw.Parameter("k", 1.0)])
+
+    def with_parameters(self, values):
+        return self
+
+    def simulate(self, u, *, initial=None):
+        return self.check_input(u)
+
+
 def _bad_file(tmp, text, name="bad.dat"):
     p = tmp / name
     p.write_text(text)
@@ -838,6 +850,20 @@ API = [
     ("EquivalentCircuit.impedance", "f = 0 with capacity= (was inf with a RuntimeWarning)",
      lambda t: _CIRC34.impedance([0.0, 1.0], capacity=5.0), fohw.ParameterError,
      "`f` = 0.0 (index 0): the impedance of the open-circuit voltage (capacity=) is infinite"),
+    ("EquivalentCircuit.frequency_response", "omega = 0 with capacity= (infinite there)",
+     lambda t: _CIRC34.frequency_response([0.0, 1.0], capacity=5.0), fohw.ParameterError,
+     "`omega` = 2 pi f: `f` = 0.0 (index 0): the impedance of the open-circuit voltage"),
+    ("CircuitTables.frequency_response", "tables over two SOC points, no `soc`",
+     lambda t: fohw.CircuitTables(["rc"], soc_points=[0.2, 0.8], temperature_points=[25.0])
+     .frequency_response([1.0]), fohw.ParameterError,
+     "the tables of this CircuitTables vary with `soc` (breakpoints [0.2, 0.8])"),
+    ("bode", "a string for the system",
+     lambda t: fohw.bode("G"), fohw.ParameterError,
+     "`system` must be a fohw.Model, a fit result or an object with a frequency_response(omega); "
+     "got str"),
+    ("nyquist", "a kind without a frequency response (a Model's default hook)",
+     lambda t: fohw.nyquist(_NoResponse()), fohw.ParameterError,
+     "a _NoResponse has no frequency response"),
     ("identify", "a fixed dead zone entirely above the data (was fitted, converged)",
      lambda t: fohw.identify(_PAPER100.u, _PAPER100.y, **S, method="output_error",
                              output_map=fohw.DeadZone(100.0, 200.0)),

@@ -93,3 +93,54 @@ def test_linear_block_and_models(fitted):
         _short(repr(m), limit=400)
         _html_table(m._repr_html_())
     assert np.isclose(float(re.search(r">R0<.*?>([-\d.e]+)<", models[3]._repr_html_()).group(1)), 0.015)
+
+
+def test_fit_result_html_shows_units_intervals_and_the_records():
+    G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0], dt=0.05)
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.standard_normal(40), 10)
+    rec = fohw.Record(u, G.simulate(u) + 0.01 * rng.standard_normal(u.size), dt=0.05,
+                      name="step test", input_name="current", input_unit="A",
+                      output_name="voltage", output_unit="V", time_unit="s")
+    fit = fohw.fit(G.with_parameters({"a0": 1.5, "alpha0": 0.5}), rec)
+    page = _html_table(fit._repr_html_())
+    text = html.unescape(re.sub(r"<[^>]+>", " ", page))
+    words = set(text.split())
+    assert [w for w in fit.summary().split() if w not in words] == []    # all the summary says
+    assert "current [A]" in text and "voltage [V]" in text                # the units
+    assert "records: step test (N = 400, dt = 0.05 s)" in text            # the data line
+    assert "95% CI low" in page and "95% CI high" in page
+    for name, (low, high) in fit.confidence_intervals().items():         # the Wald intervals
+        se = fit.standard_errors()[name]
+        value = fit.parameters[name].value
+        assert np.isclose(high - value, 1.959963984540054 * se) and np.isclose(value - low, high - value)
+        assert f">{low:.6g}<" in page and f">{high:.6g}<" in page
+    assert ">fixed<" in page                                              # a1, the normaliser
+
+
+def test_a_new_kind_reads_as_a_table_of_its_parameters():
+    class Scaled(fohw.Model, register=False):
+        def __init__(self, k=1.5, c=0.25):
+            self.k, self.c = k, c
+
+        @property
+        def parameters(self):
+            return fohw.Parameters([fohw.Parameter("k", self.k, bounds=(0.0, 10.0)),
+                                    fohw.Parameter("c", self.c, fixed=True)])
+
+        def with_parameters(self, values):
+            v = self.parameters.with_values(values).valuesdict()
+            return Scaled(v["k"], v["c"])
+
+        def simulate(self, u, *, initial=None):
+            return self.k * self.check_input(u) + self.c
+
+    m = Scaled()
+    page = _html_table(m._repr_html_())
+    assert re.search(r">k<.*?>1\.5<.*?>\[0, 10\]<.*?>free<", page)
+    assert re.search(r">c<.*?>0\.25<.*?>\[-inf, inf\]<.*?>fixed<", page)
+    assert "dt = 1" in page
+    lines = m.summary().splitlines()
+    assert lines[0] == "Scaled" and lines[-2].split() == ["k", "1.5", "[0,", "10]", "free"]
+    assert lines[-1].split() == ["c", "0.25", "[-inf,", "inf]", "fixed"]
+

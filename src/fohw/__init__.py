@@ -46,6 +46,7 @@ from .exceptions import (
     SimulationDivergedError,
 )
 from .fit_result import FitResult
+from .frequency_plots import bode, nyquist
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.base import Model, register_model
@@ -101,6 +102,8 @@ __all__ = [
     "fit_impedance",
     "fit_record_and_impedance",
     "FitResult",
+    "bode",
+    "nyquist",
     "identify_many",
     "stream_fits",
     "Validation",

@@ -11,7 +11,6 @@ it simulates, summarises itself and writes itself to JSON. The lagged kind's
 from __future__ import annotations
 
 import abc
-import html
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -216,16 +215,69 @@ class FitResult(metaclass=abc.ABCMeta):
         return (f"<FitResult {type(self.model).__name__} {self.status.name} sse={self.sse:.4g} "
                 f"N={self.n_samples}: {est}{more}>")
 
+    def _record_lines(self):
+        """The records the fit used: name, samples and step (from :attr:`data`)."""
+        records = self.data.get("records") or []
+        if not records:
+            return []
+        unit = f" {self.data.get('time_unit')}".rstrip() if self.data.get("time_unit") else ""
+        parts = []
+        for k, r in enumerate(records):
+            step = "non-uniform" if r.get("dt") is None else f"dt = {r['dt']:g}{unit}"
+            parts.append(f"{r.get('name') or f'record {k}'} (N = {r['n_samples']}, {step})")
+        return ["records: " + "; ".join(parts)]
+
     def _repr_html_(self):
-        rows = "".join(
-            f"<tr><td>{html.escape(n)}</td><td>{v:.6g}</td>"
-            f"<td>{'' if se is None else f'{se:.4g}'}</td><td>{html.escape(how)}</td></tr>"
-            for n, v, se, how in self._rows())
-        return (f"<div><b>FitResult</b> {html.escape(type(self.model).__name__)}, "
-                f"N={self.n_samples}, status={self.status.name}, sse={self.sse:.6g}, "
-                f"rmse={self.rmse:.6g}, Jacobian {html.escape(self.jacobian)}<br>"
-                f"<small>{html.escape(self.message)}</small><table><tr><th>parameter</th>"
-                f"<th>estimate</th><th>std err</th><th></th></tr>{rows}</table></div>")
+        """The notebook view: what :meth:`summary` shows, with 95 % intervals and the records.
+
+        The same view as :class:`fohw.IdentificationResult`'s (:func:`fohw._repr.estimates_html`):
+        the head (kind, N, status, message, the data's names and units), the estimates with
+        standard errors and Wald intervals (:meth:`confidence_intervals`), then the records.
+        """
+        from scipy.stats import norm
+
+        from ._repr import estimates_html
+
+        head = [line.strip() for line in self.summary().split("\n\n")[0].splitlines()]
+        ci = self.confidence_intervals() if self.covariance is not None else {}
+        rows = [(n, v, se, *ci.get(n, (None, None)), how) for n, v, se, how in self._rows()]
+        z = float(norm.ppf(0.975))
+        for name, entry in self.per_record.items():
+            ses = entry["standard_errors"] or [None] * len(entry["values"])
+            for r, (v, se) in enumerate(zip(entry["values"], ses)):
+                low, high = (None, None) if se is None else (v - z * se, v + z * se)
+                rows.append((f"{name}[{r}]", v, se, low, high, f"(record {r})"))
+        return estimates_html(head[0], rows, lines=head[1:] + self._record_lines(), se_digits=4)
+
+    # --- figures -------------------------------------------------------------------------------
+    def bode(self, omega=None, *, others=None, label=None, title=None, ax=None, hz=False,
+             time_unit=None, **where):
+        """Bode diagram of the fitted model (:meth:`fohw.Model.bode`), in the record's time unit.
+
+        The parameters are those of :func:`fohw.frequency_plots.bode`; the frequency axis is in
+        the unit of the records the fit was given (``rad/s`` for seconds), the curve is
+        ``"estimate"`` beside ``others``. A kind without a frequency response is refused,
+        naming it.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .frequency_plots import bode
+
+        return bode(self, omega, others=others, label=label, title=title, ax=ax, hz=hz,
+                    time_unit=time_unit, **where)
+
+    def nyquist(self, omega=None, *, others=None, label=None, title=None, ax=None, **where):
+        """Nyquist diagram of the fitted model (:func:`fohw.frequency_plots.nyquist`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .frequency_plots import nyquist
+
+        return nyquist(self, omega, others=others, label=label, title=title, ax=ax, **where)
 
     # --- files -------------------------------------------------------------------------------
     def to_dict(self) -> dict:

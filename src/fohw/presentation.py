@@ -27,7 +27,7 @@ class ResultPresentation:
         """The notebook view: what :meth:`summary` shows, its estimates as a table."""
         import html
 
-        from ._repr import html_table
+        from ._repr import estimates_html
 
         paragraphs = self.summary().split("\n\n")       # head, estimates, then the rest
         names = self._display_names()
@@ -35,14 +35,11 @@ class ResultPresentation:
                else dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear])))
         if self.covariance is not None:
             se, ci = self.standard_errors(), self.confidence_intervals()
-            header = ["parameter", "estimate", "std err", "95% CI low", "95% CI high"]
-            rows = [(n, f"{est[n]:.6g}", f"{se[n]:.3g}", f"{ci[n][0]:.6g}", f"{ci[n][1]:.6g}")
-                    for n in names]                      # as summary() writes them
+            rows = [(n, est[n], se[n], ci[n][0], ci[n][1], "") for n in names]
         else:
-            header = ["parameter", "estimate"]
-            rows = [(n, f"{est[n]:.6g}") for n in names]
+            rows = [(n, est[n], None, None, None, "") for n in names]
         head = [line.strip() for line in paragraphs[0].splitlines()]
-        table = html_table(head[0], header, rows, lines=head[1:])
+        table = estimates_html(head[0], rows, lines=head[1:])     # as summary() writes them
         return table + "".join(f"<pre>{html.escape(p)}</pre>" for p in paragraphs[2:])
 
     def summary(self, linear_block=True) -> str:
@@ -125,8 +122,9 @@ class ResultPresentation:
             Angular frequencies, ``0 < omega dt <= pi`` (default: three decades up to the
             Nyquist frequency ``pi / dt``).
         others : dict of str to model, optional
-            Further lagged models (a ``HammersteinWiener``, a result or a ``LinearBlock``) drawn on
-            the same axes, e.g. the true model beside the estimate.
+            Further models of any kind with a frequency response (a ``HammersteinWiener``, a
+            result or a ``LinearBlock``, ...) drawn on the same axes, e.g. the true model beside
+            the estimate (:func:`fohw.frequency_plots.bode`, which draws this figure).
         title : str, optional
             Figure title.
         ax : matplotlib Axes or sequence of two Axes, optional
@@ -144,18 +142,30 @@ class ResultPresentation:
             is not registered with pyplot (no window; ``fig.savefig`` writes it) and shows as
             the last expression of a notebook cell.
         """
-        from .frequency_plots import bode_plot
-        from .model.hw_frequency import LinearBlock, linear_block
+        from .frequency_plots import bode
 
-        block = self.linear_block()
-        omega = block.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
-        curves = {"estimate" if others else "linear block H(exp(jωh))": block.frequency_response(omega)}
-        for label, other in (others or {}).items():
-            other = other if isinstance(other, LinearBlock) else linear_block(other)
-            curves[label] = other.frequency_response(omega)
-        unit = (self.data or {}).get("time_unit") or (
+        self.linear_block()                 # raises, saying why, when the model is undefined
+        return bode(self, omega, others=others, title=title, ax=ax, hz=hz,
+                    time_unit=self._time_unit())
+
+    def nyquist(self, omega=None, *, others=None, title=None, ax=None):
+        """Nyquist diagram of the linear block (:func:`fohw.frequency_plots.nyquist`).
+
+        The parameters are those of :meth:`bode` (without ``hz``).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .frequency_plots import nyquist
+
+        self.linear_block()
+        return nyquist(self, omega, others=others, title=title, ax=ax)
+
+    def _time_unit(self):
+        """The record's time unit; ``"sample"`` at ``dt = 1`` without a record; else unknown."""
+        return (self.data or {}).get("time_unit") or (
             "sample" if self.structure.dt == 1.0 and not (self.data or {}).get("dt") else None)
-        return bode_plot(omega, curves, title=title, ax=ax, time_unit=unit, hz=hz)
 
     def _estimate_table(self, names, est):
         """Rows of estimates with standard errors and 95 % intervals (a fit with a covariance)."""

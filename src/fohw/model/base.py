@@ -151,8 +151,12 @@ class Model(abc.ABC):
     :meth:`starts` and :meth:`linear_start` (where :func:`fohw.fit` starts), :meth:`config`
     (the settings that are not parameters, for files), :meth:`check_settings` (bounds or ties
     the kind cannot hold), :meth:`penalty` (a regularisation added to the fit's criterion),
-    :meth:`check_fitted` (a kind's own sanity check of a fitted model) and :meth:`simulate_at`
-    (non-uniform instants).
+    :meth:`check_fitted` (a kind's own sanity check of a fitted model), :meth:`simulate_at`
+    (non-uniform instants) and :meth:`frequency_response` (the response at ``s = j omega``;
+    with it :meth:`bode` and :meth:`nyquist` draw the kind, together with
+    :meth:`default_frequencies`, :meth:`response_label` and :attr:`response_kind`). Every kind
+    reads in a terminal (:meth:`summary`) and a notebook (``_repr_html_``) as a table of its
+    parameters; :meth:`description` adds the kind's own lines.
 
     Examples
     --------
@@ -296,6 +300,176 @@ class Model(abc.ABC):
         from .irregular import grid_simulate
 
         return grid_simulate(self, u, t, intersample=intersample, refine=refine, step=step)
+
+    #: What :meth:`frequency_response` returns, for the figures: ``"transfer"`` (a transfer
+    #: function from input to output; the Nyquist plot marks the critical point -1) or
+    #: ``"impedance"`` (voltage over current; the Nyquist plot is the impedance plane, ``-Im Z``
+    #: upwards, without the critical point, as electrochemistry draws it).
+    response_kind: str = "transfer"
+
+    def frequency_response(self, omega):
+        """The response at ``s = j omega`` (complex, shape of ``omega``), or ``None`` (default).
+
+        ``omega`` is the angular frequency in radians per unit of :attr:`dt`'s time. ``None``
+        says "this kind has none": :meth:`bode` and :meth:`nyquist` then refuse, naming the
+        kind. A kind whose response depends on an operating point takes it as keywords with
+        documented defaults (or refuses without them, naming them); :meth:`bode` and
+        :meth:`nyquist` pass their extra keywords on.
+        """
+        return None
+
+    def default_frequencies(self, n=400):
+        """The grid :meth:`bode` and :meth:`nyquist` draw on without ``omega``.
+
+        The default: ``n`` logarithmically spaced frequencies over the three decades below the
+        Nyquist frequency ``pi / dt`` (where sampled data see the response); a kind overrides
+        it with its own corner frequencies.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> w = fohw.datasets.paper_model().default_frequencies(4)      # dt = 1
+        >>> np.round(w / np.pi, 12)
+        array([0.001, 0.01 , 0.1  , 1.   ])
+        """
+        from .._validation import check_int
+
+        n = check_int(n, "n", minimum=2, maximum=1_000_000)
+        dt = self.dt
+        if dt is None:
+            raise ParameterError(f"this {type(self).__name__} has no sampling time `dt`, so it has "
+                                 "no default frequency grid; give `omega`.")
+        nyquist = np.pi / float(dt)
+        return np.logspace(np.log10(nyquist) - 3.0, np.log10(nyquist), n)
+
+    def response_label(self) -> str:
+        """What the curve of :meth:`frequency_response` is called in a figure (default: the kind)."""
+        return self.kind_name()
+
+    def bode(self, omega=None, *, others=None, label=None, title=None, ax=None, hz=False,
+             time_unit=None, **where):
+        """Bode diagram of :meth:`frequency_response` (:func:`fohw.frequency_plots.bode`).
+
+        Parameters
+        ----------
+        omega : array_like, optional
+            Angular frequencies (default :meth:`default_frequencies`).
+        others : dict of str to model or fit, optional
+            Further models (or fit results) drawn on the same axes, e.g. the truth beside an
+            estimate.
+        label : str, optional
+            The curve's name (default :meth:`response_label`).
+        title : str, optional
+            Figure title.
+        ax : matplotlib Axes or sequence of two Axes, optional
+            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
+        hz : bool, optional
+            Against ``f = omega / (2 pi)``.
+        time_unit : str, optional
+            The unit of :attr:`dt`, for the axis label (``"s"``: rad/s; default unknown).
+        **where
+            Passed to :meth:`frequency_response` (an operating point, e.g. ``soc=`` and
+            ``temperature=`` of :class:`fohw.CircuitTables`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Magnitude and phase axes; a new figure opens no window and shows in a notebook.
+
+        Raises
+        ------
+        ParameterError
+            The kind has no frequency response (:meth:`frequency_response` returns ``None``).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
+        >>> fig.axes[0].get_ylabel()
+        'magnitude [dB]'
+        """
+        from ..frequency_plots import bode
+
+        return bode(self, omega, others=others, label=label, title=title, ax=ax, hz=hz,
+                    time_unit=time_unit, **where)
+
+    def nyquist(self, omega=None, *, others=None, label=None, title=None, ax=None, **where):
+        """Nyquist diagram of :meth:`frequency_response` (:func:`fohw.frequency_plots.nyquist`).
+
+        The parameters are those of :meth:`bode` (without ``hz`` and ``time_unit``); an
+        ``"impedance"`` kind (:attr:`response_kind`) is drawn in the impedance plane.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Examples
+        --------
+        >>> import fohw
+        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
+        >>> fig.axes[0].get_xlabel()
+        'real part'
+        """
+        from ..frequency_plots import nyquist
+
+        return nyquist(self, omega, others=others, label=label, title=title, ax=ax, **where)
+
+    # --- how a model reads ---------------------------------------------------------------------
+    def description(self) -> list:
+        """Lines that say what the model is besides its parameters' values.
+
+        The default: the kind's own text (its ``str``) when it writes one, and the sampling
+        time. :meth:`summary` and the notebook table show them above the parameters.
+        """
+        lines = []
+        if type(self).__str__ is not object.__str__:
+            lines.append(str(self))
+        dt = self.dt
+        if dt is not None:
+            lines.append(f"dt = {float(dt):g}")
+        return lines
+
+    def _parameter_rows(self):
+        rows = []
+        for name, par in self.parameters.items():
+            how = (f"= {par.tie[1]:g} * {par.tie[0]}" if par.tie is not None
+                   else "fixed" if par.fixed else "free")
+            rows.append((name, par.value, f"[{par.bounds[0]:g}, {par.bounds[1]:g}]", how))
+        return rows
+
+    def summary(self) -> str:
+        """A text table of the parameters: name, value, bounds, free or fixed (or tied).
+
+        Examples
+        --------
+        >>> import fohw
+        >>> print(fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.5, 0.0], dt=0.1).summary())
+        FractionalTF
+          1 / (2 s^0.5 + 1)
+          dt = 0.1
+        <BLANKLINE>
+          parameter          value  bounds            free/fixed
+          b0                     1  [-inf, inf]       free
+          beta0                  0  [-2, 2]           fixed
+          a0                     2  [-inf, inf]       free
+          a1                     1  [-inf, inf]       fixed
+          alpha0               0.5  [0, 2]            free
+          alpha1                 0  [0, 2]            fixed
+        """
+        rows = self._parameter_rows()
+        width = max(12, max((len(r[0]) for r in rows), default=0) + 2)
+        lines = [self.kind_name(), *(f"  {line}" for line in self.description()), ""]
+        lines.append(f"  {'parameter':<{width}}{'value':>12}  {'bounds':<18}free/fixed")
+        lines += [f"  {n:<{width}}{v:>12.6g}  {b:<18}{how}" for n, v, b, how in rows]
+        return "\n".join(line.rstrip() for line in lines)
+
+    def _repr_html_(self):
+        """The notebook view: the parameters' table (name, value, bounds, free or fixed)."""
+        from .._repr import html_table
+
+        return html_table(self.kind_name(), ["parameter", "value", "bounds", ""],
+                          self._parameter_rows(), lines=self.description(), digits=6)
 
     def config(self) -> dict:
         """The settings that are not parameters, as keyword arguments of the constructor.

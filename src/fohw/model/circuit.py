@@ -995,19 +995,68 @@ class EquivalentCircuit(Model):
             z = _finite_impedance(z, f, "the open-circuit voltage (capacity=)")
         return z
 
+    #: :meth:`frequency_response` is an impedance (ohm): Nyquist plots draw the impedance plane.
+    response_kind = "impedance"
+
+    def frequency_response(self, omega, *, discrete=False, capacity=None, ocv_slope=0.0):
+        """The impedance ``Z(j omega) = R0 + sum_e Z_e(j omega)`` [ohm] at angular frequencies [rad/s].
+
+        The :meth:`fohw.Model.frequency_response` hook: :meth:`impedance` at ``f = omega / (2
+        pi)``, about zero current (the cubic map ``c3 i^3`` has zero slope there; the
+        parameters do not depend on the state of charge, so there is no other operating point).
+        By default the continuous circuit without the OCV's capacitor; the keywords are those
+        of :meth:`impedance`. :meth:`bode` and :meth:`nyquist` draw it (the Nyquist plot in the
+        impedance plane, :attr:`response_kind`).
+
+        Parameters
+        ----------
+        omega : array_like
+            Finite angular frequencies [rad/s] (``omega = 0`` is refused where ``Z`` is infinite).
+        discrete, capacity, ocv_slope
+            As in :meth:`impedance` (defaults: continuous, no OCV capacitor, slope 0).
+
+        Returns
+        -------
+        ndarray of complex, shape of ``omega``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from fohw.model.circuit import EquivalentCircuit, ZARC
+        >>> cell = EquivalentCircuit([ZARC(0.01, 50.0, 1.0)], r0=0.015)
+        >>> z = cell.frequency_response([1 / 50.0])           # R0 + R / (1 + j)
+        >>> bool(np.isclose(z[0], 0.015 + 0.01 / (1 + 1j), rtol=1e-14, atol=0))
+        True
+        """
+        omega = check_array(omega, "omega", ndim=None, min_length=0)
+        try:
+            return self.impedance(omega / (2.0 * np.pi), discrete=discrete, capacity=capacity,
+                                  ocv_slope=ocv_slope)
+        except ParameterError as err:
+            if not str(err).startswith("`f` = "):
+                raise
+            raise ParameterError(f"`omega` = 2 pi f: {err}") from None
+
+    def default_frequencies(self, n=400):
+        """Two decades either side of the elements' corners ``1 / tau`` (the Model's grid without any)."""
+        n = check_int(n, "n", minimum=2, maximum=1_000_000)
+        taus = [e.tau for e in self.elements if e.kind != "warburg"]
+        if not taus:
+            return super().default_frequencies(n)
+        return np.logspace(-np.log10(max(taus)) - 2.0, -np.log10(min(taus)) + 2.0, n)
+
+    def response_label(self):
+        """The curve's name in :meth:`bode` and :meth:`nyquist`."""
+        return f"impedance Z(jω), {'+'.join(self.kinds) or 'R0 only'}"
+
     def __str__(self):
         parts = [f"{n} = {v:.6g}" for n, v in self.parameters.valuesdict().items()]
         return f"EquivalentCircuit({'+'.join(self.kinds) or 'R0 only'}: {', '.join(parts)})"
 
-    def _repr_html_(self):
-        from .._repr import html_table
-
-        rows = [(n, p.value, f"[{p.bounds[0]:g}, {p.bounds[1]:g}]")
-                for n, p in self.parameters.items()]
-        return html_table(f"EquivalentCircuit ({'+'.join(self.kinds) or 'R0 only'})",
-                          ["parameter", "value", "bounds"], rows,
-                          lines=[f"dt = {self.dt:g} s; OCV map: "
-                                 + ("given" if self.ocv is not None else "none")])
+    def description(self):
+        """The elements, the step and whether there is an OCV map (above the parameters' table)."""
+        return [f"elements: {'+'.join(self.kinds) or 'R0 only'}",
+                f"dt = {self.dt:g} s; OCV map: " + ("given" if self.ocv is not None else "none")]
 
 
 def check_spectrum(f, z):

@@ -600,6 +600,95 @@ class CircuitTables(Model):
             raise ParameterError(f"no table {name!r}; this circuit's are {sorted(self.tables)}.")
         return self.tables[name].copy()
 
+    # --- frequency domain -----------------------------------------------------------------------
+    #: :meth:`frequency_response` is an impedance (ohm): Nyquist plots draw the impedance plane.
+    response_kind = "impedance"
+
+    def at(self, soc=None, temperature=None):
+        """The :class:`fohw.EquivalentCircuit` of the tables at one state of charge and temperature.
+
+        With ``soc`` and ``T`` held, the model is that circuit exactly (module docstring): its
+        ``R0`` and its elements' resistances and time constants are the tables' interpolated
+        values there (``temperature_interpolation``), its orders the shared ones.
+
+        Parameters
+        ----------
+        soc : float, optional
+            State of charge in ``[0, 1]``. Needed when the tables have more than one SOC
+            breakpoint; default the single one.
+        temperature : float, optional
+            Temperature [degC]. Needed when the tables have more than one temperature
+            breakpoint; default the single one.
+
+        Returns
+        -------
+        EquivalentCircuit
+            Without the offset table and the OCV (they do not enter the impedance), at the same
+            ``dt``.
+
+        Examples
+        --------
+        >>> from fohw.model.circuit_tables import CircuitTables
+        >>> cell = CircuitTables(["rc"], soc_points=[0.5], temperature_points=[0.0, 40.0],
+        ...                      values={"R0": [[0.03, 0.01]], "R1": 0.01, "tau1": 5.0})
+        >>> round(cell.at(temperature=10.0).r0, 6)               # 3/4 of 0.03 + 1/4 of 0.01
+        0.025
+        """
+        point = {}
+        for name, value, points, low, high, unit in (
+                ("soc", soc, self.soc_points, 0.0, 1.0, "a fraction of the capacity"),
+                ("temperature", temperature, self.temperature_points, -100.0, 200.0, "degC")):
+            if value is None:
+                if points.size > 1:
+                    raise ParameterError(
+                        f"the tables of this CircuitTables vary with `{name}` (breakpoints "
+                        f"{points.tolist()}), so its impedance needs the operating point: give "
+                        f"{name}=... ({unit}).")
+                value = float(points[0])
+            point[name] = check_scalar(value, name, lower=low, upper=high)
+        w = self._weights(np.array([point["soc"]]), np.array([point["temperature"]]))
+        elements = []
+        for e, kind in enumerate(self.kinds, start=1):
+            R, tau = float(self.value(f"R{e}", w)[0]), float(self.value(f"tau{e}", w)[0])
+            elements.append(ZARC(R, tau, self.alphas[f"alpha{e}"]) if kind == "zarc" else RC(R, tau))
+        return EquivalentCircuit(elements, r0=float(self.value("R0", w)[0]), dt=self.dt,
+                                 tau_bounds=self.tau_bounds, current_sign=self.current_sign)
+
+    def frequency_response(self, omega, *, soc=None, temperature=None, discrete=False):
+        """The impedance ``Z(j omega)`` [ohm] at angular frequencies [rad/s], at ``(soc, temperature)``.
+
+        The :meth:`fohw.Model.frequency_response` hook: ``R0 + sum_e R_e / (1 + (j omega
+        tau_e)^alpha_e)`` with the tables' values at the operating point (:meth:`at`), about
+        zero current. ``soc`` and ``temperature`` default to the tables' single breakpoint
+        along an axis that has one, and are required along an axis with several (refused
+        naming them). ``discrete``: the GL-discretised model's response at its ``dt``
+        (:meth:`fohw.EquivalentCircuit.impedance`). :meth:`bode` and :meth:`nyquist` pass their
+        keywords on (``cell.bode(soc=0.5, temperature=25.0)``).
+
+        Returns
+        -------
+        ndarray of complex, shape of ``omega``
+        """
+        return self.at(soc, temperature).frequency_response(omega, discrete=discrete)
+
+    def default_frequencies(self, n=400):
+        """Two decades either side of the corners ``1 / tau`` over every breakpoint of the tables."""
+        n = check_int(n, "n", minimum=2, maximum=1_000_000)
+        taus = np.concatenate([self.tables[f"tau{e}"].ravel() for e in range(1, len(self.kinds) + 1)]
+                              or [np.array([self.dt])])
+        return np.logspace(-np.log10(taus.max()) - 2.0, -np.log10(taus.min()) + 2.0, n)
+
+    def response_label(self):
+        """The curve's name in :meth:`bode` and :meth:`nyquist`."""
+        return f"impedance Z(jω), {'+'.join(self.kinds) or 'R0 only'}"
+
+    def description(self):
+        """The elements, the breakpoints and the step (above the parameters' table)."""
+        return [f"elements: {'+'.join(self.kinds) or 'R0 only'}; soc points "
+                f"{self.soc_points.tolist()}, temperature points {self.temperature_points.tolist()} degC",
+                f"dt = {self.dt:g} s; temperature interpolation {self.temperature_interpolation}; "
+                f"OCV map: {'given' if self.ocv is not None else 'none'}"]
+
     def __repr__(self):
         return (f"CircuitTables({'+'.join(self.kinds) or 'R0 only'}, soc points "
                 f"{self.soc_points.tolist()}, temperature points {self.temperature_points.tolist()}, "

@@ -432,3 +432,28 @@ class HammersteinWiener(Model):
                    orders=Orders.from_dict(d["terms"]), dt=d["dt"], offset=d["offset"],
                    past=d["past"], operating_point=d["operating_point"])
 
+    # --- the frequency view (fohw.Model's hooks) ----------------------------------------------
+    def frequency_response(self, omega):
+        """The linear block's ``H(e^{j omega dt}) = f' B / (1 - g' A)`` (:mod:`fohw.model.hw_frequency`).
+
+        The :meth:`fohw.Model.frequency_response` hook: the static maps replaced by their
+        slopes at the operating point (the linearisation of
+        :class:`fohw.model.hw_frequency.LinearBlock`), ``omega`` in radians per unit of
+        :attr:`dt` (``0 < |omega| dt < 2 pi``). :meth:`bode` and :meth:`nyquist` draw it.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import fohw
+        >>> m = fohw.HammersteinWiener([0.5], [1.0], [1.0], [1.0], orders=0)   # y = 0.5 y[k-1] + u[k-1]
+        >>> z = np.exp(0.3j)
+        >>> bool(np.isclose(m.frequency_response([0.3])[0], (1 / z) / (1 - 0.5 / z), rtol=1e-14))
+        True
+        """
+        from .hw_frequency import LinearBlock
+
+        return LinearBlock.from_model(self).frequency_response(omega)
+
+    def response_label(self):
+        """The curve's name in :meth:`bode` and :meth:`nyquist`: the linear block ``H``."""
+        return "linear block H(exp(jωh))"

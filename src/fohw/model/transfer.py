@@ -393,16 +393,6 @@ class FractionalTF(Model):
         return (f"FractionalTF({fmt(self._num)}, {fmt(self._num_orders)}, {fmt(self._den)}, "
                 f"{fmt(self._den_orders)}, dt={self._dt!r}, delay={self._delay!r})")
 
-    def _repr_html_(self):
-        from .._repr import html_table
-
-        rows = ([("numerator", c, o) for c, o in zip(self._num, self._num_orders)]
-                + [("denominator", c, o) for c, o in zip(self._den, self._den_orders)])
-        extra = ", ".join(f"{k} = {v:g}" for k, v in (("dt", self._dt), ("delay", self._delay))
-                          if v)
-        return html_table("FractionalTF", ["", "coefficient", "order of s"], rows,
-                          lines=[f"G(s) = {self}", extra])
-
     def __str__(self):
         num = _poly_text(self._num, self._num_orders)
         den = _poly_text(self._den, self._den_orders)
@@ -808,6 +798,8 @@ class FractionalTF(Model):
     def frequency_response(self, omega):
         """``G(j omega)``, exact (principal branch ``(j omega)^alpha = omega^alpha e^{j alpha pi/2}``).
 
+        The :meth:`fohw.Model.frequency_response` hook: :meth:`bode` and :meth:`nyquist` draw it.
+
         Parameters
         ----------
         omega : array_like
@@ -1144,66 +1136,9 @@ class FractionalTF(Model):
                                 np.concatenate([o1, o2]), dt, 0.0)
 
     # ------------------------------------------------------------------ figures and export
-    def bode(self, omega=None, *, others=None, title=None, ax=None):
-        """Bode diagram; returns the figure (a notebook shows it, pyplot never sees it).
-
-        Parameters
-        ----------
-        omega : array_like, optional
-            Frequencies (default :meth:`default_frequencies`).
-        others : dict of str to FractionalTF, optional
-            Further models drawn on the same axes (e.g. an estimate beside the truth).
-        title : str, optional
-            Figure title.
-        ax : matplotlib Axes or sequence of two Axes, optional
-            One Axes: the magnitude only; two: magnitude and phase (default: a new figure).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            See :func:`fohw.frequency_plots.bode_plot`.
-
-        Examples
-        --------
-        >>> import fohw
-        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]).bode()
-        >>> fig.axes[0].get_ylabel()
-        'magnitude [dB]'
-        """
-        from ..frequency_plots import bode_plot
-
-        omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
-        curves = {str(self): self.frequency_response(omega)}
-        for label, model in (others or {}).items():
-            curves[label] = model.frequency_response(omega)
-        return bode_plot(omega, curves, title=title, ax=ax)
-
-    def nyquist(self, omega=None, *, title=None, ax=None):
-        """Nyquist diagram; returns the figure (a notebook shows it, pyplot never sees it).
-
-        Parameters
-        ----------
-        omega : array_like, optional
-            Positive frequencies (default :meth:`default_frequencies`).
-        title : str, optional
-            Figure title.
-        ax : matplotlib Axes, optional
-            Where to draw (default: a new figure).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            See :func:`fohw.frequency_plots.nyquist_plot`.
-
-        Examples
-        --------
-        >>> import fohw
-        >>> fig = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.5, 0.0]).nyquist()
-        """
-        from ..frequency_plots import nyquist_plot
-
-        omega = self.default_frequencies() if omega is None else np.asarray(omega, dtype=np.float64)
-        return nyquist_plot({str(self): self.frequency_response(omega)}, title=title, ax=ax)
+    def response_label(self):
+        """``str(G)``: the curve's name in :meth:`bode` and :meth:`nyquist` (fohw.Model's, inherited)."""
+        return str(self)
 
     def oustaloup(self, band=(1e-3, 1e3), order=5, method="oustaloup"):
         """Integer-order approximation in a frequency band (FOMCON ``oustapp``).

@@ -282,13 +282,6 @@ class FractionalHW(Model):
             raise ParameterError("`dt` is needed: pass dt=... to FractionalHW(...) or to its G.")
         return self._dt
 
-    def _repr_html_(self):
-        from .._repr import html_table
-
-        rows = [(f"p{j}", n, v) for j, (n, v) in enumerate(zip(self.f_basis.names, self.p), 1)]
-        return html_table("FractionalHW", ["parameter", "basis", "value"], rows,
-                          lines=[str(self), f"G(s) = {self.G}", str(self.output_map)])
-
     def input_signal(self, u):
         """``w = fbar(u) = sum_j p_j f_j(u)``."""
         return self.p @ self.f_basis.evaluate(np.asarray(u, dtype=np.float64), "u")
@@ -632,8 +625,29 @@ class FractionalHW(Model):
                 f"dt={self._dt!r})")
 
     def frequency_response(self, omega):
-        """The linear block's exact ``G(j omega)`` (the maps are static: see :meth:`linearised_gain`)."""
+        """The linear block's exact ``G(j omega)`` (:meth:`fohw.FractionalTF.frequency_response`).
+
+        The :meth:`fohw.Model.frequency_response` hook: the response of ``G`` alone, not of the
+        chain ``h(G f(u))``, whose static maps have no frequency response (for small signals
+        about 0 the chain is ``G`` times :meth:`linearised_gain`). :meth:`bode` and
+        :meth:`nyquist` draw it.
+
+        Examples
+        --------
+        >>> import fohw
+        >>> G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [1.0, 0.0], dt=0.1)
+        >>> fohw.FractionalHW(G, p=[1.0, 0.3]).frequency_response([1.0])      # 1 / (j + 1)
+        array([0.5-0.5j])
+        """
         return self.G.frequency_response(omega)
+
+    def default_frequencies(self, n=400):
+        """``G``'s grid (:meth:`fohw.FractionalTF.default_frequencies`)."""
+        return self.G.default_frequencies(n)
+
+    def response_label(self):
+        """The curve's name in :meth:`bode` and :meth:`nyquist`: the linear block ``G(s)``."""
+        return f"linear block G(s) = {self.G}"
 
     def linearised_gain(self):
         """``f'(0) h'(0)``: the slope of the static maps at 0, multiplying ``G`` for small signals."""
