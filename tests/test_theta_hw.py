@@ -191,3 +191,15 @@ def test_the_shared_map_kind_has_the_exact_jacobian():
     fd = fohw.fit(start, d.u, d.y, exact_jacobian=False)
     assert exact.jacobian == "exact" and fd.jacobian == "finite differences"
     assert exact.sse == pytest.approx(fd.sse, rel=1e-8)
+
+
+def test_frequency_view_is_the_linear_block_of_the_fit():
+    d = fohw.datasets.paper_example(300, random_state=0)
+    r = fohw.identify(d.u, d.y, **FIT)
+    w = np.linspace(0.05, 3.0, 7)
+    # polynomial bases: each lag's slope at 0 is theta's first block, the rank-one model's a, b
+    np.testing.assert_allclose(r.model.frequency_response(w),
+                               r.shared_model.frequency_response(w), rtol=1e-12)
+    np.testing.assert_allclose(r.model.frequency_response(w),
+                               r.linear_block().frequency_response(w), rtol=1e-12)
+    assert fohw.bode(r.model) is not None and r.model.bode() is not None

@@ -302,6 +302,21 @@ class ThetaHW(Model):
         return HammersteinWiener.simulate_at(self, u, t, intersample=intersample, refine=refine,
                                              step=step)
 
+    def frequency_response(self, omega):
+        """The linear block's ``H(e^{j omega dt})`` (:mod:`fohw.model.hw_frequency`).
+
+        Each term linearised with its own map's slope at the operating point (for polynomial
+        bases theta's first block, as :meth:`fohw.HammersteinWiener.frequency_response` of the
+        rank-one model); ``omega`` in radians per unit of :attr:`dt`. Single input.
+        """
+        from .hw_frequency import LinearBlock
+
+        return LinearBlock.from_model(self).frequency_response(omega)
+
+    def response_label(self):
+        """The curve's name in :meth:`bode` and :meth:`nyquist`: the linear block ``H``."""
+        return "linear block H(exp(jωh))"
+
     def config(self) -> dict:
         """``{"structure", "operating_point", "dt"}``: the settings that are not parameters.
 
