@@ -203,3 +203,30 @@ def test_frequency_view_is_the_linear_block_of_the_fit():
     np.testing.assert_allclose(r.model.frequency_response(w),
                                r.linear_block().frequency_response(w), rtol=1e-12)
     assert fohw.bode(r.model) is not None and r.model.bode() is not None
+
+
+def test_records_that_start_from_other_levels_are_fitted_jointly():
+    # Three experiments of one system, each started from its own output level: the lagged kind
+    # carries its past levels as parameters, so a joint fit estimates one level per record.
+    rng = np.random.default_rng(0)
+    s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, past="estimate")
+    levels = (0.0, 1.0, -1.5)
+    records = []
+    for level in levels:
+        u = rng.uniform(-1, 1, 300)
+        y = fohw.ThetaHW(s, [0.5, 1.0], [0.5, 0.0, level]).simulate(u)
+        records.append(fohw.Record(u=u, y=y + 0.01 * rng.standard_normal(300)))
+    start = fohw.ThetaHW(s, [0.3, 0.8], [0.6, 0.0, 0.0])
+    params = start.parameters.replace("u_past", fixed=True)
+    start = start.with_parameters(params)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        shared = fohw.fit(start, records)
+    joint = fohw.fit(start, records, per_record=["y_past"])
+    assert joint.status == fohw.Status.CONVERGED
+    # the noise floor: 900 samples of variance 1e-4 (a chi-square within 4 of its sd)
+    assert abs(joint.sse - 900 * 1e-4) < 4 * np.sqrt(2 * 900) * 1e-4
+    assert shared.sse > 10 * joint.sse          # one shared level cannot start all three
+    est = joint.per_record["y_past"]
+    np.testing.assert_allclose(est["values"], levels,
+                               atol=5 * max(est["standard_errors"]) + 1e-12)
