@@ -230,3 +230,14 @@ def test_records_that_start_from_other_levels_are_fitted_jointly():
     est = joint.per_record["y_past"]
     np.testing.assert_allclose(est["values"], levels,
                                atol=5 * max(est["standard_errors"]) + 1e-12)
+
+
+def test_the_bound_of_the_fitted_model_is_that_of_its_theta():
+    # crb of result.model (theta itself) is the bound of the theta a result estimates: the same
+    # numbers as of the rank-one model when theta is a Kronecker product (the paper's model)
+    d = fohw.datasets.paper_example(300, random_state=0)
+    m = d.model
+    t = fohw.ThetaHW(m.structure, m.linear, m.nonlinear)
+    a = fohw.crb(t, d.u, 0.01, noise="output")
+    b = fohw.crb(m, d.u, 0.01, noise="output")
+    np.testing.assert_allclose(a.covariance, b.covariance, rtol=1e-9)

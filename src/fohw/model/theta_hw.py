@@ -143,6 +143,26 @@ class ThetaHW(Model):
         return self.structure.layout
 
     @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the entries of :attr:`theta` (``a1``, ``q2a1``, ``b1``, ``p2b1``, …)."""
+        return self.layout.names
+
+    @property
+    def na(self) -> int:
+        """Largest output lag."""
+        return self.structure.na
+
+    @property
+    def nb(self) -> int:
+        """Number of input lags."""
+        return self.structure.nb
+
+    @property
+    def nk(self) -> int:
+        """Input delay: the smallest input lag."""
+        return self.structure.nk
+
+    @property
     def dt(self) -> float:
         """Sampling time."""
         return self.structure.dt
