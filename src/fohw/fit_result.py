@@ -319,6 +319,43 @@ class FitResult(metaclass=abc.ABCMeta):
     def __reduce__(self):
         return (_rebuild, (self.to_dict(),))
 
+    # --- the order test ----------------------------------------------------------------------
+    def order_test(self, data_or_u=None, y=None, **kwargs):
+        """The likelihood-ratio test of the free orders against orders 0: see :func:`fohw.order_test`.
+
+        The test refits the model with its free orders held at 0 (:func:`fohw.fit`) on the
+        data it was fitted to. A result keeps no data, and the fitting code sits above this
+        module (CONTRIBUTING.md's layers: results, then estimators, then analysis; an import
+        of either here would climb them), so this method runs no test: it raises, naming the
+        call that does, ``fohw.order_test(fit, data_or_u, y, validation=(u_val, y_val))``.
+
+        Raises
+        ------
+        ParameterError
+            Always: the message gives the call with the data.
+
+        Examples
+        --------
+        >>> import numpy as np, fohw
+        >>> G = fohw.FractionalTF([1.0], [0.5], [2.0, 1.0], [1.0, 0.0], dt=0.05)   # s^0.5 / (2 s + 1)
+        >>> G = G.with_parameters(G.parameters.replace("alpha0", fixed=True))     # beta0 free
+        >>> u = np.random.default_rng(0).standard_normal(200)
+        >>> y = G.simulate(u) + 0.01 * np.random.default_rng(1).standard_normal(200)
+        >>> fit = fohw.fit(G, u, y)
+        >>> t = fohw.order_test(fit, u, y)          # beta0 = 0 refitted, then fohw.lr_test
+        >>> t.hypothesis, t.distribution, t.pvalue < 1e-6
+        ('beta0 = 0', 'chi2_1', True)
+        >>> try:
+        ...     fit.order_test(u, y)
+        ... except fohw.ParameterError as exc:
+        ...     print(str(exc).split(": ")[-1])
+        fohw.order_test(fit, record) or fohw.order_test(fit, u, y),
+        with validation=(u_val, y_val) for the verdict.
+        """
+        from .lr_statistic import order_test
+
+        return order_test(self)             # a FitResult: refused, naming fohw.order_test
+
 
 def _rebuild(d):
     return FitResult.from_dict(d)

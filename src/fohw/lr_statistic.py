@@ -347,13 +347,28 @@ def order_test(full):
     residuals, so the test is not corrected for their correlation here (``pvalue_corrected``
     NaN): ``fohw.order_test(result, u, y)`` refits the integer class and gives it, and the verdict.
 
+    A :class:`fohw.FitResult` of another kind keeps no fit at orders 0: the test refits one
+    (:func:`fohw.order_test` with the data), so it is refused here, naming that call.
+
     Returns
     -------
     LRTest or None
         None when ``full`` has no ``details["integer_sse"]`` (another method, a given start,
         no free order, a bound of an order above 0, or a series output map, whose fit starts
-        from the fit without the map instead: use :func:`lr_test` with both fits).
+        from the fit without the map instead: ``fohw.order_test(result, u, y)`` refits it).
+
+    Raises
+    ------
+    ParameterError
+        ``full`` is not a lagged IdentificationResult of a least-squares method (a FitResult:
+        the message gives the call with the data).
     """
+    if hasattr(full, "model") and hasattr(full, "parameters") and not hasattr(full, "structure"):
+        raise ParameterError(
+            f"the order test of a {type(full.model).__name__} fit refits its model with the free "
+            "orders held at 0 on the data it was fitted to (a result keeps no data, and the "
+            "fitting code sits above the result): fohw.order_test(fit, record) or "
+            "fohw.order_test(fit, u, y), with validation=(u_val, y_val) for the verdict.")
     full = check_result(full, "full")
     if "integer_sse" not in full.details or not full.orders:
         return None

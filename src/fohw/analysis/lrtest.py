@@ -47,6 +47,11 @@ The F form ``((RSS_r - RSS_f) / q) / (RSS_f / (n - d))`` is exact only for linea
 chi2 references; the boundary and Davies references are derived for the likelihood ratio, so
 fohw uses ``n log``. For ``n`` in the hundreds and ``d`` parameters the two differ by about
 ``d / n`` relatively (see ``docs/order_test.md`` for the measured null rejection rates).
+
+:func:`order_test` makes the restricted fit and calls :func:`lr_test`, for every kind: a
+:class:`fohw.FitResult`'s model with its free orders (``Parameter(order=True)``) held at 0,
+refitted by :func:`fohw.fit` with the fit's settings (:func:`fit_at_orders_zero`); a lagged
+fit's integer class, refitted by its own method.
 """
 
 from __future__ import annotations
@@ -78,6 +83,7 @@ from ..lr_statistic import (
 )
 from ..lr_statistic import order_test as order_test_without_record
 from ..model.simulation import record_list
+from ..record import Record
 from .order_verdict import LEVEL, MARGIN, check_level_margin, validation_fits, verdict
 from .profile_interval import (
     check_data,
@@ -88,7 +94,9 @@ from .profile_interval import (
     refit,
 )
 
-__all__ = ["LRTest", "lr_test", "order_test", "davies_bound", "chi_bar_squared_sf",
+__all__ = ["LRTest", "lr_test", "order_test", "orders_zero", "fit_at_orders_zero", "fit_options",
+           "davies_bound",
+           "chi_bar_squared_sf",
            "cancelled_orders", "REFERENCES", "CORRECTIONS", "score_direction"]
 
 #: ``reference=`` spellings.
@@ -327,13 +335,15 @@ def _check_correction(correction):
 
 
 def _with_verdict(test, restricted, full, validation, level, margin):
-    """``test`` with its held-back fits (``validation=(u, y)``) and its verdict."""
+    """``test`` with its held-back fits (``validation=(u, y)`` or a Record) and its verdict."""
     fits = ()
     if validation is not None:
         try:
-            u_val, y_val = validation
+            u_val, y_val = ((validation.u, validation.y) if isinstance(validation, Record)
+                            else validation)
         except (TypeError, ValueError):
-            raise ParameterError(f"`validation` must be the held-back record (u, y); got "
+            raise ParameterError(f"`validation` must be the held-back record (u, y) or a "
+                                 f"fohw.Record; got "
                                  f"{type(validation).__name__}.") from None
         fits = validation_fits(restricted, full, u_val, y_val)
     text = verdict(test.pvalue_corrected, *(fits or (math.nan, math.nan)), level=level,
@@ -396,7 +406,7 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         measures their size and power). It needs both fits' residuals: a FitResult keeps
         them; for the lagged kind pass ``u``, ``y``. None (NaN) with ``reference="bootstrap"``
         (its records have white noise).
-    validation : (u, y), optional
+    validation : (u, y) or Record, optional
         A held-back record neither fit saw: both fits are simulated free on it and the test
         is read beside their fit % (:mod:`fohw.analysis.order_verdict`) into ``verdict``.
     level, margin : float
@@ -656,7 +666,7 @@ def _lr_fits(restricted, full, reference, u, y, n_effective, correction):
     if u is not None:
         with warnings.catch_warnings():       # its status is the user's `full`'s business
             warnings.simplefilter("ignore", ConvergenceWarning)
-            again = fit(full.model, u, y, start=restricted.model, **dict(full.options))
+            again = fit(full.model, u, y, start=restricted.model, **fit_options(full, u))
         if again.sse < rss_f * (1 - 1e-6):
             notes.append(f"`full` refitted from its estimate and the restricted one: SSE "
                          f"{rss_f:.6g} -> {again.sse:.6g}.")
@@ -699,31 +709,135 @@ def _lr_fits(restricted, full, reference, u, y, n_effective, correction):
 
 
 
-def order_test(full, u=None, y=None, *, correction="sandwich", validation=None, level=LEVEL,
-               margin=MARGIN):
-    """The test of a lagged fit's free orders against orders 0, and its verdict.
+def orders_zero(full):
+    """``full``'s model with its free orders held fixed at 0, and their names.
 
-    Without the record: :func:`fohw.lr_statistic.order_test` (the integer fit the
-    ``"output_error"`` chain kept, no refit; white-noise statistic only, since no residuals are
-    kept). With the estimation record ``u, y``: the integer class (``full``'s structure with
-    every order 0) is fitted by the same method on it, and :func:`lr_test` reports the
-    white-noise and the corrected test (``correction``) and, with a held-back ``validation=(u,
-    y)``, the verdict (:mod:`fohw.analysis.order_verdict`).
+    The orders are the free parameters marked ``Parameter(order=True)``; each must have 0
+    within its bounds (the null inside the full class). Raises a ParameterError naming the
+    fit's parameters when none is free, and the order and its bounds when 0 is outside them.
+    """
+    params = full.parameters
+    orders = tuple(n for n in params.free_names if params[n].order)
+    kind = type(full.model).__name__
+    if not orders:
+        listed = ", ".join(f"{n} ({'order, ' if p.order else ''}"
+                           f"{'fixed' if p.fixed else 'tied' if p.tie else 'free'})"
+                           for n, p in params.items())
+        raise ParameterError(f"`full` (a {kind} fit) has no free order (a free parameter marked "
+                             f"Parameter(order=True)): nothing to test against orders 0. Its "
+                             f"parameters: {listed}.")
+    for name in orders:
+        lo, hi = params[name].bounds
+        if not lo <= 0.0 <= hi:
+            raise ParameterError(f"`full`'s order {name} is bounded to ({lo:g}, {hi:g}), so orders 0 "
+                                 f"are outside its bounds: the null is not in the {kind}'s class "
+                                 "(refit it with bounds that hold 0, where the kind allows them; "
+                                 "or test another value with fohw.lr_test).")
+    for name in orders:
+        params = params.replace(name, value=0.0, fixed=True)
+    try:
+        model = full.model.with_parameters(params)
+    except ParameterError as exc:
+        raise ParameterError(f"the {kind} refuses its orders {list(orders)} held at 0: "
+                             f"{exc}") from None
+    return model, orders
+
+
+def fit_at_orders_zero(full, data_or_u, y=None):
+    """:func:`fohw.fit` of ``full``'s model with its free orders held at 0, on ``full``'s data.
+
+    The same settings as ``full`` (its ``options``: ``order_grid``, ``n_starts``, ``max_nfev``,
+    ``tol``, ``sample_weight``, ``per_record``, ``warmup``, ``refine``), started from the
+    kind's starts and from ``full``'s estimate with the orders put to 0 (``start=``), so it
+    never ends above that nested model's simulation error. Its ConvergenceWarning is not
+    raised (the test's note reports a restricted fit that did not converge); a
+    RankDeficiencyWarning is (orders 0 that leave parameters unidentified: the order is then
+    not identified under the null, and the chi2 reference does not hold).
+    """
+    model, orders = orders_zero(full)
+    per = [n for n in full.options.get("per_record") or () if n in orders]
+    if per:
+        raise ParameterError(f"`full` estimates the order(s) {per} once per record: holding them "
+                             "at 0 fixes one value per record, which the test's degrees of "
+                             "freedom do not count; fit the order shared (per_record without it).")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return fit(model, data_or_u, y, start=model, **fit_options(full, data_or_u))
+
+
+def fit_options(full, data_or_u):
+    """``full.options`` as :func:`fohw.fit` takes them again for the same data.
+
+    The fit keeps its ``sample_weight`` as one array over the records it was given; for a list
+    of Records it is split back into one array per record.
+    """
+    options = dict(full.options)
+    records = record_list(data_or_u)
+    weight = options.get("sample_weight")
+    if records is not None and len(records) > 1 and weight is not None:
+        weight = np.asarray(weight, dtype=float)
+        bounds = np.cumsum([0] + [r.n_samples for r in records])
+        options["sample_weight"] = [weight[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    return options
+
+
+def _restricted_note(test, restricted):
+    """``test`` with a note when the fit at orders 0 did not converge."""
+    if restricted.status.name == "CONVERGED":
+        return test
+    text = (f"The fit at orders 0 ended {restricted.status.name}: {restricted.message}"
+            + (" Orders 0 leave parameters unidentified: an order not identified under the null "
+               "(Davies 1977), for which the chi2 reference does not hold."
+               if restricted.status.name == "RANK_DEFICIENT" else ""))
+    return dataclasses.replace(test, note=" ".join(t for t in (test.note, text) if t))
+
+
+def order_test(full, data_or_u=None, y=None, *, correction="sandwich", validation=None,
+               level=LEVEL, margin=MARGIN):
+    """The test of a fit's free orders against orders 0, and its verdict, for every kind.
+
+    The restricted fit is ``full``'s model with every free order (``Parameter(order=True)``)
+    held at 0, fitted to the same data with the same settings; :func:`lr_test` of it against
+    ``full`` gives the statistic ``n log(SSE_restricted / SSE_full)``, its p-value (the
+    chi-bar-squared mixture for orders on their lower bound 0, chi2 for 0 inside the bounds),
+    the statistic corrected for correlated residuals (``correction``) and, with a held-back
+    ``validation=(u, y)``, the verdict (:mod:`fohw.analysis.order_verdict`).
+
+    - A :class:`fohw.FitResult` (any kind, :func:`fohw.fit`): the restricted fit is
+      :func:`fohw.fit` of the model at orders 0 with ``full``'s options, started from the
+      kind's starts and from ``full``'s estimate with the orders put to 0; ``full`` is refitted
+      from the restricted estimate too (:func:`lr_test`), so neither ends above what it should.
+    - A lagged :class:`fohw.IdentificationResult` (:func:`fohw.identify`): its own method
+      refits the integer class (``full``'s structure with every order 0, its output map kept).
+      Without the record: :func:`fohw.lr_statistic.order_test` (the integer fit the
+      ``"output_error"`` chain kept, no refit; white-noise statistic only).
 
     Parameters
     ----------
-    full : IdentificationResult
-        A ``"varpro"``, ``"structured"`` or ``"output_error"`` fit with free orders bounded
-        below by 0 (with the record; without it, an ``"output_error"`` chain's fit).
-    u, y : array_like, optional
-        The record ``full`` was fitted to.
+    full : FitResult or IdentificationResult
+        A fit with free orders whose bounds hold 0 (an order bounded away from 0, e.g. a
+        ZARC's in (0, 1], is refused: the null is outside the bounds).
+    data_or_u : Record, list of Record or array_like
+        The data ``full`` was fitted to (checked against its fingerprint, or for the lagged
+        kind its criterion): a :class:`fohw.Record`, a list of Records, or the input ``u``
+        with ``y``. Optional for the lagged kind only.
+    y : array_like, optional
+        The measured output, with an array ``u``.
     correction, validation, level, margin
         As for :func:`lr_test`.
 
     Returns
     -------
-    LRTest or None
-        None without the record when ``full`` kept no integer fit.
+    LRTest
+        Its ``hypothesis`` names the orders held at 0 for a FitResult; its ``note`` says when
+        the fit at orders 0 did not converge. None for a lagged fit without the record that
+        kept no integer fit.
+
+    Raises
+    ------
+    ParameterError
+        No free order (the message names the fit's parameters), an order whose bounds do not
+        hold 0, data that are not ``full``'s, or a ``validation`` without the data.
 
     Examples
     --------
@@ -737,17 +851,25 @@ def order_test(full, u=None, y=None, *, correction="sandwich", validation=None, 
     >>> t.correction.split(":")[0], t.verdict in VERDICTS
     ('sandwich', True)
     """
-    if u is None and y is None:
+    if data_or_u is None and y is None:
         if validation is not None:
             raise ParameterError("`validation` needs the estimation record too: "
                                  "fohw.order_test(full, u, y, validation=(u_val, y_val)).")
-        return order_test_without_record(full)
+        return order_test_without_record(full)      # a FitResult: refused, naming the call
+    if is_fit(full):
+        orders_zero(full)                    # refuse before the data are read
+        check_fit_record(full, data_or_u, y, "full")
+        restricted = fit_at_orders_zero(full, data_or_u, y)
+        test = lr_test(restricted, full, u=data_or_u, y=y, correction=correction,
+                       validation=validation, level=level, margin=margin)
+        return _restricted_note(test, restricted)
+    # The lagged kind: its own method refits the integer class (same method).
     full = check_result(full, "full")
-    u, y = check_data(full, u, y, "full")
+    data_or_u, y = check_data(full, data_or_u, y, "full")
     if not full.structure.orders.free:
-        raise ParameterError(f"`full` has no free order ({full.structure.describe()}): nothing "
-                             "to test.")
+        raise ParameterError(f"`full` has no free order ({full.structure.describe()}): "
+                             "nothing to test.")
     null, _, _ = null_orders(full.structure.orders)
-    restricted = refit(full, u, y, orders=null)
-    return lr_test(restricted, full, u=u, y=y, correction=correction, validation=validation,
-                   level=level, margin=margin)
+    restricted = refit(full, data_or_u, y, orders=null)
+    return lr_test(restricted, full, u=data_or_u, y=y, correction=correction,
+                   validation=validation, level=level, margin=margin)

@@ -66,6 +66,19 @@ def check_data(result, u, y, name):
     if u.shape[0] != result.n_samples:
         raise ParameterError(f"`u` and `y` have {u.shape[0]} samples, but `{name}` was fitted to "
                              f"{result.n_samples}: pass the record it was fitted to.")
+    if result.structure.output_map is not None and "simulation_sse" in result.details:
+        # A series map's J is of the inner one-step prediction (predict applies the map): the
+        # free-run criterion, which the fit minimised, identifies its record instead.
+        n_init = int(result.options.get("n_init", 0))
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")           # the fit's own record: no extrapolation
+            e = (y - np.asarray(result.simulate(u, initial="fitted"), dtype=float))[n_init:]
+        sse, fitted = float(e @ e), float(result.details["simulation_sse"])
+        if not np.isclose(sse, fitted, rtol=1e-6, atol=1e-300):
+            raise ParameterError(f"`u` and `y` are not the record `{name}` was fitted to: its "
+                                 f"free-run error sum of squares on them is {sse:.6g}, not its "
+                                 f"{fitted:.6g}.")
+        return u, y
     J = float(np.mean((y - result.predict(u, y)) ** 2))
     if not np.isclose(J, result.J, rtol=1e-6, atol=1e-300):
         raise ParameterError(f"`u` and `y` are not the record `{name}` was fitted to: its mean "
@@ -213,7 +226,7 @@ def refit(result, u, y, *, orders=None, start=None):
     """Fit ``result``'s model class again on ``u, y`` (its method, options, bounds).
 
     Optionally with other ``orders`` and, for ``"output_error"``, a ``start`` pair
-    ``(linear, nonlinear)``.
+    ``(linear, nonlinear)``. A series output map is kept (its resolved form).
     """
     s = result.structure
     orders = s.orders if orders is None else orders
@@ -234,7 +247,7 @@ def refit(result, u, y, *, orders=None, start=None):
         return identify(u, y, na=s.na, nb=s.nb, f_basis=s.f_basis, g_basis=s.g_basis,
                         method=result.method, orders=orders, offset=s.offset,
                         operating_point=result.operating_point, past=s.past, dt=s.dt,
-                        alpha_bounds=bounds, options=options, nk=s.nk)
+                        alpha_bounds=bounds, output_map=s.output_map, options=options, nk=s.nk)
 
 
 
