@@ -247,7 +247,7 @@ class ThetaHW(Model):
         denom = 1.0 - a0
         if denom == 0.0:
             return float("nan")
-        return y0 + (self.offset + b0) / denom
+        return float(y0 + (self.offset + b0) / denom)
 
     # --- the Model protocol ------------------------------------------------------------------
     @property
