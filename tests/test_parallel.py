@@ -137,16 +137,47 @@ def test_a_cancelled_task_says_what_happened():
     assert "client closed" in out[0].message
 
 
-def slow_square(i):
-    time.sleep(0.4)
+def square_once_released(i, release):
+    """``i * i`` once the file ``release`` exists (task 0 at once); None if it never comes.
+
+    (The 600 s bound only turns a hang into a failure: nothing in the test waits for it.)
+    """
+    give_up = time.monotonic() + 600
+    while i and not os.path.exists(release):
+        if time.monotonic() > give_up:
+            return None
+        time.sleep(0.01)
     return i * i
 
 
+class ClosesItsClientAfterOneTask(Executor):
+    """A dask client's executor that closes the client as soon as the first task is done.
+
+    Tied to an event, not to a wall-clock delay, so that the client closes mid-run however
+    loaded the machine is. (The close runs in a thread of its own: the done callbacks run in
+    the client's event loop, which ``close`` waits for.)
+    """
+
+    def __init__(self, client):
+        self.client, self.inner, self.closing = client, client.get_executor(), None
+
+    def submit(self, fn, /, *args, **kwargs):
+        future = self.inner.submit(fn, *args, **kwargs)
+        future.add_done_callback(self._close_once)
+        return future
+
+    def _close_once(self, future):
+        if self.closing is None:
+            self.closing = threading.Thread(target=self.client.close)
+            self.closing.start()
+
+
 @pytest.mark.slow
-def test_dask_killed_worker_and_closed_client_say_so():
-    distributed = pytest.importorskip("distributed")
+def test_dask_killed_worker_and_closed_client_say_so(dask_cluster_options, tmp_path):
+    import distributed
+
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  **dask_cluster_options) as cluster:
         with distributed.Client(cluster) as client:
             out = run_tasks(die_in_a_worker, [(i, os.getpid()) for i in range(4)],
                             executor=client.get_executor())
@@ -156,10 +187,17 @@ def test_dask_killed_worker_and_closed_client_say_so():
         assert all(o == i * i if not isinstance(o, TaskError)
                    else "dask workers that ran it died" in o.message for i, o in enumerate(out))
         assert any(not isinstance(o, TaskError) for o in out)
-        client = distributed.Client(cluster)
-        threading.Timer(1.0, client.close).start()       # 10 x 0.4 s on 2 workers: 2 s
-        out = run_tasks(slow_square, [(i,) for i in range(10)],
-                        executor=client.get_executor())
+        # task 0 returns at once and closes the client; the other nine wait for a file that is
+        # written only once the client has closed, so they cannot end before it closes
+        release = tmp_path / "client closed"
+        executor = ClosesItsClientAfterOneTask(distributed.Client(cluster))
+        try:
+            out = run_tasks(square_once_released, [(i, str(release)) for i in range(10)],
+                            executor=executor)
+            executor.closing.join()
+        finally:
+            release.touch()                  # the workers' tasks end; the cluster closes
+    assert out[0] == 0
     lost = [o for o in out if isinstance(o, TaskError)]
     assert lost and all("client closed" in o.message for o in lost)
     assert all(o == i * i for i, o in enumerate(out) if not isinstance(o, TaskError))
