@@ -1,11 +1,17 @@
 import copy
 import importlib.util
+import signal
 import sys
 from pathlib import Path
 
 import pytest
 
-import fohw
+# The SIGINT handler this process inherited (a shell starts a background job, `nohup` and many
+# CI runners with SIGINT ignored), read before fohw is imported: importing fohw as a library
+# must leave it as it was (tests/test_cli.py). None if something imported fohw before us.
+SIGINT_BEFORE_FOHW = None if "fohw" in sys.modules else signal.getsignal(signal.SIGINT)
+
+import fohw  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # The literal reference implementations in tests/reference.py (``import reference``).
@@ -18,6 +24,15 @@ import dask_service  # noqa: E402
 def robot_arm_path():
     """The DaISy robot-arm file shipped inside the package (no skip: it is always there)."""
     return Path(fohw.datasets.robot_arm().path)
+
+
+@pytest.fixture(scope="session")
+def sigint_before_fohw():
+    """The SIGINT handler the test process had before it imported fohw."""
+    if SIGINT_BEFORE_FOHW is None:
+        pytest.fail("fohw was imported before tests/conftest.py: the SIGINT handler the process "
+                    "inherited is not known")
+    return SIGINT_BEFORE_FOHW
 
 
 @pytest.fixture(scope="session")
