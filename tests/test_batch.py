@@ -37,10 +37,11 @@ def pools():
 
 
 @pytest.fixture(scope="module")
-def dask_client():
-    distributed = pytest.importorskip("distributed")
+def dask_client(dask_cluster_options):
+    import distributed
+
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
+                                  **dask_cluster_options) as cluster, \
             distributed.Client(cluster) as client:
         yield client
 

@@ -1,6 +1,10 @@
+import functools
 import json
+import os
+import signal
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
@@ -127,30 +131,52 @@ def _run(args, **kwargs):
                           text=True, **kwargs)
 
 
-def _interrupt_while_importing(command, delays=(0.25, 0.1, 0.5, 0.35, 0.18, 0.7)):
-    """Send SIGINT to ``command`` while it is still importing; return (status, stderr).
+def _child_env():
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
 
-    A signal that arrives before the interpreter runs any Python code (before ``import fohw``
-    began) kills it silently with -SIGINT: that is not fohw's window, so the next delay is
-    tried. (fohw's own bug, the signal during its import, left a KeyboardInterrupt traceback.)
+
+def _with_sigint(disposition):
+    """A ``preexec_fn`` that gives the child ``disposition`` for SIGINT, whatever this process has.
+
+    A child inherits an ignored SIGINT (a shell starts a background job, ``nohup`` and many CI
+    runners that way); a handler of Python's is reset to the default at ``exec``.
     """
-    import os
-    import signal
-    import time
+    return functools.partial(signal.signal, signal.SIGINT, disposition)
 
-    for delay in delays:
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
-        proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True, env=env)
-        time.sleep(delay)
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
-        if proc.returncode == -signal.SIGINT and not err:
-            continue                             # before any Python code ran: too early
+
+def _interrupt_while_importing(command, attempts=3):
+    """Send SIGINT to ``command`` while fohw is still importing; return (status, stderr).
+
+    The child gets SIGINT at its default, as from a terminal, and runs with ``-X importtime``:
+    Python writes a line to stderr as each module has been imported, and the signal goes out at
+    the line of ``fohw._startup`` (the guard is in place, the rest of fohw, a few hundred
+    milliseconds of work, is not yet imported) -- an event, not a delay, so a loaded machine
+    cannot make it early or late. Those lines are taken out of the stderr returned.
+    (fohw's own bug, the signal during its import, left a KeyboardInterrupt traceback.)
+    """
+    for _ in range(attempts):
+        proc = subprocess.Popen([command[0], "-X", "importtime", *command[1:]],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                env=_child_env(), preexec_fn=_with_sigint(signal.SIG_DFL))
+        watchdog = threading.Timer(300, proc.kill)          # a hang fails, never blocks the run
+        watchdog.start()
+        try:
+            lines, sent = [], False
+            for line in proc.stderr:
+                lines.append(line)
+                if not sent and line.startswith("import time:") \
+                        and line.rsplit("|", 1)[-1].strip() == "fohw._startup":
+                    proc.send_signal(signal.SIGINT)
+                    sent = True
+            proc.wait()
+        finally:
+            watchdog.cancel()
+            proc.stderr.close()
+        err = "".join(line for line in lines if not line.startswith("import time:"))
+        assert sent, f"no import of fohw._startup in the child's -X importtime lines:\n{err}"
         if proc.returncode != 0:                 # interrupted (fohw --version exits 0)
             return proc.returncode, err
-    pytest.skip("the process finished before it could be interrupted")
+    pytest.fail(f"{command}: the process finished {attempts} times before the signal reached it")
 
 
 @pytest.mark.parametrize("how", ["-m", "script"])
@@ -169,7 +195,7 @@ def test_ctrl_c_while_importing_is_one_line_and_130(tmp_path, how):
     assert "Traceback" not in err
 
 
-def test_the_startup_guard_is_for_the_command_only():
+def test_the_startup_guard_is_for_the_command_only(sigint_before_fohw):
     from fohw._startup import is_fohw_command
 
     assert is_fohw_command(["python", "-m", "fohw", "select"], "-m")
@@ -178,9 +204,18 @@ def test_the_startup_guard_is_for_the_command_only():
     assert not is_fohw_command(["python", "script.py"], "script.py")
     assert not is_fohw_command(["python", "-c", "import fohw"], "-c")
     assert not is_fohw_command(["python", "-m", "pytest"], "-m")
-    import signal
-
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler     # here: untouched
+    # Imported as a library, fohw leaves SIGINT as the process inherited it: here (a runner
+    # started as a background job inherits it ignored, from a terminal at Python's default) ...
+    assert signal.getsignal(signal.SIGINT) is sigint_before_fohw
+    # ... and in a fresh interpreter given either disposition
+    code = ("import signal; before = signal.getsignal(signal.SIGINT); import fohw; "
+            "print(before is signal.default_int_handler, before is signal.SIG_IGN, "
+            "signal.getsignal(signal.SIGINT) is before)")
+    for disposition, expected in ((signal.SIG_DFL, "True False True"),
+                                  (signal.SIG_IGN, "False True True")):
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              env=_child_env(), preexec_fn=_with_sigint(disposition))
+        assert (proc.returncode, proc.stdout.strip(), proc.stderr) == (0, expected, ""), disposition
 
 
 @pytest.fixture(scope="module")

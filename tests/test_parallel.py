@@ -137,29 +137,79 @@ def test_a_cancelled_task_says_what_happened():
     assert "client closed" in out[0].message
 
 
-def slow_square(i):
-    time.sleep(0.4)
+def square_once_released(i, release):
+    """``i * i`` once the file ``release`` exists (task 0 at once); None if it never comes.
+
+    (The 300 s bound only turns a hang into a failure: nothing in the test waits for it.)
+    """
+    give_up = time.monotonic() + 300
+    while i and not os.path.exists(release):
+        if time.monotonic() > give_up:
+            return None
+        time.sleep(0.01)
     return i * i
 
 
+class ClosesItsClientAfterOneTask(Executor):
+    """A dask client's executor that closes the client once ``n_tasks`` are submitted and one is done.
+
+    Tied to events, not to a wall-clock delay, so that the client closes mid-run however loaded
+    the machine is. Not before the last submission: a task submitted to a closing client is
+    never cancelled, and its future never ends. (The close runs in a thread of its own: the done
+    callbacks run in the client's event loop, which ``close`` waits for.)
+    """
+
+    def __init__(self, client, n_tasks):
+        self.client, self.inner, self.closing = client, client.get_executor(), None
+        self.to_submit, self.done, self.lock = n_tasks, False, threading.Lock()
+
+    def submit(self, fn, /, *args, **kwargs):
+        future = self.inner.submit(fn, *args, **kwargs)
+        with self.lock:
+            self.to_submit -= 1
+        future.add_done_callback(self._one_done)
+        self._close_when_ready()
+        return future
+
+    def _one_done(self, future):
+        self.done = True
+        self._close_when_ready()
+
+    def _close_when_ready(self):
+        with self.lock:
+            if self.closing is None and self.done and self.to_submit == 0:
+                self.closing = threading.Thread(target=self.client.close)
+                self.closing.start()
+
+
 @pytest.mark.slow
-def test_dask_killed_worker_and_closed_client_say_so():
-    distributed = pytest.importorskip("distributed")
+def test_dask_killed_worker_and_closed_client_say_so(dask_cluster_options, tmp_path):
+    import distributed
+
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  **dask_cluster_options) as cluster:
         with distributed.Client(cluster) as client:
             out = run_tasks(die_in_a_worker, [(i, os.getpid()) for i in range(4)],
                             executor=client.get_executor())
         # dask counts a worker's death against every task queued on it, so under load a
         # healthy task can be given up too: then its row must say so, never be wrong or blank
-        assert "dask workers that ran it died" in out[2].message
+        rows = [o.message if isinstance(o, TaskError) else o for o in out]
+        assert "dask workers that ran it died" in out[2].message, rows
         assert all(o == i * i if not isinstance(o, TaskError)
-                   else "dask workers that ran it died" in o.message for i, o in enumerate(out))
-        assert any(not isinstance(o, TaskError) for o in out)
-        client = distributed.Client(cluster)
-        threading.Timer(1.0, client.close).start()       # 10 x 0.4 s on 2 workers: 2 s
-        out = run_tasks(slow_square, [(i,) for i in range(10)],
-                        executor=client.get_executor())
+                   else "dask workers that ran it died" in o.message
+                   for i, o in enumerate(out)), rows
+        assert any(not isinstance(o, TaskError) for o in out), rows
+        # once all ten are submitted and task 0 (at once) has returned, the client closes; the
+        # other nine wait for a file written only after that, so they cannot end before it
+        release = tmp_path / "client closed"
+        executor = ClosesItsClientAfterOneTask(distributed.Client(cluster), 10)
+        try:
+            out = run_tasks(square_once_released, [(i, str(release)) for i in range(10)],
+                            executor=executor)
+            executor.closing.join()
+        finally:
+            release.touch()                  # the workers' tasks end; the cluster closes
+    assert out[0] == 0
     lost = [o for o in out if isinstance(o, TaskError)]
     assert lost and all("client closed" in o.message for o in lost)
     assert all(o == i * i for i, o in enumerate(out) if not isinstance(o, TaskError))

@@ -206,18 +206,19 @@ def test_unpicklable_candidate_fails_alone_on_a_process_pool(paper):
     assert sel.rows[1]["status"] == "failed" and "executor" in sel.rows[1]["reason"]
 
 
-def test_dask_executor_gives_the_same_table_on_the_tanks():
+def test_dask_executor_gives_the_same_table_on_the_tanks(dask_cluster_options):
     # select_structure on the cascaded-tanks estimation record, serially and on a 2-worker
     # dask LocalCluster started here: the same table (the timing is in
     # benchmarks/bench_distributed.py, not in a test).
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     est = fohw.datasets.cascaded_tanks().estimation
     cands = [dict(na=n, nb=n) for n in (1, 2)]
     kw = dict(validation=256, f_basis=2, g_basis=1, orders=0, offset=True,
               operating_point="mean", dt=4.0)
     serial = fohw.select_structure(est, cands, **kw)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  **dask_cluster_options) as cluster, \
             distributed.Client(cluster) as client:
         parallel = fohw.select_structure(est, cands, executor=client.get_executor(), **kw)
     drop = ("seconds",)
