@@ -128,7 +128,7 @@ def test_the_information_matrix_reproduces_the_record():
     s, u, _ = record(400)
     v = 0.05 * np.random.default_rng(8).standard_normal(400)
     y = fohw.simulate(s, u, params=TRUE, noise=v)
-    b = fohw.RegressorBuilder(u, y, structure=s)
+    b = fohw.model.regressors.RegressorBuilder(u, y, structure=s)
     np.testing.assert_allclose(y - b.matrix(TRUE[-2:]) @ TRUE[:-2], v, rtol=0, atol=1e-12)
 
 
