@@ -202,7 +202,7 @@ HOOKS = {
     "fractional_tf": {"jacobian", "linear_start", "frequency_response"},
     "hammerstein_wiener": {"jacobian", "frequency_response"},
     "theta_hw": {"jacobian", "linear_start", "frequency_response"},
-    "equivalent_circuit": {"jacobian"},
+    "equivalent_circuit": {"jacobian", "frequency_response"},
     "circuit_tables": {"jacobian"},
 }
 OPTIONAL = {"jacobian", "linear_start", "frequency_response", "penalty"}
@@ -213,11 +213,14 @@ def test_every_kind_passes_check_model(factory):
     true, start, u, _, _ = factory()
     checks = [c for c in fohw.testing.CHECKS
               if not (isinstance(true, fohw.HammersteinWiener)
-                      and c == "save_load_settings")]     # see the xfail below
+                      and c == "save_load_settings")      # see the xfail below
+              # tables over SOC and temperature have an impedance at an operating point only
+              # (frequency_response(omega, soc=, temperature=): tests/test_frequency_hook.py)
+              and not (isinstance(true, fohw.CircuitTables) and c == "frequency_response")]
     for model in (true, start):
         report = fohw.testing.check_model(model, u=u, checks=checks)
         assert {c for c, outcome in report.items() if outcome != "passed"} \
-            == OPTIONAL - HOOKS[factory.__name__], report
+            == (OPTIONAL - HOOKS[factory.__name__]) & set(report), report
 
 
 @pytest.mark.xfail(strict=True, raises=fohw.testing.ModelCheckError,

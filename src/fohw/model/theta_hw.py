@@ -318,9 +318,12 @@ class ThetaHW(Model):
         return self.with_parameters(dict(zip(s.linear_names, linear.tolist())))
 
     def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
-        """Refused: the lagged model is discrete in samples (:meth:`HammersteinWiener.simulate_at`)."""
-        return HammersteinWiener.simulate_at(self, u, t, intersample=intersample, refine=refine,
-                                             step=step)
+        """Refused: the lagged model is discrete in samples (its lags are samples, not seconds)."""
+        raise ParameterError(
+            "a ThetaHW (the lagged kind) is discrete in samples: it has no meaning between its "
+            "samples, so it cannot be simulated at non-uniform instants `t`. resample the record "
+            "to a uniform grid (fohw.model.irregular.resample), or use a continuous-time kind "
+            "(fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")
 
     def frequency_response(self, omega):
         """The linear block's ``H(e^{j omega dt})`` (:mod:`fohw.model.hw_frequency`).
