@@ -20,8 +20,9 @@ kernels' time per call at that N (measured once each), plus the fit's time outsi
 kernels. The same estimate is printed at N = 16 495, where it can be checked against the
 measured direct fit. Prints medians of CPU time (``time.process_time``) over ``--repeats``.
 
-``--part spectrum``: ``fohw.fit_impedance`` of four circuits to the cell's measured spectra at SOC
-0.4, 0.5 and 0.6 (1e-3 to 0.33 Hz, with the OCV's capacitor), and ``fohw.fit_record_and_impedance`` of a ZARC
+``--part spectrum``: ``fit_impedance`` (``fohw.estimators.impedance_fit``) of four circuits to the
+cell's measured spectra at SOC 0.4, 0.5 and 0.6 (1e-3 to 0.33 Hz, with the OCV's capacitor), and
+``fit_record_and_impedance`` of a ZARC
 and of two RC elements to the drive cycle's estimation half (h = 1.5 s, tau <= 20 000 s) with
 the SOC 0.6 spectrum, against the record alone: RMS relative impedance errors, validation RMSE
 (free run of the second half), CPU times. The numbers of docs/battery.md's "Conventions and the
@@ -55,6 +56,7 @@ import numpy as np
 
 import fohw
 import fohw.model.circuit as circuit_module
+from fohw.estimators.impedance_fit import fit_impedance, fit_record_and_impedance
 from fohw.model import kernels
 
 # ruff: noqa: B023   (the timed closures run inside their loop iteration)
@@ -254,7 +256,7 @@ def run_spectrum():
                                     ocv_slope=slope(soc))
         return 100 * float(np.sqrt(np.mean(rel ** 2)))
 
-    print(f"\nfohw.fit_impedance to the measured spectra ({int(band.sum())} frequencies, 1e-3 to "
+    print(f"\nfit_impedance to the measured spectra ({int(band.sum())} frequencies, 1e-3 to "
           "0.33 Hz), RMS relative error (%) at SOC 0.4 / 0.5 / 0.6, CPU s per fit")
     for elements in (["zarc"], ["rc", "rc"], ["rc", "zarc"], ["rc", "rc", "rc"]):
         model = fohw.EquivalentCircuit(elements, dt=1.5, tau_bounds=(1.5, 20000.0))
@@ -263,8 +265,8 @@ def run_spectrum():
             t0 = time.process_time()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                fit = fohw.fit_impedance(model, f[band], z_at(soc), capacity=cell.capacity,
-                                         ocv_slope=slope(soc))
+                fit = fit_impedance(model, f[band], z_at(soc), capacity=cell.capacity,
+                                    ocv_slope=slope(soc))
             seconds.append(time.process_time() - t0)
             errors.append(error(fit, soc))
             alphas += [f"{fit.parameters[n].value:.3f}" for n in fit.parameters if n[:5] == "alpha"]
@@ -284,8 +286,8 @@ def run_spectrum():
             t0 = time.process_time()
             alone = fohw.fit(model, u[est], d.v[est], order_grid=1)
             t1 = time.process_time()
-            joint = fohw.fit_record_and_impedance(model, u[est], d.v[est], f[band], z_at(0.6),
-                                   capacity=cell.capacity, ocv_slope=slope(0.6))
+            joint = fit_record_and_impedance(model, u[est], d.v[est], f[band], z_at(0.6),
+                                             capacity=cell.capacity, ocv_slope=slope(0.6))
             t2 = time.process_time()
         for name, fit, sec in (("record alone", alone, t1 - t0), ("joint", joint, t2 - t1)):
             e = fit.simulate(u)[val] - d.v[val]

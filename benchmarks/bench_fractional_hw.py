@@ -46,8 +46,8 @@ def run():
 
 NEW = COMMON + r"""
 G = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [0.6, 0.0])
-hmap, params = {"identity": (None, None), "polynomial": (fohw.PolynomialMap(2), [-0.2]),
-                "saturation": (fohw.Saturation(), [0.1, 0.45])}[kind]
+hmap, params = {"identity": (None, None), "polynomial": (fohw.model.output_map.PolynomialMap(2), [-0.2]),
+                "saturation": (fohw.model.output_map.Saturation(), [0.1, 0.45])}[kind]
 y = fohw.FractionalHW(G, p=[1.0, 0.3], f_basis=2, output_map=hmap, output_params=params,
                       dt=0.05).simulate(u) + noise
 limits = [float(np.min(y)), float(np.max(y))] if kind == "saturation" else None

@@ -174,7 +174,7 @@ def main(argv=None):
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for n in sizes:
         d = fohw.datasets.paper_example(n, random_state=0)
-        builder = fohw.RegressorBuilder(d.u, d.y, **STRUCT)
+        builder = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
         t0 = time.perf_counter()
         start = separable_least_squares(builder, bounds=(np.array([0.0]), np.array([1.0])),
                                         options=VarproOptions())

@@ -103,7 +103,7 @@ def main(argv=None):
         y = fohw.simulate(model, u, noise=v)
         lo, hi = np.percentile(y, [5, 95])
         sat = s.with_output_map("saturation")
-        pwl = s.with_output_map(fohw.PiecewiseLinear(np.linspace(lo, hi, 5)))
+        pwl = s.with_output_map(fohw.model.output_map.PiecewiseLinear(np.linspace(lo, hi, 5)))
         eta_pwl = np.linspace(lo, hi, 5) * 1.1
         ys = fohw.simulate(sat, u, params=np.r_[params, lo, hi], noise=v)
         z = fohw.simulate(s, u, params=params, noise=v)

@@ -52,7 +52,7 @@ u = rng.uniform(-np.sqrt(3), np.sqrt(3), 5000)
 v = 0.1 * rng.standard_normal(5000)
 y = fohw.simulate(model, u, noise=v)
 
-Phi = fohw.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
+Phi = fohw.model.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
 print("max |y - Phi theta - v| =", np.abs(y - Phi @ model.theta - v).max())
 
 # %% [markdown]
@@ -100,7 +100,7 @@ best.bode()
 # MI-RLS processes chunks as they arrive; the result equals one fit on all data.
 
 # %%
-online = fohw.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3)
+online = fohw.estimators.rls.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3)
 for start in range(0, 5000, 1000):
     online.partial_fit(u[start:start + 1000], y[start:start + 1000])
 print("MI-RLS after %d samples: alpha = %.4f" % (online.n_samples_seen_, online.alpha_))

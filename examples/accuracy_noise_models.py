@@ -27,6 +27,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
+from fohw.analysis.batch import end_with_parent  # noqa: E402
 from fohw.paper.accuracy import system_b, system_c, write_csv  # noqa: E402
 
 
@@ -89,7 +90,7 @@ def run(tasks, jobs):
             rows += fit(t)
         return rows
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs,
-                                                initializer=fohw.end_with_parent) as pool:
+                                                initializer=end_with_parent) as pool:
         for out in pool.map(fit, tasks):
             rows += out
     return rows

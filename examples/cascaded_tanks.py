@@ -37,6 +37,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
+from fohw.analysis.batch import end_with_parent  # noqa: E402
 from fohw.analysis.metrics import fit_percent, rmse  # noqa: E402
 from fohw.estimators.baselines import fit_linear_output_error  # noqa: E402
 
@@ -153,7 +154,7 @@ def main(argv=None):
 
     # 1. Structure on the estimation record only.
     cands = grid(args.fast)
-    pool = ProcessPoolExecutor(args.jobs, initializer=fohw.end_with_parent) if args.jobs > 1 else None
+    pool = ProcessPoolExecutor(args.jobs, initializer=end_with_parent) if args.jobs > 1 else None
     try:
         sel = fohw.select_structure(est, candidates=cands, validation=HELD_BACK, refit=False,
                                     executor=pool, **COMMON)

@@ -35,14 +35,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import fohw  # noqa: E402
+from fohw.analysis.batch import end_with_parent  # noqa: E402
 from fohw.analysis.metrics import rmse  # noqa: E402
+from fohw.model.output_map import Saturation  # noqa: E402
 
 COMMON = dict(method="output_error", offset=True, operating_point="mean", dt=4.0)
 HELD_BACK = 256
 #: The output maps tried, by the label the tables use.
 MAPS = {"none": None, "saturation (both limits free)": "saturation",
-        "saturation (upper limit free)": fohw.Saturation(lower=-np.inf),
-        "saturation at the sensor's 10 V (fixed)": fohw.Saturation(lower=-np.inf, upper=10.0),
+        "saturation (upper limit free)": Saturation(lower=-np.inf),
+        "saturation at the sensor's 10 V (fixed)": Saturation(lower=-np.inf, upper=10.0),
         "piecewise linear (5 breakpoints)": "piecewise_linear"}
 #: Published free-run validation RMSEs (V) to compare with (docs/real_data.md).
 PUBLISHED = [("Grey-box with a physical overflow model (Rogers et al. 2017)", 0.18),
@@ -103,7 +105,7 @@ def main(argv=None):
     args.outdir.mkdir(parents=True, exist_ok=True)
 
     cands = grid(args.fast)
-    pool = ProcessPoolExecutor(args.jobs, initializer=fohw.end_with_parent) if args.jobs > 1 else None
+    pool = ProcessPoolExecutor(args.jobs, initializer=end_with_parent) if args.jobs > 1 else None
     try:
         sel = fohw.select_structure(est, candidates=cands, validation=HELD_BACK, refit=False,
                                     executor=pool, **COMMON)

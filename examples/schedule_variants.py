@@ -40,9 +40,9 @@ VARIANTS = [
 def run(kind, opts, data):
     t0 = time.perf_counter()
     if kind == "migd":
-        est = fohw.MultiInnovationGradient(alpha=0.6, **STRUCT, **opts).fit(data.u, data.y)
+        est = fohw.estimators.migd.MultiInnovationGradient(alpha=0.6, **STRUCT, **opts).fit(data.u, data.y)
         theta, alpha, n_iter, conv = est.theta_, 0.6, 1, None
-        Phi = fohw.information_matrix(data.u, data.y, 0.6, **STRUCT)
+        Phi = fohw.model.regressors.information_matrix(data.u, data.y, 0.6, **STRUCT)
         J = float(np.mean((data.y - Phi @ theta) ** 2))
     else:
         with warnings.catch_warnings():

@@ -31,7 +31,7 @@ def one_step_prediction(u, y, theta, alpha, *, na, nb, f_basis, g_basis):
     """Eq. (19) written out: ``yhat[k] = sum_j sum_i theta[.] (Delta^alpha g_j(y))[k-i] + …``."""
     import fohw
 
-    f_basis, g_basis = fohw.as_basis(f_basis), fohw.as_basis(g_basis)
+    f_basis, g_basis = fohw.model.basis.as_basis(f_basis), fohw.model.basis.as_basis(g_basis)
     G = [gl(row, alpha) for row in basis_values(g_basis, y)]
     F = [gl(row, alpha) for row in basis_values(f_basis, u)]
     yhat = np.zeros(len(y))

@@ -9,7 +9,7 @@ They are test scaffolding, not part of the package (issue 23, item 8):
 * :func:`reference_windows`: the recursive schedule's windows rebuilt from the GL weights at
   every sample (``O(N^2)`` per pass, the code before the expansion in alpha);
   :func:`rebuilt_windows` puts it in place of :func:`fohw.estimators.hybrid.expanded_windows`.
-* :class:`ReferenceRLS`: :class:`fohw.MultiInnovationRLS` with each window rebuilt from the
+* :class:`ReferenceRLS`: :class:`fohw.estimators.rls.MultiInnovationRLS` with each window rebuilt from the
   weights.
 * :class:`FiniteDifferenceResidual` / :func:`finite_difference_output_error`: output_error's
   solver with scipy's forward differences (``"2-point"``) instead of the exact sensitivity.
@@ -63,10 +63,10 @@ class FullMatrixProfile(Profile):
 
 
 class FullMatrixBuilder:
-    """A :class:`fohw.RegressorBuilder` whose :meth:`jacobian` is the reference one.
+    """A :class:`fohw.model.regressors.RegressorBuilder` whose :meth:`jacobian` is the reference one.
 
     The reference Jacobian forms ``Phi`` and every ``dPhi/dparams[m]`` in full and multiplies
-    (what :meth:`fohw.RegressorBuilder.jacobian` did before it wrote the columns in place);
+    (what :meth:`fohw.model.regressors.RegressorBuilder.jacobian` did before it wrote the columns in place);
     everything else is the builder's.
     """
 
@@ -119,7 +119,7 @@ def rebuilt_windows():
         yield
 
 
-class ReferenceRLS(fohw.MultiInnovationRLS):
+class ReferenceRLS(fohw.estimators.rls.MultiInnovationRLS):
     """MI-RLS with each window rebuilt from the GL weights (``O(N^2)``), not streamed."""
 
     def _start_windows(self, lo, hi):
@@ -132,7 +132,7 @@ class ReferenceRLS(fohw.MultiInnovationRLS):
         length = max(k, 1)
         weights = [fohw.gl_weights(alpha, length)]
         if self._estimate_alpha:
-            weights.append(fohw.gl_weights_derivative(alpha, length))
+            weights.append(fohw.model.gl.gl_weights_derivative(alpha, length))
         return self._kernel.rows(self._signals, k, self._P, weights)
 
 

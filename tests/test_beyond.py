@@ -53,7 +53,7 @@ def test_varpro_is_exact_on_noise_free_data(system):
 def test_varpro_finds_the_global_minimum_of_the_profile():
     d = fohw.datasets.paper_example(2000, random_state=5)
     res = fohw.identify(d.u, d.y, method="varpro", **STRUCT)
-    b = fohw.RegressorBuilder(d.u, d.y, **STRUCT)
+    b = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
     fine = [profile_theta(b.matrix(a), d.y)[1] / 2000 for a in np.linspace(0.01, 0.99, 197)]
     assert res.J <= min(fine) + 1e-12
     assert res.alpha_profile.shape == (2, 41)
@@ -139,7 +139,7 @@ def test_standard_errors_and_summary():
 
 
 def test_recover_jacobian_matches_finite_differences():
-    layout = fohw.ThetaLayout(na=2, nb=3, n_g=3, n_f=2)
+    layout = fohw.model.params.ThetaLayout(na=2, nb=3, n_g=3, n_f=2)
     theta = np.random.default_rng(0).uniform(0.2, 1.0, layout.n_params)
     jac = layout.recover_jacobian(theta)
     eps = 1e-7
@@ -193,8 +193,8 @@ def test_monte_carlo_records_diverged_data():
 @pytest.mark.parametrize("chunks", [[1000], [1, 499, 500], [250, 250, 250, 250], [7] * 142 + [6]])
 def test_partial_fit_equals_fit(P, chunks):
     d = fohw.datasets.paper_example(1000, random_state=3)
-    whole = fohw.MultiInnovationRLS(innovation_length=P, **STRUCT).fit(d.u, d.y)
-    stream = fohw.MultiInnovationRLS(innovation_length=P, **STRUCT)
+    whole = fohw.estimators.rls.MultiInnovationRLS(innovation_length=P, **STRUCT).fit(d.u, d.y)
+    stream = fohw.estimators.rls.MultiInnovationRLS(innovation_length=P, **STRUCT)
     i = 0
     for c in chunks:
         stream.partial_fit(d.u[i:i + c], d.y[i:i + c])
@@ -209,10 +209,10 @@ def test_partial_fit_equals_fit(P, chunks):
 
 def test_rls_with_fixed_alpha_is_least_squares():
     d = fohw.datasets.paper_example(3000, random_state=4)
-    rls = fohw.MultiInnovationRLS(estimate_alpha=False, alpha0=0.6, initial_covariance=1e8,
-                                  **STRUCT)
+    rls = fohw.estimators.rls.MultiInnovationRLS(estimate_alpha=False, alpha0=0.6, initial_covariance=1e8,
+                                                 **STRUCT)
     rls.fit(d.u, d.y)
-    Phi = fohw.information_matrix(d.u, d.y, 0.6, **STRUCT)
+    Phi = fohw.model.regressors.information_matrix(d.u, d.y, 0.6, **STRUCT)
     theta_ls, _ = profile_theta(Phi, d.y)
     # RLS from S(0) = c I is ridge regression with penalty 1/c = 1e-8: equal to ~1e-6.
     np.testing.assert_allclose(rls.theta_, theta_ls, rtol=0, atol=1e-6)
@@ -222,17 +222,17 @@ def test_rls_tracks_alpha_on_the_paper_example():
     bound_alpha_std = 0.004   # CRB at N = 10 000 (SPEC §6; test_crb_agrees_with...)
     for seed in range(2):
         d = fohw.datasets.paper_example(10_000, random_state=seed)
-        rls = fohw.MultiInnovationRLS(**STRUCT).fit(d.u, d.y)
+        rls = fohw.estimators.rls.MultiInnovationRLS(**STRUCT).fit(d.u, d.y)
         assert abs(rls.alpha_ - 0.6) < 5 * bound_alpha_std
         assert np.linalg.norm(rls.theta_ - d.model.theta) / np.linalg.norm(d.model.theta) < 0.1
 
 
 def test_rls_bad_input():
     with pytest.raises(fohw.ParameterError, match="`forgetting`"):
-        fohw.MultiInnovationRLS(forgetting=0.0, **STRUCT).fit(np.zeros(10), np.zeros(10))
+        fohw.estimators.rls.MultiInnovationRLS(forgetting=0.0, **STRUCT).fit(np.zeros(10), np.zeros(10))
     with pytest.raises(fohw.ParameterError, match="`alpha0`"):
-        fohw.MultiInnovationRLS(alpha0=1.5, **STRUCT).fit(np.zeros(10), np.zeros(10))
+        fohw.estimators.rls.MultiInnovationRLS(alpha0=1.5, **STRUCT).fit(np.zeros(10), np.zeros(10))
     with pytest.raises(fohw.DimensionError, match="same length"):
-        fohw.MultiInnovationRLS(**STRUCT).partial_fit(np.zeros(10), np.zeros(9))
+        fohw.estimators.rls.MultiInnovationRLS(**STRUCT).partial_fit(np.zeros(10), np.zeros(9))
     with pytest.raises(fohw.NotFittedError):
-        fohw.MultiInnovationRLS(**STRUCT).predict(np.zeros(10), np.zeros(10))
+        fohw.estimators.rls.MultiInnovationRLS(**STRUCT).predict(np.zeros(10), np.zeros(10))

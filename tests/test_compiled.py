@@ -141,7 +141,7 @@ def test_pure_path_when_switched_off(monkeypatch):
                              kernel="compiled")
     # a non-polynomial output basis never gets the compiled leaf
     monkeypatch.setattr(_compiled, "ENABLED", True)
-    assert _compiled.leaf_for(fohw.as_basis([np.sin]), 10**9) is None
+    assert _compiled.leaf_for(fohw.model.basis.as_basis([np.sin]), 10**9) is None
 
 
 def _fresh_state(monkeypatch):
@@ -294,8 +294,8 @@ def test_compiled_sensitivity_leaf_equals_pure_leaf_at_every_sample(
     assert len(segments) > 16 and max(hi - lo for lo, hi in segments) <= 48
     assert S_p.shape[1] == len(model.linear) + len(model.nonlinear)
     # not trivial: the feedback moves S away from the one-step Jacobian E (S != E) everywhere
-    E = fohw.RegressorBuilder(u, y_p, structure=model.structure).jacobian(model.linear,
-                                                                          model.nonlinear)
+    E = fohw.model.regressors.RegressorBuilder(u, y_p, structure=model.structure).jacobian(model.linear,
+                                                                                           model.nonlinear)
     assert np.all(np.max(np.abs(S_p - E), axis=0) > 1e-3 * np.max(np.abs(S_p), axis=0))
 
 

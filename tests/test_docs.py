@@ -103,6 +103,19 @@ def test_one_page_per_public_object(site):
 
 
 @pytest.mark.slow
+def test_one_page_per_submodule_name_in_api_md(site):
+    """The names docs/api.md lists from submodules (option and estimator classes, output maps, ...,
+    which the top level does not re-export) have their pages too."""
+    listed = re.findall(r"^   (fohw\.[\w.]+)$", (ROOT / "docs" / "api.md").read_text(), re.MULTILINE)
+    assert "fohw.model.output_map.Saturation" in listed and "fohw.analysis.batch.end_with_parent" in listed
+    index = (site / "html" / "api.html").read_text()
+    for name in listed:
+        html = (site / "html" / "api" / f"{name}.html").read_text()
+        assert f'id="{name}"' in html, name
+        assert f'href="api/{name}.html' in index, name
+
+
+@pytest.mark.slow
 def test_gallery_shows_every_example_with_its_figures(site):
     html_dir = site / "html" / "gallery"
     index = (html_dir / "index.html").read_text()

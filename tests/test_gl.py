@@ -142,7 +142,7 @@ def test_weights_near_integer_orders_have_no_cancellation(alpha):
     # either (the old code passes it; the weights above are what changed).
     a = Fraction(alpha)
     c = [abs((k - 1 - a) / k) for k in range(1, n)]
-    dbeta = fohw.gl_weights_derivative(alpha, n)
+    dbeta = fohw.model.gl.gl_weights_derivative(alpha, n)
     for j in range(1, n):
         size = Fraction(0)
         for i in range(1, j + 1):
@@ -171,7 +171,7 @@ def test_integer_alpha_weights_vanish_exactly():
 def test_weight_derivative_matches_central_difference(alpha):
     n, eps = 300, 1e-6
     fd = (fohw.gl_weights(alpha + eps, n) - fohw.gl_weights(alpha - eps, n)) / (2 * eps)
-    exact = fohw.gl_weights_derivative(alpha, n)
+    exact = fohw.model.gl.gl_weights_derivative(alpha, n)
     # Truncation error of the central difference is O(eps**2), rounding O(1e-16 / eps).
     np.testing.assert_allclose(exact, fd, rtol=1e-7, atol=1e-9)
 
@@ -179,11 +179,11 @@ def test_weight_derivative_matches_central_difference(alpha):
 def test_weight_derivative_closed_forms_at_integers():
     j = np.arange(2, 100)
     # alpha = 0: beta_j = -alpha/j + O(alpha^2)  =>  dbeta_j = -1/j for j >= 1.
-    d0 = fohw.gl_weights_derivative(0.0, 100)
+    d0 = fohw.model.gl.gl_weights_derivative(0.0, 100)
     assert d0[0] == 0
     np.testing.assert_allclose(d0[1:], -1.0 / np.arange(1, 100), rtol=1e-14)
     # alpha = 1: dbeta_1 = -1 and dbeta_j = 1 / (j (j - 1)) for j >= 2.
-    d1 = fohw.gl_weights_derivative(1.0, 100)
+    d1 = fohw.model.gl.gl_weights_derivative(1.0, 100)
     assert d1[1] == -1.0
     np.testing.assert_allclose(d1[2:], 1.0 / (j * (j - 1)), rtol=1e-14)
 
@@ -245,7 +245,7 @@ def test_a_scale_beyond_float_range_names_h():
     assert np.array_equal(fohw.gl_difference(np.ones(3), 2.0, h=1e300), np.zeros(3))
 
 
-@pytest.mark.parametrize("call", [fohw.gl_weights, fohw.gl_weights_derivative])
+@pytest.mark.parametrize("call", [fohw.gl_weights, fohw.model.gl.gl_weights_derivative])
 def test_weights_beyond_memory_are_refused_naming_n(call):
     """Issue 28 #5: gl_weights(0.5, 10**12) was numpy's bare MemoryError."""
     with pytest.raises(fohw.ParameterError, match=r"`n` = 1000000000000 needs \d.* TB of "

@@ -6,6 +6,10 @@ import numpy as np
 import pytest
 
 import fohw
+from fohw.estimators.hybrid import HybridIdentifier, HybridOptions
+from fohw.estimators.migd import MultiInnovationGradient
+from fohw.estimators.rls import MultiInnovationRLS, RlsOptions
+from fohw.model.regressors import RegressorBuilder
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -121,7 +125,7 @@ def test_iterative_single_innovation_lm_makes_lm_steps(data2000):
     # alpha, a theta pass of LM steps written out from Eq. (48) with P = 1.
     from fohw.estimators.milm import alpha_update
 
-    b = fohw.RegressorBuilder(u, y, **STRUCT)
+    b = RegressorBuilder(u, y, **STRUCT)
     theta = np.full(10, 1e-6)
     alpha = alpha_update(b, theta, 0.5, rows=np.array([0]))
     Phi = b.matrix(alpha)
@@ -140,7 +144,7 @@ def test_recursive_pass_of_hybrid_with_fixed_alpha_is_migd(data2000):
     # pass at alpha0 (the windows being rebuilt per sample, exactly, from full memory).
     u, y = data2000.u[:600], data2000.y[:600]
     res = paper_identify(u, y, alpha0=0.6, lm_lambda=1e300, innovation_length=3)
-    migd = fohw.MultiInnovationGradient(alpha=0.6, innovation_length=3, **STRUCT).fit(u, y)
+    migd = MultiInnovationGradient(alpha=0.6, innovation_length=3, **STRUCT).fit(u, y)
     assert np.all(res.alpha_sample_history == 0.6)
     np.testing.assert_allclose(res.theta_history, migd.theta_history_, rtol=1e-10, atol=1e-13)
 
@@ -184,7 +188,7 @@ def test_result_plot_returns_figure(data2000):
 
 
 def test_hybrid_identifier_estimator(data2000):
-    est = fohw.HybridIdentifier(innovation_length=3, schedule="iterative", max_iter=40, **STRUCT)
+    est = HybridIdentifier(innovation_length=3, schedule="iterative", max_iter=40, **STRUCT)
     assert est.get_params()["innovation_length"] == 3
     with pytest.raises(fohw.NotFittedError):
         est.predict(data2000.u, data2000.y)
@@ -202,13 +206,13 @@ def test_hybrid_identifier_estimator(data2000):
     est.set_params(innovation_length=1, alpha0=0.9)
     np.testing.assert_array_equal(est.predict(data2000.u, data2000.y), before)
     with pytest.raises(TypeError, match="unexpected keyword argument 'P'; its parameters are na"):
-        fohw.HybridIdentifier(P=3, **STRUCT)
+        HybridIdentifier(P=3, **STRUCT)
     with pytest.raises(TypeError, match="unexpected keyword argument 'method'"):
-        fohw.HybridIdentifier(method="varpro", **STRUCT)
+        HybridIdentifier(method="varpro", **STRUCT)
     with pytest.raises(TypeError, match="missing required keyword argument"):
-        fohw.HybridIdentifier(na=2, nb=2)
+        HybridIdentifier(na=2, nb=2)
     with pytest.raises(TypeError):              # keyword-only
-        fohw.HybridIdentifier(2, 2, 2, 3)
+        HybridIdentifier(2, 2, 2, 3)
 
 
 @pytest.mark.parametrize(
@@ -283,9 +287,9 @@ def test_every_option_is_declared_once_and_checked_by_one_check():
         checked = cls().check(n_samples=100, bounds=(0.0, 1.0))
         assert type(checked) is cls and checked.check(n_samples=100, bounds=(0.0, 1.0)) == checked
     # The estimator classes take their settings, defaults included, from the dataclasses.
-    for est, cls in ((fohw.HybridIdentifier, fohw.HybridOptions),
-                     (fohw.MultiInnovationRLS, fohw.RlsOptions),
-                     (fohw.MultiInnovationGradient, MigdOptions)):
+    for est, cls in ((HybridIdentifier, HybridOptions),
+                     (MultiInnovationRLS, RlsOptions),
+                     (MultiInnovationGradient, MigdOptions)):
         params = est(**STRUCT, **({"alpha": 0.6} if cls is MigdOptions else {})).get_params()
         assert {k: v for k, v in params.items() if k in cls.names()} == cls.defaults()
 
@@ -294,7 +298,7 @@ def test_rls_class_and_method_share_the_alpha0_default(data2000):
     # alpha0 defaults to the middle of alpha_bounds for both (the class once started at 0.5,
     # outside these bounds).
     u, y = data2000.u[:300], data2000.y[:300]
-    est = fohw.MultiInnovationRLS(alpha_bounds=(1.0, 2.0), estimate_alpha=False, **STRUCT)
+    est = MultiInnovationRLS(alpha_bounds=(1.0, 2.0), estimate_alpha=False, **STRUCT)
     assert est.fit(u, y).alpha_ == 1.5
     # alpha held at 1.5 (the truth is 0.6): the recursive estimate is unstable in free run on
     # its own input, so it is FAILED, not NOT_TESTED (issue 36)

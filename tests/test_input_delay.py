@@ -121,7 +121,7 @@ def test_past_levels_and_history_with_a_delay_follow_the_reference(nk):
                                rtol=0, atol=1e-12)
     # and the information matrix with estimated past levels reproduces the record
     y = fohw.simulate(model, u, noise=v)
-    b = fohw.RegressorBuilder(u - 0.5, y - 1.0, structure=model.structure)
+    b = fohw.model.regressors.RegressorBuilder(u - 0.5, y - 1.0, structure=model.structure)
     np.testing.assert_allclose(y - 1.0 - b.matrix(model.nonlinear) @ model.linear, v,
                                rtol=0, atol=1e-12)
 
@@ -145,7 +145,7 @@ def test_the_information_matrix_reproduces_the_record(case):
     u = rng.uniform(-1, 1, 300)
     v = 0.05 * rng.standard_normal(300)
     y = fohw.simulate(s, u, params=params, noise=v)
-    b = fohw.RegressorBuilder(u, y, structure=s)
+    b = fohw.model.regressors.RegressorBuilder(u, y, structure=s)
     k = s.n_linear
     Phi = b.matrix(params[k:]) if s.n_nonlinear else b.matrix(np.zeros(0))
     np.testing.assert_allclose(y - Phi @ params[:k], v, rtol=0, atol=1e-12)

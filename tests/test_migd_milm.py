@@ -49,13 +49,13 @@ def test_migd_pass_window_matches_definition(normalisation, forgetting):
 def test_migd_noise_free_innovation_goes_to_zero(seed):
     m, u, y = simple_record(seed)
     kw = dict(na=1, nb=1, f_basis=1, g_basis=1, alpha=0.6, innovation_length=5)
-    misg = fohw.MultiInnovationGradient(normalisation="current", **kw).fit(u, y)
+    misg = fohw.estimators.migd.MultiInnovationGradient(normalisation="current", **kw).fit(u, y)
     first = np.sqrt(np.mean(misg.innovation_history_[:300] ** 2))
     last = np.sqrt(np.mean(misg.innovation_history_[-300:] ** 2))
     assert last < 1e-3 * first
     np.testing.assert_allclose(misg.theta_, m.theta, rtol=1e-3)
     # The paper's normalisation (Eq. 31) also reduces it, more slowly (1/r(k) step).
-    paper = fohw.MultiInnovationGradient(**kw).fit(u, y)
+    paper = fohw.estimators.migd.MultiInnovationGradient(**kw).fit(u, y)
     first = np.sqrt(np.mean(paper.innovation_history_[:300] ** 2))
     last = np.sqrt(np.mean(paper.innovation_history_[-300:] ** 2))
     assert last < 0.5 * first
@@ -63,8 +63,8 @@ def test_migd_noise_free_innovation_goes_to_zero(seed):
 
 def test_migd_paper_example_noise_free_innovation_decreases():
     data = fohw.datasets.paper_example(4000, noise_variance=0.0, random_state=0)
-    est = fohw.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6,
-                                       innovation_length=5).fit(data.u, data.y)
+    est = fohw.estimators.migd.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6,
+                                                       innovation_length=5).fit(data.u, data.y)
     inn = est.innovation_history_
     assert np.sqrt(np.mean(inn[-1000:] ** 2)) < np.sqrt(np.mean(inn[:1000] ** 2))
 
@@ -74,8 +74,8 @@ def test_longer_innovation_converges_faster_on_a_well_conditioned_system(seed):
     m, u, y = simple_record(seed)
     delta = {}
     for P in (1, 5):
-        est = fohw.MultiInnovationGradient(na=1, nb=1, f_basis=1, g_basis=1, alpha=0.6,
-                                           innovation_length=P).fit(u, y)
+        est = fohw.estimators.migd.MultiInnovationGradient(na=1, nb=1, f_basis=1, g_basis=1, alpha=0.6,
+                                                           innovation_length=P).fit(u, y)
         delta[P] = np.linalg.norm(est.theta_ - m.theta) / np.linalg.norm(m.theta)
     assert delta[5] < delta[1]
 
@@ -92,7 +92,7 @@ def test_milm_step_by_hand_and_vector_form():
 @pytest.mark.parametrize("start", [0.45, 0.5, 0.7, 0.75])
 def test_alpha_step_with_true_theta_moves_toward_truth(start):
     data = fohw.datasets.paper_example(3000, noise_variance=0.0, random_state=1)
-    b = fohw.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     new = alpha_update(b, data.model.theta, start)
     assert abs(new - 0.6) < abs(start - 0.6)
     assert np.sign(new - start) == np.sign(0.6 - start)
@@ -102,7 +102,7 @@ def test_alpha_step_with_true_theta_moves_toward_truth(start):
 def test_innovation_window_alpha_step_points_toward_truth(start):
     # Eq. (48) as printed: the window of the last P = 5 samples, at many sample indices.
     data = fohw.datasets.paper_example(3000, noise_variance=0.0, random_state=2)
-    b = fohw.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     signs = [np.sign(alpha_update(b, data.model.theta, start, rows=np.arange(k, k - 5, -1)) - start)
              for k in range(50, 3000, 150)]
     assert all(s == np.sign(0.6 - start) for s in signs)
@@ -110,7 +110,7 @@ def test_innovation_window_alpha_step_points_toward_truth(start):
 
 def test_exact_and_finite_difference_sensitivities_agree():
     data = fohw.datasets.paper_example(2000, random_state=3)
-    b = fohw.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     theta = data.model.theta
     exact = output_sensitivity(b, 0.6, theta, sensitivity="exact")
     err = {d: np.max(np.abs(output_sensitivity(b, 0.6, theta, delta_alpha=d) - exact))
@@ -123,7 +123,7 @@ def test_exact_and_finite_difference_sensitivities_agree():
 
 def test_windowed_regressors_equal_the_full_matrix():
     data = fohw.datasets.paper_example(700, random_state=4)
-    b = fohw.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     for alpha in (0.35, 0.6, 0.95):
         Phi = b.matrix(alpha)
         w = fohw.gl_weights(alpha, 700)
@@ -134,7 +134,7 @@ def test_windowed_regressors_equal_the_full_matrix():
 
 
 def test_migd_estimator_contract():
-    est = fohw.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6)
+    est = fohw.estimators.migd.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6)
     with pytest.raises(fohw.NotFittedError, match="not fitted"):
         est.predict(np.zeros(10), np.zeros(10))
     assert est.get_params()["innovation_length"] == 5

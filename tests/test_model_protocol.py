@@ -119,6 +119,15 @@ def hammerstein_wiener():
     return true, start, u, 0.02, "alpha"
 
 
+def theta_hw():
+    """The lagged kind with a map per lag (what identify fits): p2b1 / b1 = 0.3, p2b2 / b2 = -0.2."""
+    s = fohw.Structure.make(na=1, nb=2, f_basis=2, g_basis=1)
+    true = fohw.ThetaHW(s, [0.3, 1.0, 0.5, 0.3, -0.1], [0.4])
+    start = fohw.ThetaHW(s, [0.1, 0.5, 0.1, 0.0, 0.0], [0.6])
+    u = np.random.default_rng(25).uniform(-1.7, 1.7, 500)
+    return true, start, u, 0.02, "alpha"
+
+
 def equivalent_circuit():
     """A cell: OCV 3.3 + 0.9 soc, R0 = 15 mOhm, a ZARC (12 mOhm, 50 s, 0.55), 20 s current
     steps in [-3, 1.2] A over 1200 s, 0.1 mV noise (issue fixtures of the reliability round)."""
@@ -156,8 +165,8 @@ def circuit_tables():
 
 
 #: One factory per kind: ``() -> (true_model, start_model, u, noise_std, order_name)``.
-KINDS = [fractional_lag, fractional_hw, fractional_tf, hammerstein_wiener, equivalent_circuit,
-         circuit_tables]
+KINDS = [fractional_lag, fractional_hw, fractional_tf, hammerstein_wiener, theta_hw,
+         equivalent_circuit, circuit_tables]
 
 
 def _case(factory, seed):
@@ -176,9 +185,9 @@ def case(request):
 
 
 def _lagged(model):
-    """The paper's lagged kind keeps its own paths (equation noise, one-step prediction, its
-    file layout); the checks below say where it differs."""
-    return isinstance(model, fohw.HammersteinWiener)
+    """The paper's lagged kind (either map) keeps its own paths (equation noise, one-step
+    prediction); the checks below say where it differs."""
+    return isinstance(model, (fohw.HammersteinWiener, fohw.ThetaHW))
 
 
 def _with(model, name, **changes):
@@ -191,8 +200,9 @@ HOOKS = {
     "fractional_lag": set(),
     "fractional_hw": {"jacobian", "linear_start", "frequency_response"},
     "fractional_tf": {"jacobian", "linear_start", "frequency_response"},
-    "hammerstein_wiener": set(),
-    "equivalent_circuit": {"jacobian"},
+    "hammerstein_wiener": {"jacobian", "frequency_response"},
+    "theta_hw": {"jacobian", "linear_start", "frequency_response"},
+    "equivalent_circuit": {"jacobian", "frequency_response"},
     "circuit_tables": {"jacobian"},
 }
 OPTIONAL = {"jacobian", "linear_start", "frequency_response", "penalty"}
@@ -202,11 +212,15 @@ OPTIONAL = {"jacobian", "linear_start", "frequency_response", "penalty"}
 def test_every_kind_passes_check_model(factory):
     true, start, u, _, _ = factory()
     checks = [c for c in fohw.testing.CHECKS
-              if not (_lagged(true) and c == "save_load_settings")]     # see the xfail below
+              if not (isinstance(true, fohw.HammersteinWiener)
+                      and c == "save_load_settings")      # see the xfail below
+              # tables over SOC and temperature have an impedance at an operating point only
+              # (frequency_response(omega, soc=, temperature=): tests/test_frequency_hook.py)
+              and not (isinstance(true, fohw.CircuitTables) and c == "frequency_response")]
     for model in (true, start):
         report = fohw.testing.check_model(model, u=u, checks=checks)
         assert {c for c, outcome in report.items() if outcome != "passed"} \
-            == OPTIONAL - HOOKS[factory.__name__], report
+            == (OPTIONAL - HOOKS[factory.__name__]) & set(report), report
 
 
 @pytest.mark.xfail(strict=True, raises=fohw.testing.ModelCheckError,
@@ -314,7 +328,9 @@ def test_a_damaged_file_is_refused_naming_the_field(case, tmp_path):
 
 def _crb(model, u, noise_variance):
     """The output-noise bound, in the order of the fit's free parameters."""
-    lagged = {"noise": "output", "parametrisation": "structured"}      # its own (a, b, p, q, alpha)
+    # the lagged kinds' own parameters: (a, b, p, q, alpha), or theta itself with a map per lag
+    lagged = {"noise": "output", "parametrisation": "theta" if isinstance(model, fohw.ThetaHW)
+              else "structured"}
     bound = fohw.crb(model, u, noise_variance, **(lagged if _lagged(model) else {}))
     assert bound.noise == "output"
     return bound

@@ -650,7 +650,7 @@ def _children(pid):
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_end_when_select_is_killed(tmp_path):
     """Issue 34 #34: SIGKILL of `fohw select --jobs 2` left both workers alive 120 s later.
-    The pool's initializer (fohw.end_with_parent) ends them: gone within 5 s."""
+    The pool's initializer (fohw.analysis.batch.end_with_parent) ends them: gone within 5 s."""
     d = fohw.datasets.paper_example(3000, random_state=0)
     data = tmp_path / "d.dat"
     np.savetxt(data, np.c_[d.u, d.y])

@@ -131,7 +131,9 @@ def test_replacing_what_facts_derive_from_moves_them():
     assert moved.alpha == 0.3 and moved.model.alpha == 0.3 and moved.orders == {"alpha": 0.3}
     assert r.alpha != 0.3 and r.model.alpha == r.alpha       # the original is untouched
     theta = r.theta * 2
-    assert np.array_equal(dataclasses.replace(r, theta=theta).model.theta,
+    moved = dataclasses.replace(r, theta=theta)
+    assert np.array_equal(moved.model.theta, theta)          # the fitted model: theta itself
+    assert np.array_equal(moved.shared_model.theta,
                           fohw.HammersteinWiener.from_theta(theta, r.alpha, na=2, nb=2,
                                                             f_basis=2, g_basis=3).theta)
     s = fohw.Structure.make(na=2, nb=2, f_basis=2, g_basis=3, offset=True)

@@ -13,6 +13,9 @@ import numpy as np
 import pytest
 
 import fohw
+from fohw.estimators.migd import MultiInnovationGradient
+from fohw.estimators.rls import MultiInnovationRLS
+from fohw.estimators.varpro import VarproOptions
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 SCALES = range(-4, 5)
@@ -105,7 +108,7 @@ def test_options_are_never_silently_ignored(noisy):
     # An option the method has is used, and recorded.
     res = fohw.identify(noisy.u, noisy.y, method="varpro", n_grid=7, **STRUCT)
     assert res.alpha_profile.shape == (2, 7) and res.options["n_grid"] == 7
-    same = fohw.identify(noisy.u, noisy.y, method="varpro", options=fohw.VarproOptions(n_grid=7),
+    same = fohw.identify(noisy.u, noisy.y, method="varpro", options=VarproOptions(n_grid=7),
                          **STRUCT)
     np.testing.assert_array_equal(same.theta, res.theta)
 
@@ -157,7 +160,7 @@ def test_bound_advice_can_be_followed():
 
 def test_migd_estimator_predicts_from_what_it_fitted(noisy):
     # fohw 0.1: predict read the `alpha` setting, so set_params changed the predictions.
-    est = fohw.MultiInnovationGradient(alpha=0.6, **STRUCT).fit(noisy.u, noisy.y)
+    est = MultiInnovationGradient(alpha=0.6, **STRUCT).fit(noisy.u, noisy.y)
     before = est.predict(noisy.u, noisy.y)
     est.set_params(alpha=0.9, na=1)
     np.testing.assert_array_equal(est.predict(noisy.u, noisy.y), before)
@@ -165,7 +168,7 @@ def test_migd_estimator_predicts_from_what_it_fitted(noisy):
 
 
 def test_rls_predicts_from_what_it_fitted(noisy):
-    est = fohw.MultiInnovationRLS(**STRUCT).fit(noisy.u, noisy.y)
+    est = MultiInnovationRLS(**STRUCT).fit(noisy.u, noisy.y)
     before = est.predict(noisy.u, noisy.y)
     est.set_params(g_basis=1, nb=1)
     np.testing.assert_array_equal(est.predict(noisy.u, noisy.y), before)

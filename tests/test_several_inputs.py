@@ -128,7 +128,7 @@ def test_the_information_matrix_reproduces_the_record():
     s, u, _ = record(400)
     v = 0.05 * np.random.default_rng(8).standard_normal(400)
     y = fohw.simulate(s, u, params=TRUE, noise=v)
-    b = fohw.RegressorBuilder(u, y, structure=s)
+    b = fohw.model.regressors.RegressorBuilder(u, y, structure=s)
     np.testing.assert_allclose(y - b.matrix(TRUE[-2:]) @ TRUE[:-2], v, rtol=0, atol=1e-12)
 
 
@@ -162,7 +162,8 @@ def test_noise_free_two_input_plant_is_recovered_exactly(method):
     assert r.parameter_names == s.linear_names
     np.testing.assert_allclose(np.r_[r.linear, r.nonlinear], TRUE, atol=1e-6)
     np.testing.assert_allclose(r.simulate(u), y, atol=1e-6)
-    assert r.model is None and "one input" in r.message
+    assert r.shared_model is None and "one input" in r.message
+    np.testing.assert_array_equal(r.model.simulate(u), r.simulate(u))   # the fitted model
 
 
 def test_method_auto_chain_and_compare_work_on_two_inputs():

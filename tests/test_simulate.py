@@ -5,6 +5,8 @@ import pytest
 
 import fohw
 from fohw.datasets import paper_model
+from fohw.model.basis import as_basis
+from fohw.model.regressors import information_matrix
 
 
 def reference_simulate(model, u, v):
@@ -60,8 +62,8 @@ def test_simulator_equals_literal_reference(which):
 def test_regression_identity_y_minus_phi_theta_is_noise(seed):
     data = fohw.datasets.paper_example(10_000, random_state=seed)
     m = data.model
-    Phi = fohw.information_matrix(data.u, data.y, m.alpha, na=m.na, nb=m.nb,
-                                  f_basis=m.f_basis, g_basis=m.g_basis)
+    Phi = information_matrix(data.u, data.y, m.alpha, na=m.na, nb=m.nb,
+                             f_basis=m.f_basis, g_basis=m.g_basis)
     resid = data.y - Phi @ m.theta
     assert np.max(np.abs(resid - data.noise)) < 1e-12
 
@@ -73,7 +75,7 @@ def test_regression_identity_custom_system():
     u = rng.uniform(-1, 1, 3000)
     v = 0.05 * rng.standard_normal(3000)
     y = fohw.simulate(model, u, noise=v)
-    Phi = fohw.information_matrix(u, y, 1.3, na=3, nb=1, f_basis=model.f_basis, g_basis=model.g_basis)
+    Phi = information_matrix(u, y, 1.3, na=3, nb=1, f_basis=model.f_basis, g_basis=model.g_basis)
     assert np.max(np.abs(y - Phi @ model.theta - v)) < 1e-12
 
 
@@ -154,7 +156,7 @@ def test_fast_simulator_general_blocks_and_divergence():
     n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path
     qa = np.array([[0.3, -0.1, 0.05], [0.02, 0.01, -0.03]])
     pb = np.array([[1.0], [0.2]])
-    f, g = fohw.as_basis([np.sin, np.tanh]), fohw.as_basis([np.sin, np.cos])
+    f, g = as_basis([np.sin, np.tanh]), as_basis([np.sin, np.cos])
     u = rng.uniform(-1, 1, n)
     v = 0.05 * rng.standard_normal(n)
     Q = np.eye(2)

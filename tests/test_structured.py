@@ -30,7 +30,7 @@ def central_difference(fun, x, rel=1e-6):
 # ---- the mapping theta(a, b, p, q) ------------------------------------------------------------
 
 def test_theta_jacobian_matches_finite_differences_and_inverts_the_recovery():
-    layout = fohw.ThetaLayout(na=3, nb=2, n_g=3, n_f=2)
+    layout = fohw.model.params.ThetaLayout(na=3, nb=2, n_g=3, n_f=2)
     eta = np.random.default_rng(0).normal(size=layout.n_model_params)
     jac = layout.theta_jacobian(eta)
     fd = central_difference(layout.theta_of_model_vector, eta)
@@ -44,7 +44,7 @@ def test_theta_jacobian_matches_finite_differences_and_inverts_the_recovery():
 
 def test_rank_one_recovery_is_the_best_rank_one_fit_of_each_block():
     """On a perturbed theta, the recovered blocks are the leading SVD term of each block."""
-    layout = fohw.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    layout = fohw.model.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
     rng = np.random.default_rng(1)
     theta = fohw.datasets.paper_model().theta + 0.01 * rng.standard_normal(10)
     rebuilt = layout.blocks(layout.theta_of_model_vector(layout.rank_one_recovery(theta)))
@@ -54,7 +54,7 @@ def test_rank_one_recovery_is_the_best_rank_one_fit_of_each_block():
 
 
 def test_rank_one_recovery_names_a_block_it_cannot_normalise():
-    layout = fohw.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+    layout = fohw.model.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
     with pytest.raises(fohw.ParameterError, match="output"):
         layout.rank_one_recovery([0.0, 0.5, 1.0])
 
@@ -194,7 +194,7 @@ def test_structured_fit_is_exact_on_noise_free_data():
     assert r.method == "structured" and r.converged
     assert r.relative_error(model.theta) < 1e-8
     assert abs(r.alpha - 0.6) < 1e-8
-    np.testing.assert_allclose(r.model.q, model.q, atol=1e-8)
+    np.testing.assert_allclose(r.shared_model.q, model.q, atol=1e-8)
 
 
 def test_structured_fit_of_a_general_structure_is_exact_on_noise_free_data():
@@ -214,13 +214,13 @@ def test_structured_standard_errors_are_those_of_the_structured_jacobian():
     independently of the estimator (information_matrix of theta(a, b, p, q))."""
     data = fohw.datasets.paper_example(1500, random_state=9)
     r = fohw.identify(data.u, data.y, method="structured", **STRUCT)
-    m = r.model
+    m = r.shared_model
     x = np.r_[m.a, m.b, m.p[1:], m.q[1:], r.alpha]
     layout = m.layout
 
     def predictor(z):
         theta = layout.to_theta(z[:2], z[2:4], np.r_[1, z[4]], np.r_[1, z[5:7]])
-        return fohw.information_matrix(data.u, data.y, z[7], **STRUCT) @ theta
+        return fohw.model.regressors.information_matrix(data.u, data.y, z[7], **STRUCT) @ theta
     G = central_difference(predictor, x)
     rss = float(np.sum((data.y - predictor(x)) ** 2))
     cov = rss / (data.u.size - x.size) * np.linalg.inv(G.T @ G)

@@ -11,6 +11,7 @@ import pytest
 
 import fohw
 from fohw.exceptions import DimensionError, ParameterError
+from fohw.model.output_map import DeadZone, PiecewiseLinear, PolynomialMap, Saturation
 from fohw.model.parameters import ORDER_RANGE
 
 
@@ -43,9 +44,9 @@ def _literal(u, h, num, num_orders, den, den_orders, delay_samples, p, h_map):
 
 MAPS = [
     ("identity", None, (), lambda x: x),
-    ("polynomial", fohw.PolynomialMap(3), (0.4, -0.3), lambda x: x + 0.4 * x ** 2 - 0.3 * x ** 3),
-    ("saturation", fohw.Saturation(), None, None),       # limits at the 20 % and 80 % quantiles of x
-    ("deadzone", fohw.DeadZone(), None, None),           # ends at the 30 % and 70 % quantiles of x
+    ("polynomial", PolynomialMap(3), (0.4, -0.3), lambda x: x + 0.4 * x ** 2 - 0.3 * x ** 3),
+    ("saturation", Saturation(), None, None),       # limits at the 20 % and 80 % quantiles of x
+    ("deadzone", DeadZone(), None, None),           # ends at the 30 % and 70 % quantiles of x
 ]
 
 
@@ -135,8 +136,8 @@ def _fd(model, u, eps=1e-6):
     return np.column_stack(cols)
 
 
-@pytest.mark.parametrize("hmap,params", [(None, None), (fohw.PolynomialMap(3), (0.4, -0.3)),
-                                         (fohw.Saturation(), (-0.3, 0.45))])
+@pytest.mark.parametrize("hmap,params", [(None, None), (PolynomialMap(3), (0.4, -0.3)),
+                                         (Saturation(), (-0.3, 0.45))])
 def test_jacobian_equals_central_differences(hmap, params):
     h = 0.05
     G = fohw.FractionalTF([1.0, 0.3], [0.0, 0.5], [2.0, 1.0], [0.7, 0.0], delay=h)
@@ -158,8 +159,8 @@ def test_jacobian_equals_central_differences(hmap, params):
     assert np.max(np.abs(jac - ref)) <= 1e-7 * max(1.0, np.max(np.abs(ref)))
 
 
-TRUE_MAPS = {"polynomial": (fohw.PolynomialMap(2), [-0.2]),
-             "saturation": (fohw.Saturation(), [0.1, 0.45]), "identity": (None, None)}
+TRUE_MAPS = {"polynomial": (PolynomialMap(2), [-0.2]),
+             "saturation": (Saturation(), [0.1, 0.45]), "identity": (None, None)}
 TRUE = {"b0": 1.0, "a0": 2.0, "alpha0": 0.6, "p2": 0.3, "h_c2": -0.2, "h_lower": 0.1,
         "h_upper": 0.45}
 H, N, SIGMA = 0.05, 1000, 0.01
@@ -257,7 +258,7 @@ def test_a_limit_never_reached_is_rank_deficient_and_named():
     the data say nothing about it: the CRB and the fit name it (the old ones gave a nan
     standard error)."""
     G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0])
-    model = fohw.FractionalHW(G, output_map=fohw.Saturation(), output_params=[-5.0, 0.2], dt=0.1)
+    model = fohw.FractionalHW(G, output_map=Saturation(), output_params=[-5.0, 0.2], dt=0.1)
     rng = np.random.default_rng(0)
     u = rng.uniform(-1, 1, 300)
     _, jac = model.jacobian(u)
@@ -276,13 +277,13 @@ def test_a_limit_never_reached_is_rank_deficient_and_named():
     (lambda G: fohw.FractionalHW(G, p=[2.0, 1.0]), ParameterError, r"`p\[0\]` must be exactly 1"),
     (lambda G: fohw.FractionalHW(G, p=[1.0, 1.0], f_basis=3), DimensionError, "one entry per f-basis"),
     (lambda G: fohw.FractionalHW("G"), ParameterError, "`G` must be a FractionalTF"),
-    (lambda G: fohw.FractionalHW(G, output_map=fohw.Saturation(1.0, 0.0)), ParameterError,
+    (lambda G: fohw.FractionalHW(G, output_map=Saturation(1.0, 0.0)), ParameterError,
      "lower < upper"),
     (lambda G: fohw.FractionalHW(G, output_map="cubic"), ParameterError, "`output_map`"),
     (lambda G: fohw.FractionalHW(G, output_map=("saturation", [-1, 1])), ParameterError,
      "`output_map` must be None"),
     (lambda G: fohw.FractionalHW(G, output_map=0), ParameterError, "`output_map` as a polynomial"),
-    (lambda G: fohw.FractionalHW(G, output_map=fohw.PiecewiseLinear(4)), ParameterError,
+    (lambda G: fohw.FractionalHW(G, output_map=PiecewiseLinear(4)), ParameterError,
      "`output_map`.*breakpoints"),
     (lambda G: fohw.FractionalHW(G, output_map="saturation"), ParameterError, "`output_params`"),
     (lambda G: fohw.FractionalHW(G, output_map=3, output_params=[1.0]), DimensionError,
@@ -311,7 +312,7 @@ def test_bad_fit_input():
         fohw.fit(model, u, np.ones(50))
     with pytest.raises(ParameterError, match="`dt` is needed"):
         fohw.fit(fohw.FractionalHW(G), u, u)
-    sat = fohw.FractionalHW(G, output_map=fohw.Saturation(upper=-10.0), dt=0.1,
+    sat = fohw.FractionalHW(G, output_map=Saturation(upper=-10.0), dt=0.1,
                             output_params=[-20.0])
     with pytest.raises(ParameterError, match="`output_map`.*entirely at one limit"):
         fohw.fit(sat, u, u)

@@ -9,28 +9,15 @@ matrix, and the paper's estimators.
 # _startup first ("_" sorts first): for the `fohw` command only, Ctrl-C while importing is one
 # line and status 130.
 from . import _startup, datasets  # noqa: F401
-from ._parallel import end_with_parent
 from .analysis.batch import identify_many, stream_fits
-from .analysis.crb import CRBResult, crb
+from .analysis.crb import crb
 from .analysis.lrtest import LRTest, lr_test, order_test
 from .analysis.montecarlo import monte_carlo
 from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
 from .estimators.fit import fit
-from .estimators.hybrid import (
-    HybridIdentifier,
-    HybridOptions,
-    SingleInnovationGradientOptions,
-    SingleInnovationLMOptions,
-)
 from .estimators.identify import identify
-from .estimators.impedance_fit import fit_impedance, fit_record_and_impedance
-from .estimators.migd import MultiInnovationGradient
-from .estimators.output_error import OutputErrorOptions
-from .estimators.rls import MultiInnovationRLS, RlsOptions
-from .estimators.structured import StructuredOptions
-from .estimators.varpro import VarproOptions
 from .exceptions import (
     ConvergenceWarning,
     DataFileError,
@@ -50,22 +37,20 @@ from .frequency_plots import bode, nyquist
 from .io.jsonio import load_model, load_result, save_model, save_result
 from .io.text import read_record
 from .model.base import Model, register_model
-from .model.basis import Basis, InputBases, as_basis, polynomial_basis
+from .model.basis import Basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
 from .model.circuit_tables import CircuitTables
-from .model.gl import gl_difference, gl_weights, gl_weights_derivative
+from .model.gl import gl_difference, gl_weights
 from .model.initial import InitialState, initial_state
 from .model.orders import Orders
-from .model.output_map import CustomMap, DeadZone, PiecewiseLinear, PolynomialMap, Saturation
 from .model.parameters import Parameter, Parameters
-from .model.params import ThetaLayout
-from .model.regressors import RegressorBuilder, information_matrix
 from .model.simulation import simulate
 from .model.structure import Structure
 from .model.system import HammersteinWiener
+from .model.theta_hw import ThetaHW
 from .model.transfer import FractionalTF
 from .model.wiener import FractionalHW
-from .record import Benchmark, Record
+from .record import Record
 from .results import IdentificationResult, Status
 
 
@@ -98,8 +83,6 @@ __all__ = [
     "Parameters",
     "register_model",
     "fit",
-    "fit_impedance",
-    "fit_record_and_impedance",
     "FitResult",
     "bode",
     "nyquist",
@@ -111,8 +94,6 @@ __all__ = [
     "Selection",
     "select_structure",
     "Basis",
-    "InputBases",
-    "CRBResult",
     "ConvergenceWarning",
     "NothingSelectedWarning",
     "DataWarning",
@@ -121,37 +102,22 @@ __all__ = [
     "EstimationDivergedError",
     "FohwError",
     "HammersteinWiener",
-    "HybridIdentifier",
-    "HybridOptions",
+    "ThetaHW",
     "IdentificationResult",
     "Record",
-    "Benchmark",
-    "MultiInnovationGradient",
-    "MultiInnovationRLS",
     "NotFittedError",
     "Orders",
-    "OutputErrorOptions",
     "ParameterError",
     "ExtrapolationWarning",
     "RankDeficiencyWarning",
-    "RegressorBuilder",
-    "RlsOptions",
-    "StructuredOptions",
-    "SingleInnovationGradientOptions",
-    "SingleInnovationLMOptions",
     "SimulationDivergedError",
     "Status",
     "Structure",
-    "ThetaLayout",
-    "VarproOptions",
-    "as_basis",
     "crb",
     "datasets",
     "gl_difference",
     "gl_weights",
-    "gl_weights_derivative",
     "identify",
-    "information_matrix",
     "load_model",
     "load_result",
     "monte_carlo",
@@ -168,11 +134,6 @@ __all__ = [
     "ProfileInterval",
     "profile_interval",
     "FractionalHW",
-    "Saturation",
-    "DeadZone",
-    "PiecewiseLinear",
-    "PolynomialMap",
-    "CustomMap",
     # battery cells: the fractional equivalent circuit
     "EquivalentCircuit",
     "OCVTable",
@@ -180,5 +141,4 @@ __all__ = [
     "ZARC",
     "Warburg",
     "CircuitTables",
-    "end_with_parent",
 ]

@@ -33,12 +33,13 @@ PARENT_POLL = 0.5
 def end_with_parent(parent=None, poll=PARENT_POLL):
     """Initializer of a worker process: end it when its parent process dies.
 
-    ``ProcessPoolExecutor(initializer=fohw.end_with_parent)``. Without it a pool's workers
-    outlive a parent killed by SIGKILL (measured: both workers of ``fohw select --jobs 2`` alive
-    120 s after the kill), since nothing tells them. On Linux the kernel sends the worker
-    SIGTERM when the parent's thread that started it ends (``prctl(PR_SET_PDEATHSIG)``); on
-    every system a daemon thread looks every ``poll`` seconds whether the parent is still the
-    worker's parent and ends the worker (``os._exit``) when it is not.
+    ``ProcessPoolExecutor(initializer=end_with_parent)``, imported from :mod:`fohw.analysis.batch`
+    (this module is private). Without it a pool's workers outlive a parent killed by SIGKILL
+    (measured: both workers of ``fohw select --jobs 2`` alive 120 s after the kill), since
+    nothing tells them. On Linux the kernel sends the worker SIGTERM when the parent's thread
+    that started it ends (``prctl(PR_SET_PDEATHSIG)``); on every system a daemon thread looks
+    every ``poll`` seconds whether the parent is still the worker's parent and ends the worker
+    (``os._exit``) when it is not.
 
     Parameters
     ----------
@@ -53,7 +54,8 @@ def end_with_parent(parent=None, poll=PARENT_POLL):
     --------
     >>> from concurrent.futures import ProcessPoolExecutor
     >>> import fohw
-    >>> with ProcessPoolExecutor(2, initializer=fohw.end_with_parent) as pool:   # doctest: +SKIP
+    >>> from fohw.analysis.batch import end_with_parent
+    >>> with ProcessPoolExecutor(2, initializer=end_with_parent) as pool:   # doctest: +SKIP
     ...     rows = fohw.monte_carlo({"varpro": {"method": "varpro"}}, executor=pool)
     """
     if isinstance(poll, bool) or not isinstance(poll, numbers.Real) or not 0.0 < poll <= 60.0:

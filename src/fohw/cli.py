@@ -706,7 +706,7 @@ def _fit_and_check(args, record, options):
         _progress(f"identified in {time.perf_counter() - start:.1f} s; simulating in free run "
                   "...")
         check = None
-        if res.model is not None or res.structure.n_inputs > 1:      # several: result.simulate
+        if res.shared_model is not None or res.structure.n_inputs > 1:      # several: result.simulate
             try:
                 check = compare(res, record, initial="fitted")    # its own estimation record
             except FohwError as exc:        # e.g. a constant output: no fit index
@@ -732,8 +732,8 @@ def _print_identified(args, res, check):
                "J": res.J, "converged": res.converged, "status": res.status.name,
                "method": res.method,
                "n_samples": res.n_samples, "message": res.message}
-        if res.model is not None:
-            out["model"] = {k: getattr(res.model, k).tolist() for k in "abpq"}
+        if res.shared_model is not None:
+            out["model"] = {k: getattr(res.shared_model, k).tolist() for k in "abpq"}
         if res.covariance is not None:
             out["standard_errors"] = res.standard_errors()
         out["estimation_record"] = _fit_dict(check)

@@ -31,7 +31,7 @@ class ResultPresentation:
 
         paragraphs = self.summary().split("\n\n")       # head, estimates, then the rest
         names = self._display_names()
-        est = (self._estimates() if self.model is not None
+        est = (self._estimates() if self.shared_model is not None
                else dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear])))
         if self.covariance is not None:
             se, ci = self.standard_errors(), self.confidence_intervals()
@@ -76,7 +76,7 @@ class ResultPresentation:
                   ""]
         names = self._display_names()
         est = dict(zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
-        if self.model is not None:
+        if self.shared_model is not None:
             est = self._estimates()
         if self.covariance is not None:
             lines += self._estimate_table(names, est)
@@ -84,10 +84,10 @@ class ResultPresentation:
             width = max(12, max(len(n) for n in names) + 2)
             lines.append(f"  {'parameter':<{width}}{'estimate':>14}")
             lines += [f"  {n:<{width}}{est[n]:>14.6g}" for n in names]
-            if self.model is not None:
+            if self.shared_model is not None:
                 lines += ["", "  recovered by Eqs. (39)-(40):"]
                 for name in "abpq":
-                    vals = ", ".join(f"{v:.6g}" for v in getattr(self.model, name))
+                    vals = ", ".join(f"{v:.6g}" for v in getattr(self.shared_model, name))
                     lines.append(f"  {name} = [{vals}]")
         if self.alpha_at_bound:
             lines.append("  alpha was held at (or ended at) a bound of alpha_bounds.")
@@ -179,7 +179,7 @@ class ResultPresentation:
             return (f"  {n:<{width}}{est[n]:>14.6g}{se[n]:>12.3g}{ci[n][0]:>14.6g}"
                     f"{ci[n][1]:>14.6g}")
         lines += [row(n) for n in names]
-        if self.model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
+        if self.shared_model is not None and (self.layout.n_f > 1 or self.layout.n_g > 1):
             lines += ["", "  p and q estimated directly (structured least squares):"
                       if self.method == "structured" else
                       "  p and q recovered by Eqs. (39)-(40), delta-method errors:"]

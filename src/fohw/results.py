@@ -24,12 +24,13 @@ from .lr_statistic import order_test
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
-from .model.parameters import Parameter, Parameters
+from .model.parameters import Parameters
 from .model.params import ThetaLayout
 from .model.regressors import RegressorBuilder
 from .model.simulation import check_input_point, check_record_sampling, record_list
 from .model.structure import Structure
 from .model.system import HammersteinWiener
+from .model.theta_hw import ThetaHW
 from .presentation import ResultPresentation
 
 __all__ = ["IdentificationResult", "Status", "recover_model", "DETAIL_KEYS"]
@@ -352,14 +353,38 @@ class IdentificationResult(ResultPresentation):
         return self.structure.g_basis
 
     @cached_property
-    def model(self) -> HammersteinWiener | None:
-        """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40).
+    def model(self) -> ThetaHW:
+        """The fitted model: a :class:`fohw.ThetaHW` holding theta itself (a map per lag).
 
-        With a series output map it is the model of ``z``, before ``h`` (a
-        :class:`fohw.HammersteinWiener` has no output map): ``result.simulate`` applies ``h``,
-        ``fohw.simulate(result.model, u)`` does not.
+        The class the method fitted, every parameter at its estimate (the offset, orders, past
+        levels and the series output map's parameters included) and the orders' bounds those of
+        the fit (``options["alpha_bounds"]``): ``result.model.simulate(u)`` is
+        ``result.simulate(u)`` (from the model's own levels), and ``fohw.fit(result.model,
+        data)`` starts at this estimate. ``result.model.shared()`` is the model with one map
+        per branch of Eqs. (39)–(40) (a :class:`fohw.HammersteinWiener`, a smaller class that
+        simulates otherwise unless theta is an exact Kronecker product).
+        """
+        s = self.structure
+        model = ThetaHW(s, self.linear, self.nonlinear, operating_point=self.operating_point)
+        bounds = self.options.get("alpha_bounds")
+        if bounds is None or not s.orders.free:
+            return model
+        per = dict(bounds) if isinstance(bounds, Mapping) else dict.fromkeys(s.orders.free, bounds)
+        params = model.parameters
+        for name, pair in per.items():
+            if name in params:
+                params = params.replace(name, bounds=tuple(float(v) for v in pair))
+        return model.with_parameters(params)
 
-        ``None`` if that is undefined (an ``a_i`` or ``b_i`` exactly zero; ``message`` says so).
+    @cached_property
+    def shared_model(self) -> HammersteinWiener | None:
+        """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40): one map per branch.
+
+        A :class:`fohw.HammersteinWiener`, the paper's smaller class; it reproduces the fit only
+        when theta is an exact Kronecker product (``method="structured"``), so the fitted model
+        is :attr:`model`. With a series output map it is the model of ``z``, before ``h``.
+        ``None`` if the recovery is undefined (an ``a_i`` or ``b_i`` exactly zero, or several
+        inputs; ``message`` says so).
         """
         return recover_model(self.structure, self.theta, self.orders, offset=self.offset,
                              past=self.past, operating_point=self.operating_point)[0]
@@ -438,12 +463,11 @@ class IdentificationResult(ResultPresentation):
     def parameters(self) -> Parameters:
         """The estimates as :class:`fohw.Parameters` (:attr:`estimate_names`, the order of ``covariance``).
 
-        The free orders are marked ``order=True``; this is the vocabulary every kind's result
-        shares (:class:`fohw.FitResult`).
+        The fitted model's own (:attr:`model`): the free orders marked ``order=True`` with the
+        bounds the fit held them in (``alpha_bounds``), one statement of each bound; this is the
+        vocabulary every kind's result shares (:class:`fohw.FitResult`).
         """
-        orders = set(self.orders)
-        return Parameters(Parameter(n, float(v), order=n in orders)
-                          for n, v in zip(self.estimate_names, np.r_[self.linear, self.nonlinear]))
+        return self.model.parameters
 
     @property
     def sse(self) -> float:
@@ -661,8 +685,8 @@ class IdentificationResult(ResultPresentation):
         """Free-run simulation of the identified predictor, in the data's units.
 
         Uses ``theta`` itself (and the offset and orders), i.e. exactly the model that was
-        fitted, from the initial state ``initial``; for the rank-one ``a, b, p, q`` of
-        Eqs. (39)–(40) use ``fohw.simulate(result.model, u)``.
+        fitted (:attr:`model`), from the initial state ``initial``; for the rank-one
+        ``a, b, p, q`` of Eqs. (39)–(40) use ``result.shared_model``.
 
         Parameters
         ----------
@@ -768,13 +792,13 @@ def recover_model(structure, theta, orders, *, offset=0.0, past=(0.0, 0.0),
                   operating_point=(0.0, 0.0)):
     """The model of Eqs. (39)-(40), or None and a note saying why it is undefined."""
     if structure.n_inputs > 1:
-        return None, (f" No HammersteinWiener model: it has one input and this result has "
-                      f"{structure.n_inputs} ({', '.join(structure.inputs)}); "
-                      "result.simulate uses the fitted theta itself.")
+        return None, (f" No shared-map model (result.shared_model, a HammersteinWiener): it has "
+                      f"one input and this result has {structure.n_inputs} "
+                      f"({', '.join(structure.inputs)}); the fitted model is result.model.")
     try:
         return HammersteinWiener.from_theta(
             theta, dict(orders), na=structure.na, nb=structure.nb, f_basis=structure.f_basis,
             g_basis=structure.g_basis, orders=structure.orders, dt=structure.dt,
             offset=offset, past=past, operating_point=operating_point, nk=structure.nk), ""
     except ParameterError as exc:
-        return None, f" No model: {exc}"
+        return None, f" No shared-map model (result.shared_model): {exc}"

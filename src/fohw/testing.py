@@ -504,6 +504,8 @@ def _check_frequency_response(ctx):
         g = response(omega)
     except Exception as exc:
         _fail(f"frequency_response(omega) raised {type(exc).__name__}: {exc}")
+    if g is None:               # fohw.Model's default: the kind has none
+        return "not applicable: the kind has no frequency_response"
     if not isinstance(g, np.ndarray) or not np.iscomplexobj(g):
         _fail(f"frequency_response(omega) must return a complex array; got "
               f"{getattr(g, 'dtype', type(g).__name__)}")

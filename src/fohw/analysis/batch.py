@@ -6,7 +6,9 @@ paper's lagged kind. :func:`stream_fits` is the form that scales: records are re
 time (an iterable, or file paths read by the worker that fits them), at most a few per worker
 are in flight, and each outcome is yielded as it comes (or written to a folder), so the memory
 of the calling process does not grow with the number of records. :func:`identify_many` is the
-list of the same outcomes.
+list of the same outcomes. A ``ProcessPoolExecutor`` of your own takes :func:`end_with_parent`
+(defined in the private ``fohw._parallel``, public here) as its ``initializer``, so its workers
+end when this process dies.
 """
 
 from __future__ import annotations
@@ -17,12 +19,12 @@ import time
 import warnings
 from dataclasses import dataclass
 
-from .._parallel import TaskError, as_executor, stream_tasks
+from .._parallel import TaskError, as_executor, end_with_parent, stream_tasks
 from ..exceptions import ConvergenceWarning, ParameterError
 from ..model.base import Model
 from ..record import Record
 
-__all__ = ["stream_fits", "identify_many", "identify_quietly", "BatchItem"]
+__all__ = ["stream_fits", "identify_many", "identify_quietly", "BatchItem", "end_with_parent"]
 
 
 def identify_quietly(u, y, **kwargs):

@@ -45,6 +45,7 @@ from ..model.regressors import RegressorBuilder
 from ..model.sensitivity import simulation_jacobian
 from ..model.simulation import check_record_sampling, generic_model, simulate
 from ..model.system import HammersteinWiener
+from ..model.theta_hw import ThetaHW
 from ..record import record_data
 
 __all__ = ["crb", "CRBResult"]
@@ -233,9 +234,9 @@ def crb(model: HammersteinWiener, u: ArrayLike, noise_variance: float, *,
     if other is not None:
         return _crb_model(other, inputs, noise_variance, parametrisation, noise, n_realizations,
                           random_state)
-    if not isinstance(model, HammersteinWiener):
-        raise ParameterError(f"`model` must be a HammersteinWiener or a fohw.Model; got "
-                             f"{type(model).__name__}.")
+    if not isinstance(model, (HammersteinWiener, ThetaHW)):    # the lagged kind, either map
+        raise ParameterError(f"`model` must be a HammersteinWiener, a ThetaHW or a fohw.Model; "
+                             f"got {type(model).__name__}.")
     parametrisation = "theta" if parametrisation is None else parametrisation
     noise = "equation" if noise is None else noise
     if parametrisation not in PARAMETRISATIONS:

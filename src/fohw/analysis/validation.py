@@ -29,6 +29,7 @@ from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
 from ..model.simulation import check_record_sampling, generic_model, simulate_record
 from ..model.system import HammersteinWiener
+from ..model.theta_hw import ThetaHW
 from ..record import record_data
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
@@ -261,7 +262,7 @@ def _free_run(model, u, state):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ExtrapolationWarning)
         try:
-            if isinstance(model, HammersteinWiener) and isinstance(state, InitialState):
+            if isinstance(model, (HammersteinWiener, ThetaHW)) and isinstance(state, InitialState):
                 ysim = simulate_from(model, u, state)
             else:
                 ysim = model.simulate(u, initial=state)
@@ -513,8 +514,8 @@ def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelo
     is_model = isinstance(model, HammersteinWiener)
     if not is_model and not all(callable(getattr(model, name, None))
                                 for name in ("simulate", "predict")):
-        raise ParameterError("`model` must be an identification result (fohw.identify) or a "
-                             f"fohw.HammersteinWiener; got {type(model).__name__}.")
+        raise ParameterError("`model` must be an identification result (fohw.identify), a "
+                             f"fohw.HammersteinWiener or a fohw.ThetaHW; got {type(model).__name__}.")
     u = check_inputs(u, model.structure.n_inputs, names=model.structure.inputs)
     y, n_init, factor = _checked_record(u, y, n_init, envelope)
     state = initial_state(model, u, y if _is_estimate(initial) else None, initial)

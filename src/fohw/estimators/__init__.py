@@ -1,5 +1,10 @@
-"""How theta and the fractional order are estimated: one module per method.
+"""How models are estimated: :func:`fohw.fit` for every kind, and the lagged kind's methods.
 
-The paper's own method (:mod:`~fohw.estimators.hybrid`, built on the kernels of
-:mod:`~fohw.estimators.migd` and :mod:`~fohw.estimators.milm`) and the estimators beyond it.
+:mod:`~fohw.estimators.fit` fits any :class:`fohw.Model` by simulation error (starts, bounded
+least squares, status, covariance); :mod:`~fohw.estimators.impedance_fit` fits a circuit to a
+measured impedance spectrum. :func:`fohw.identify` (:mod:`~fohw.estimators.identify`) is the
+lagged kind's front door: the paper's own method (:mod:`~fohw.estimators.hybrid`, built on the
+kernels of :mod:`~fohw.estimators.migd` and :mod:`~fohw.estimators.milm`) and the estimators
+beyond it (:mod:`~fohw.estimators.varpro`, :mod:`~fohw.estimators.structured`,
+:mod:`~fohw.estimators.output_error`, :mod:`~fohw.estimators.rls`), one module per method.
 """

@@ -400,7 +400,7 @@ normalisation, forgetting, restart_r, innovation_length
     --------
     >>> import fohw
     >>> data = fohw.datasets.paper_example(1000, random_state=0)
-    >>> est = fohw.HybridIdentifier(na=2, nb=2, f_basis=2, g_basis=3, innovation_length=3)
+    >>> est = fohw.estimators.hybrid.HybridIdentifier(na=2, nb=2, f_basis=2, g_basis=3, innovation_length=3)
     >>> est.get_params()["schedule"]
     'recursive'
     >>> est.fit(data.u, data.y).theta_.shape

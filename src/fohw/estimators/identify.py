@@ -102,7 +102,7 @@ def identify(u: ArrayLike, y: ArrayLike | None = None, *, na: int, nb: int, f_ba
             :class:`~fohw.estimators.hybrid.SingleInnovationGradientOptions`,
             :class:`~fohw.estimators.hybrid.SingleInnovationLMOptions`.
         ``"rls"``
-            Beyond the paper: one pass of :class:`fohw.MultiInnovationRLS` (recursive least
+            Beyond the paper: one pass of :class:`fohw.estimators.rls.MultiInnovationRLS` (recursive least
             squares with recursive alpha). Options: :class:`~fohw.estimators.rls.RlsOptions`.
     orders : str, number, dict or Orders, optional
         Which term of the linear block has which order (:class:`fohw.Orders`):

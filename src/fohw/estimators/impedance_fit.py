@@ -124,14 +124,13 @@ def _covariance(jac, sse, n, names, how):
 
 
 def _finish(kind, status, messages, rank_note):
+    where = f"fohw.estimators.impedance_fit.{kind}(EquivalentCircuit)"
     if rank_note:
         status = Status.RANK_DEFICIENT if status != Status.FAILED else status
         messages.append(rank_note)
-        warnings.warn(f"fohw.{kind}(EquivalentCircuit): {rank_note}", RankDeficiencyWarning,
-                      stacklevel=3)
+        warnings.warn(f"{where}: {rank_note}", RankDeficiencyWarning, stacklevel=3)
     elif status in (Status.MAX_ITER, Status.FAILED):
-        warnings.warn(f"fohw.{kind}(EquivalentCircuit): {' '.join(messages[1:])}",
-                      ConvergenceWarning, stacklevel=3)
+        warnings.warn(f"{where}: {' '.join(messages[1:])}", ConvergenceWarning, stacklevel=3)
     return status, " ".join(messages)
 
 
@@ -281,9 +280,10 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     Examples
     --------
     >>> import numpy as np, fohw
+    >>> from fohw.estimators.impedance_fit import fit_impedance
     >>> true = fohw.EquivalentCircuit([fohw.RC(0.004, 2.0), fohw.ZARC(0.01, 80.0, 0.55)], r0=0.02)
     >>> f = np.logspace(-3, 1, 30)
-    >>> res = fohw.fit_impedance(fohw.EquivalentCircuit(["rc", "zarc"]), f, true.impedance(f))
+    >>> res = fit_impedance(fohw.EquivalentCircuit(["rc", "zarc"]), f, true.impedance(f))
     >>> {k: round(v, 6) for k, v in res.parameters.valuesdict().items() if k != "b"}
     {'a': 0.0, 'R0': 0.02, 'R1': 0.004, 'tau1': 2.0, 'R2': 0.01, 'tau2': 80.0, 'alpha2': 0.55}
     """

@@ -186,7 +186,7 @@ class MultiInnovationGradient(BaseEstimator):
     --------
     >>> import fohw
     >>> data = fohw.datasets.paper_example(2000, random_state=0)
-    >>> est = fohw.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6)
+    >>> est = fohw.estimators.migd.MultiInnovationGradient(na=2, nb=2, f_basis=2, g_basis=3, alpha=0.6)
     >>> est.fit(data.u, data.y).theta_.shape
     (10,)
     """

@@ -20,7 +20,7 @@ from ..model.gl import gl_weights_derivative, gl_weights_unchecked
 __all__ = ["milm_step", "milm_pass", "output_sensitivity", "alpha_update", "SENSITIVITIES"]
 
 #: ``"finite_difference"``: Eq. (44) with step ``delta_alpha``; ``"exact"``: by the exact
-#: derivative of the GL weights (:func:`fohw.gl_weights_derivative`).
+#: derivative of the GL weights (:func:`fohw.model.gl.gl_weights_derivative`).
 SENSITIVITIES = ("finite_difference", "exact")
 
 
@@ -108,7 +108,7 @@ def sensitivity_weights(alpha, n, *, sensitivity="finite_difference", delta_alph
     """Weights whose GL convolution gives the regressor sensitivity ``d phi / d alpha``.
 
     ``"finite_difference"`` returns ``(beta(alpha + delta) - beta(alpha)) / delta`` (Eq. 44),
-    ``"exact"`` returns :func:`fohw.gl_weights_derivative`. ``beta``, if given, is
+    ``"exact"`` returns :func:`fohw.model.gl.gl_weights_derivative`. ``beta``, if given, is
     ``gl_weights(alpha, n)`` already computed.
     """
     if sensitivity == "exact":
@@ -144,7 +144,7 @@ def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference"
     >>> import fohw
     >>> from fohw.estimators.milm import output_sensitivity
     >>> d = fohw.datasets.paper_example(500, random_state=0)
-    >>> b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> fd = output_sensitivity(b, 0.6, d.model.theta)
     >>> ex = output_sensitivity(b, 0.6, d.model.theta, sensitivity="exact")
     >>> bool(abs(fd - ex).max() < 1e-2 * abs(ex).max())
@@ -186,7 +186,7 @@ def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
     >>> import fohw
     >>> from fohw.estimators.milm import alpha_update
     >>> d = fohw.datasets.paper_example(2000, noise_variance=0.0, random_state=0)
-    >>> b = fohw.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> a1 = alpha_update(b, d.model.theta, 0.5)      # true alpha is 0.6
     >>> bool(0.5 < a1 < 0.7)
     True

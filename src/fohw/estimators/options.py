@@ -12,8 +12,8 @@ what each accepts (scikit-learn's ``_parameter_constraints``): an :class:`Intege
 :class:`Real` interval (whose ends may depend on the record: :class:`Context`), a
 :class:`Choice` of strings, a :class:`Boolean`, or :class:`Anything`. One
 :meth:`MethodOptions.check` validates every class. The estimator classes
-(:class:`fohw.HybridIdentifier`, :class:`fohw.MultiInnovationRLS`,
-:class:`fohw.MultiInnovationGradient`) take their settings from these dataclasses, defaults
+(:class:`fohw.estimators.hybrid.HybridIdentifier`, :class:`fohw.estimators.rls.MultiInnovationRLS`,
+:class:`fohw.estimators.migd.MultiInnovationGradient`) take their settings from these dataclasses, defaults
 included.
 
 Names shared by several methods mean the same everywhere:

@@ -4,7 +4,7 @@
 ``operating_point`` and ``alpha_bounds``) into a :class:`Problem`: the regressor builder of the
 deviations from the operating point and the bounds of the free orders, with the warnings about
 the data said once. :func:`fit_method` runs one declared :class:`~fohw.estimators.options.Method`
-on it. Both :func:`fohw.identify` and the estimator classes (:class:`fohw.HybridIdentifier`)
+on it. Both :func:`fohw.identify` and the estimator classes (:class:`fohw.estimators.hybrid.HybridIdentifier`)
 call it, so the estimator modules never import :mod:`fohw.estimators.identify`.
 """
 

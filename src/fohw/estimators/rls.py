@@ -110,8 +110,8 @@ initial_alpha_variance
     --------
     >>> import numpy as np, fohw
     >>> data = fohw.datasets.paper_example(1000, random_state=0)
-    >>> whole = fohw.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3).fit(data.u, data.y)
-    >>> chunks = fohw.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3)
+    >>> whole = fohw.estimators.rls.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3).fit(data.u, data.y)
+    >>> chunks = fohw.estimators.rls.MultiInnovationRLS(na=2, nb=2, f_basis=2, g_basis=3)
     >>> for i in range(0, 1000, 250):
     ...     _ = chunks.partial_fit(data.u[i:i + 250], data.y[i:i + 250])
     >>> bool(np.array_equal(whole.theta_, chunks.theta_))

@@ -263,9 +263,9 @@ def as_basis(spec: BasisLike, name: str = "basis") -> Basis:
     Examples
     --------
     >>> import numpy as np, fohw
-    >>> fohw.as_basis(2)
+    >>> fohw.model.basis.as_basis(2)
     Basis(x, x^2)
-    >>> fohw.as_basis({"u": lambda x: x, "tanh": np.tanh})
+    >>> fohw.model.basis.as_basis({"u": lambda x: x, "tanh": np.tanh})
     Basis(u, tanh)
     """
     if isinstance(spec, Basis):
@@ -318,7 +318,7 @@ class InputBases:
     Examples
     --------
     >>> import numpy as np, fohw
-    >>> b = fohw.InputBases([2, 1], ("u1", "u2"))
+    >>> b = fohw.model.basis.InputBases([2, 1], ("u1", "u2"))
     >>> len(b), b.names
     (3, ('u1.x', 'u1.x^2', 'u2.x'))
     >>> b.evaluate(np.array([[2.0, 3.0], [1.0, -1.0]]))

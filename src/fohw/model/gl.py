@@ -141,7 +141,7 @@ def gl_weights_derivative(alpha: float, n: int) -> np.ndarray:
     Examples
     --------
     >>> import fohw
-    >>> fohw.gl_weights_derivative(1.0, 4)   # beta = [1, -alpha, alpha(alpha-1)/2, ...]
+    >>> fohw.model.gl.gl_weights_derivative(1.0, 4)   # beta = [1, -alpha, alpha(alpha-1)/2, ...]
     array([ 0.        , -1.        ,  0.5       ,  0.16666667])
     """
     alpha = check_scalar(alpha, "alpha")

@@ -159,7 +159,7 @@ class LinearBlock:
 
         Parameters
         ----------
-        model : HammersteinWiener
+        model : HammersteinWiener or ThetaHW
 
         Returns
         -------
@@ -173,9 +173,20 @@ class LinearBlock:
         >>> blk.static_gain          # commensurate, alpha > 0: no static gain
         0.0
         """
-        out_nu, in_nu = model.structure.orders.values(model.orders)
-        a_terms = [(t.lag, nu) for t, nu in zip(model.structure.orders.output, out_nu)]
-        b_terms = [(t.lag, nu) for t, nu in zip(model.structure.orders.input, in_nu)]
+        s = model.structure
+        if s.n_inputs > 1:
+            raise ParameterError(f"the model has {s.n_inputs} inputs ({', '.join(s.inputs)}): a "
+                                 "LinearBlock is of a single-input model (or several inputs are "
+                                 "one block per input, not written yet).")
+        out_nu, in_nu = s.orders.values(model.orders)
+        a_terms = [(t.lag, nu) for t, nu in zip(s.orders.output, out_nu)]
+        b_terms = [(t.lag, nu) for t, nu in zip(s.orders.input, in_nu)]
+        if not hasattr(model, "a"):
+            # a map per lag (fohw.ThetaHW): each term's own slope, sum_j theta_jt basis_j'(0)
+            qa, pb = s.layout.blocks(model.theta)
+            a = [_basis_slope(s.g_basis, qa[:, t]) for t in range(qa.shape[1])]
+            b = [_basis_slope(s.f_basis, pb[:, t]) for t in range(pb.shape[1])]
+            return cls(a, b, a_terms, b_terms, dt=model.dt)
         return cls(model.a, model.b, a_terms, b_terms, dt=model.dt,
                    g_slope=_basis_slope(model.g_basis, model.q),
                    f_slope=_basis_slope(model.f_basis, model.p))
@@ -306,8 +317,10 @@ def linear_block(model):
 
     Parameters
     ----------
-    model : HammersteinWiener or IdentificationResult
-        A result uses its recovered model (``result.model``).
+    model : HammersteinWiener, ThetaHW or IdentificationResult
+        A result uses its fitted model (``result.model``, a map per lag: each term linearised
+        with its own map's slope; for polynomial bases that is theta's first block, as the
+        rank-one recovery of Eqs. 39–40 gives it).
 
     Returns
     -------
@@ -321,11 +334,7 @@ def linear_block(model):
     'stable'
     """
     inner = getattr(model, "model", model)
-    if inner is None:
-        raise ParameterError("the result has no recovered model (an a_i or b_i is exactly zero, "
-                             "or several inputs; see result.message): its linear block is "
-                             "undefined.")
-    if not hasattr(inner, "structure") or not hasattr(inner, "a"):
-        raise ParameterError(f"`model` must be a HammersteinWiener or an identification result; got "
-                             f"{type(model).__name__}.")
+    if not hasattr(inner, "structure") or not hasattr(inner, "theta"):
+        raise ParameterError(f"`model` must be a HammersteinWiener, a ThetaHW or an identification "
+                             f"result; got {type(model).__name__}.")
     return LinearBlock.from_model(inner)

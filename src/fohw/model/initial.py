@@ -47,6 +47,7 @@ import numpy as np
 
 from .._validation import check_array, check_inputs, check_same_length, unpack_pair
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from .base import Model
 from .simulation import simulate
 from .structure import Structure
 from .system import HammersteinWiener
@@ -176,12 +177,13 @@ def _describe(value):
 def default_initial(model):
     """The choice ``initial=None`` stands for: ``"rest"``, or a model's own levels.
 
-    A :class:`fohw.HammersteinWiener` carries the levels it was written with (``"fitted"``, as
+    A model (:class:`fohw.HammersteinWiener`, :class:`fohw.ThetaHW`) carries the levels it was
+    written with (``"fitted"``, as
     :func:`fohw.simulate` runs it); a fit with ``past="rest"`` starts at rest. A fit with
     ``past="estimate"`` has no default: its levels belong to the estimation record, so a
     ParameterError asks which state to use.
     """
-    if isinstance(model, HammersteinWiener):
+    if isinstance(model, Model):        # a model carries its levels (HammersteinWiener, ThetaHW)
         return "fitted"
     if model.structure.past != "estimate":
         return "rest"

@@ -197,11 +197,11 @@ class RegressorBuilder:
     >>> import numpy as np, fohw
     >>> rng = np.random.default_rng(0)
     >>> u, y = rng.uniform(-1, 1, 200), rng.uniform(-1, 1, 200)
-    >>> builder = fohw.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> builder = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> builder.matrix(0.6).shape
     (200, 10)
-    >>> mixed = fohw.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="mixed",
-    ...                               offset=True)
+    >>> mixed = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="mixed",
+    ...                                                offset=True)
     >>> mixed.matrix(0.4).shape, mixed.structure.linear_names[-2:]
     ((200, 7), ('b1_alpha', 'offset'))
     """
@@ -255,7 +255,7 @@ class RegressorBuilder:
         """GL differences of all basis signals at one order, shape ``(n_g + n_f, N)``.
 
         With ``derivative=True``, their exact derivative with respect to the order
-        (convolution with :func:`fohw.gl_weights_derivative`). Divided by ``dt**alpha``.
+        (convolution with :func:`fohw.model.gl.gl_weights_derivative`). Divided by ``dt**alpha``.
         ``alpha`` must lie in :data:`fohw.model.orders.ORDER_RANGE` (``[0, 2]``), the orders
         every fohw model allows.
         """
@@ -519,7 +519,7 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     >>> model = fohw.HammersteinWiener([0.1, 0.2], [-0.4, -0.2], [1, 0.5], [1, 0.7, 0.35], 0.6)
     >>> u = np.random.default_rng(1).uniform(-1, 1, 500)
     >>> y = fohw.simulate(model, u)
-    >>> Phi = fohw.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> Phi = fohw.model.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
     >>> bool(np.max(np.abs(y - Phi @ model.theta)) < 1e-12)
     True
     """

@@ -11,7 +11,7 @@ sensitivity ``S = d ysim / d x`` as the solution of a linear recursion,
           \\qquad c_t[m] = \\sum_j (q_j a_t)\\, g_j'(y[m]),
 
 where ``E = [Phi, dPhi/dx_nl @ linear]`` is the one-step-predictor Jacobian
-(:meth:`fohw.RegressorBuilder.jacobian`) evaluated on the simulated output, and the sum runs
+(:meth:`fohw.model.regressors.RegressorBuilder.jacobian`) evaluated on the simulated output, and the sum runs
 over the output terms ``t`` (lag ``i_t >= 1``, order ``nu_t``, coefficient ``q_j a_t`` of basis
 function ``g_j``). Because every lag is at least 1, ``S[k]`` depends on ``S[0..k-1]`` only, and
 the recursion is solved exactly by the divide-and-conquer scheme of the simulator

@@ -84,7 +84,7 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
     params : array_like or dict, optional
         With a Structure only (and required): its linear parameters, then its nonlinear ones
         (:attr:`Structure.linear_names` then :attr:`Structure.nonlinear_names`: theta in the
-        layout of :class:`fohw.ThetaLayout`, any theta, not only ``[q ⊗ a, p ⊗ b]``; the
+        layout of :class:`fohw.model.params.ThetaLayout`, any theta, not only ``[q ⊗ a, p ⊗ b]``; the
         offset; the free orders, each in ``[0, 2]``; the past levels), as a vector in that
         order or a dict by name.
     operating_point : (float, float), optional

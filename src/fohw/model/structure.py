@@ -5,7 +5,7 @@ the basis functions, whether the equation has a constant (``offset``), what the 
 before ``k = 0`` (``past``) and the sampling time ``dt``. Its parameters fall in two groups,
 the split that separable least squares exploits:
 
-* **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by :class:`fohw.ThetaLayout`), then the
+* **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by :class:`fohw.model.params.ThetaLayout`), then the
   offset ``c`` if there is one;
 * **nonlinear**: the free orders (in :attr:`Orders.free` order), then the levels ``u_past`` and
   ``y_past`` of the unseen past if ``past="estimate"``, then the parameters of a series output

@@ -349,6 +349,30 @@ class HammersteinWiener(Model):
                               random_state=random_state,
                               divergence_threshold=divergence_threshold, history=initial)
 
+    def jacobian(self, u):
+        """``(yhat, J)``: the free run and its exact sensitivity to every parameter (in order).
+
+        The sensitivity of the free run to ``(theta, offset, orders)``
+        (:func:`fohw.model.sensitivity.simulation_jacobian`, exact) chain-ruled through
+        ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, :meth:`fohw.Structure.structured_jacobian`) to
+        :attr:`parameters`: ``a``, ``b``, ``p[1:]``, ``q[1:]``, the free orders, the offset.
+        """
+        from .sensitivity import simulation_jacobian
+
+        s = self.structure
+        u = check_array(u, "u")
+        u0, y0 = self.operating_point
+        y, jac = simulation_jacobian(s, self.linear, self.nonlinear, u - u0 if u0 else u)
+        a_names, b_names, p_names, q_names = self._names()
+        eta = np.r_[self.a, self.b, self.p[1:], self.q[1:]]
+        x = np.r_[eta, [self.offset] if s.offset else [], self.nonlinear]
+        by_name = dict(zip(s.structured_names, (jac @ s.structured_jacobian(x)).T))
+        names = self.parameters.names
+        if set(names) - set(by_name):           # the layout names the model's blocks otherwise
+            raise ParameterError(f"HammersteinWiener.jacobian: no column for "
+                                 f"{sorted(set(names) - set(by_name))}.")
+        return (y + y0 if y0 else y), np.column_stack([by_name[n] for n in names])
+
     def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
         """Refused: the lagged model is discrete in samples (its lags are samples, not seconds)."""
         raise ParameterError(

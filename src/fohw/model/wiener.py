@@ -10,8 +10,9 @@ static maps):
 - ``G``: a :class:`fohw.FractionalTF`, simulated by its GL discretisation with the current
   sample on both sides (implicit; sample alignment of :mod:`fohw.model.transfer`);
 - ``h``: a series output map of :mod:`fohw.model.output_map` (the family the lagged kind uses:
-  :class:`~fohw.Saturation`, :class:`~fohw.DeadZone`, :class:`~fohw.PiecewiseLinear`,
-  :class:`~fohw.PolynomialMap`, :class:`~fohw.CustomMap`), or none (the identity).
+  :class:`~fohw.model.output_map.Saturation`, :class:`~fohw.model.output_map.DeadZone`,
+  :class:`~fohw.model.output_map.PiecewiseLinear`, :class:`~fohw.model.output_map.PolynomialMap`,
+  :class:`~fohw.model.output_map.CustomMap`), or none (the identity).
 
 It is a :class:`fohw.Model`: :func:`fohw.fit` fits it by simulation error with the exact
 Jacobian of :meth:`FractionalHW.jacobian` (the chain rule through the three blocks):
@@ -93,9 +94,10 @@ class FractionalHW(Model):
     output_map : None, str, int or SeriesMap, optional
         ``h``, any map :func:`fohw.model.output_map.as_output_map` accepts: ``None`` (default,
         the identity), ``"saturation"``, ``"deadzone"``, an int (a polynomial degree) or a map
-        (:class:`fohw.Saturation`, :class:`fohw.DeadZone`, :class:`fohw.PiecewiseLinear` with
-        its breakpoints, :class:`fohw.PolynomialMap`, :class:`fohw.CustomMap`). Its parameters
-        keep the family's names (``h_lower``, ``h_upper``, ``h_c2``, …).
+        (:class:`~fohw.model.output_map.Saturation`, :class:`~fohw.model.output_map.DeadZone`,
+        :class:`~fohw.model.output_map.PiecewiseLinear` with its breakpoints,
+        :class:`~fohw.model.output_map.PolynomialMap`, :class:`~fohw.model.output_map.CustomMap`).
+        Its parameters keep the family's names (``h_lower``, ``h_upper``, ``h_c2``, …).
     output_params : array_like, optional
         Values of the map's parameters (``output_map.names`` order). Default: the map's identity
         start (zeros of a polynomial or dead zone, ``v_i = z_i`` of a piecewise-linear map);
@@ -584,8 +586,8 @@ class FractionalHW(Model):
     def from_config(cls, config) -> FractionalHW:
         """A model of :meth:`config`'s shape (values at placeholders; custom code refused).
 
-        A custom input basis or a :class:`fohw.CustomMap` is stored by name only (code is never
-        written): rebuild such a model with its constructor and ``with_parameters``.
+        A custom input basis or a :class:`~fohw.model.output_map.CustomMap` is stored by name only
+        (code is never written): rebuild such a model with its constructor and ``with_parameters``.
         """
         known = {"dt", "delay", "n_num", "n_den", "f_basis", "output_map"}
         if set(config) != known:

@@ -71,7 +71,7 @@ def run_paper_example(n_samples=10_000, *, random_state=0, innovation_lengths=(1
     baselines : bool
         Also run the two single-innovation baselines of Fig. 6.
     **identify_options
-        Options of the hybrid method (:class:`fohw.HybridOptions`; default: the recursive
+        Options of the hybrid method (:class:`fohw.estimators.hybrid.HybridOptions`; default: the recursive
         schedule of Table 1, one pass, ``alpha0 = 0.5``); the baselines get those they have.
 
     Returns
