@@ -18,7 +18,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validation import RANGE_TOLERANCE, check_array, check_inputs, check_scalar, input_in_range
+from ._validation import RANGE_TOLERANCE, check_inputs, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .lr_statistic import order_test
 from .model.basis import Basis
@@ -26,7 +26,6 @@ from .model.hw_frequency import linear_block
 from .model.initial import initial_state, simulate_from
 from .model.parameters import Parameters
 from .model.params import ThetaLayout
-from .model.regressors import RegressorBuilder
 from .model.simulation import check_input_point, check_record_sampling, record_list
 from .model.structure import Structure
 from .model.system import HammersteinWiener
@@ -669,17 +668,7 @@ class IdentificationResult(ResultPresentation):
         regressors built from the measured ``y`` in place of the unmeasured ``z`` (exact only
         where ``h`` is the identity; the free run, :meth:`simulate`, is the model).
         """
-        u0, y0 = self.operating_point
-        u = check_inputs(u, self.structure.n_inputs, names=self.structure.inputs)
-        y = check_array(y, "y")
-        builder = RegressorBuilder(u - np.asarray(u0) if np.any(u0) else u,
-                                   y - y0 if y0 else y, structure=self.structure)
-        yhat = builder.matrix(self.nonlinear) @ self.linear
-        yhat = yhat + y0 if y0 else yhat
-        hmap = self.structure.output_map
-        if hmap is not None:
-            yhat = hmap.evaluate(yhat, list(self.output_map_params.values()))
-        return yhat
+        return self.model.predict(u, y)
 
     def simulate(self, u, *, initial=None, y=None, **kwargs):
         """Free-run simulation of the identified predictor, in the data's units.
