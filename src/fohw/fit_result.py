@@ -3,26 +3,25 @@
 :class:`FitResult` holds the fitted :class:`fohw.Model`, its :class:`fohw.Parameters`, the
 covariance of the free ones, the status, the simulation error ``sse`` and the noise variance;
 it simulates, summarises itself and writes itself to JSON. The lagged kind's
-:class:`fohw.IdentificationResult` speaks the same vocabulary (``model``, ``parameters``,
-``covariance``, ``standard_errors()``, ``status``, ``sse``, ``noise_variance``, ``simulate``,
-``summary``, ``to_dict``) and counts as a :class:`FitResult` (``isinstance`` holds).
+:class:`fohw.IdentificationResult` (:mod:`fohw.results`) is a subclass: it adds what the
+paper's methods have (theta, the histories, the iterations) and derives ``model``,
+``parameters`` and ``sse`` from them.
 """
 
 from __future__ import annotations
 
-import abc
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
 
+from ._status import Status
 from .exceptions import ParameterError
 from .model.base import Model
 from .model.parameters import Parameters
 from .model.simulation import record_list, simulate
 from .record import describe_data
-from .results import IdentificationResult, Status
 
 __all__ = ["FitResult"]
 
@@ -36,7 +35,7 @@ def _readonly(a):
 
 
 @dataclass(frozen=True, repr=False, eq=False, kw_only=True)
-class FitResult(metaclass=abc.ABCMeta):
+class FitResult:
     """A fitted model of any kind with its uncertainty and diagnostics.
 
     Attributes
@@ -372,7 +371,3 @@ def _jsonable(value):
         return {str(k): _jsonable(v) for k, v in value.items()}
     return repr(value)
 
-
-# The lagged kind's result speaks the same vocabulary (model, parameters, covariance, status,
-# sse, noise_variance, standard_errors, simulate, summary, to_dict): it is a FitResult.
-FitResult.register(IdentificationResult)

@@ -9,17 +9,17 @@ it is written to a file is :mod:`fohw.io.jsonio` (this module imports neither fi
 from __future__ import annotations
 
 import dataclasses
-import enum
 import types
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
+from ._status import Status
 from ._validation import RANGE_TOLERANCE, check_inputs, check_scalar, input_in_range
 from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
+from .fit_result import FitResult
 from .lr_statistic import order_test
 from .model.basis import Basis
 from .model.hw_frequency import linear_block
@@ -33,32 +33,6 @@ from .model.theta_hw import ThetaHW
 from .presentation import ResultPresentation
 
 __all__ = ["IdentificationResult", "Status", "recover_model", "DETAIL_KEYS"]
-
-
-class Status(enum.IntEnum):
-    """Why an identification run stopped: ``IdentificationResult.status``, one meaning for every method.
-
-    Modelled on :class:`scipy.optimize.OptimizeResult`'s ``status``; positive values are
-    successes, zero is "ran out of iterations", negative values are failures.
-    """
-
-    #: The fitted model's free run on its own estimation input leaves the finite numbers or
-    #: the envelope :func:`fohw.compare` uses (from the fit's initial state, or from rest for
-    #: estimated past levels): the model is unstable or absurd on the data it was fitted to,
-    #: whatever its criterion; the message names the sample.
-    IMPLAUSIBLE = -3
-    #: The regressors (or the Jacobian) are rank deficient at the estimate: some parameters
-    #: are not identifiable from this record; the message names them.
-    RANK_DEFICIENT = -2
-    #: The optimiser reported a failure (its message says which).
-    FAILED = -1
-    #: Stopped at the iteration or evaluation limit before meeting the tolerance.
-    MAX_ITER = 0
-    #: Met the method's convergence test.
-    CONVERGED = 1
-    #: A recursive estimator made its passes; its convergence was not tested (Table 1 makes
-    #: one pass, and a recursive estimate is whatever the last sample leaves).
-    NOT_TESTED = 2
 
 
 #: The method-specific outputs fohw's estimators put in :attr:`IdentificationResult.details`;
@@ -143,8 +117,13 @@ def _setting_from_json(value):
 
 
 @dataclass(frozen=True, repr=False, eq=False, kw_only=True)
-class IdentificationResult(ResultPresentation):
-    """Estimates, diagnostics and histories of one identification run.
+class IdentificationResult(ResultPresentation, FitResult):
+    """Estimates, diagnostics and histories of one identification run: a :class:`fohw.FitResult`.
+
+    The subclass adds what the paper's methods have (theta, the histories, the iterations) to
+    the vocabulary every fit shares; :attr:`model` (the fitted :class:`fohw.ThetaHW`),
+    :attr:`parameters` (its :class:`fohw.Parameters`) and :attr:`sse` (the simulation error
+    where the method fits it, ``J * n_samples`` otherwise) are FitResult's fields, derived here.
 
     Each fact is stored once: the fields below are the estimate and the run's diagnostics;
     ``alpha``, ``layout``, ``f_basis``, ``g_basis`` and ``model`` are derived from them (read-only
@@ -264,6 +243,17 @@ class IdentificationResult(ResultPresentation):
     details: Mapping = field(default_factory=dict)
     output_map_params: Mapping = field(default_factory=dict)
     data: Mapping = field(default_factory=dict)
+    # What FitResult stores and this result derives from the fields above (set by
+    # __post_init__, so dataclasses.replace moves them with theta and the orders).
+    model: ThetaHW = field(init=False, default=None)
+    parameters: Parameters = field(init=False, default=None)
+    sse: float = field(init=False, default=float("nan"))
+    jacobian: str = field(init=False, default="")
+    starts: tuple = field(init=False, default=())
+    residuals: np.ndarray | None = field(init=False, default=None)
+    data_digest: str = field(init=False, default="")
+    per_record: Mapping = field(init=False, default_factory=dict)
+    n_per_record: int = field(init=False, default=0)
 
     def __post_init__(self):
         def put(name, value):
@@ -321,10 +311,17 @@ class IdentificationResult(ResultPresentation):
         put("details", types.MappingProxyType(
             {k: _readonly(v) if isinstance(v, np.ndarray) else v
              for k, v in self.details.items()}))
+        put("per_record", types.MappingProxyType({}))
+        model = self._fitted_model()
+        put("model", model)
+        put("parameters", model.parameters)
+        put("sse", float(self.details["simulation_sse"]) if "simulation_sse" in self.details
+            else float(self.J * self.n_samples))
+        put("jacobian", "" if self.covariance is None else "exact")
 
     def __reduce__(self):
         # the mappings are read-only views, which pickle cannot store: rebuild from plain dicts
-        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}
         values.update(orders=dict(self.orders), options=dict(self.options),
                       details=dict(self.details), output_map_params=dict(self.output_map_params),
                       data=dict(self.data))
@@ -351,9 +348,8 @@ class IdentificationResult(ResultPresentation):
         """The output basis functions (``structure.g_basis``)."""
         return self.structure.g_basis
 
-    @cached_property
-    def model(self) -> ThetaHW:
-        """The fitted model: a :class:`fohw.ThetaHW` holding theta itself (a map per lag).
+    def _fitted_model(self) -> ThetaHW:
+        """:attr:`model`: a :class:`fohw.ThetaHW` holding theta itself (a map per lag).
 
         The class the method fitted, every parameter at its estimate (the offset, orders, past
         levels and the series output map's parameters included) and the orders' bounds those of
@@ -375,7 +371,7 @@ class IdentificationResult(ResultPresentation):
                 params = params.replace(name, bounds=tuple(float(v) for v in pair))
         return model.with_parameters(params)
 
-    @cached_property
+    @property
     def shared_model(self) -> HammersteinWiener | None:
         """``a, b, p, q`` recovered from ``theta`` by Eqs. (39)–(40): one map per branch.
 
@@ -459,27 +455,6 @@ class IdentificationResult(ResultPresentation):
         return self.structure.dt
 
     @property
-    def parameters(self) -> Parameters:
-        """The estimates as :class:`fohw.Parameters` (:attr:`estimate_names`, the order of ``covariance``).
-
-        The fitted model's own (:attr:`model`): the free orders marked ``order=True`` with the
-        bounds the fit held them in (``alpha_bounds``), one statement of each bound; this is the
-        vocabulary every kind's result shares (:class:`fohw.FitResult`).
-        """
-        return self.model.parameters
-
-    @property
-    def sse(self) -> float:
-        """The criterion's sum of squares.
-
-        The simulation error where the method fits it (``details["simulation_sse"]``,
-        ``method="output_error"``), else ``J * n_samples`` (the one-step error, Eq. 41).
-        """
-        if "simulation_sse" in self.details:
-            return float(self.details["simulation_sse"])
-        return float(self.J * self.n_samples)
-
-    @property
     def converged(self) -> bool:
         """``status == Status.CONVERGED``: the method's convergence test was met."""
         return self.status == Status.CONVERGED
@@ -545,7 +520,7 @@ class IdentificationResult(ResultPresentation):
         ParameterError, DimensionError
             A field is missing, unknown or inconsistent with another (the message names it).
         """
-        names = {f.name for f in dataclasses.fields(cls)}
+        names = {f.name for f in dataclasses.fields(cls) if f.init}
         if isinstance(d, Mapping) and "output_map_params" not in d:   # written only with a map
             names.discard("output_map_params")
         if isinstance(d, Mapping) and "data" not in d:         # files written before records

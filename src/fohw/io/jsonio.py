@@ -451,7 +451,7 @@ def load_model(path: str | os.PathLike, *, f_basis: Basis | None = None,
 #: ``output_map_params`` is written only for a structure with a series output map.
 _OPTIONAL_RESULT_FIELDS = ("output_map_params", "data")
 _RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(IdentificationResult)
-                       if f.name not in _OPTIONAL_RESULT_FIELDS)
+                       if f.init and f.name not in _OPTIONAL_RESULT_FIELDS)
 _V2_HISTORIES = ("theta_history", "alpha_sample_history", "alpha_history", "J_history",
                  "alpha_profile")
 
