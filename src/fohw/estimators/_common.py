@@ -429,3 +429,27 @@ def bounds_record(structure, lo, hi):
     if len(set(zip(lo.tolist(), hi.tolist()))) <= 1 and lo.size:
         return (float(lo[0]), float(hi[0]))
     return {name: (float(a), float(b)) for name, a, b in zip(structure.orders.free, lo, hi)}
+
+
+def stationary(jac, r, x, lower, upper, rtol=1e-6):
+    """Whether ``x`` is a stationary point of ``||r||^2`` within its bounds (Gauss–Newton).
+
+    The reduction a Gauss–Newton step predicts, ``||P r||^2`` (``P`` the projection onto the
+    columns of ``jac`` not held at an active bound), is below ``rtol`` times ``||r||^2``: a
+    search that ends where it started there has converged (an estimate on a bound with a zero
+    projected gradient included); elsewhere it is stuck.
+    """
+    g = jac.T @ r                                   # d (||r||^2 / 2) / d x is -g
+    free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
+    if not np.any(free):
+        return True
+    # The projection onto the columns' numerical range (equilibrated, singular values above
+    # the rank tolerance of _linalg): a plain QR of nearly dependent columns (estimated past
+    # levels beside a slow pole: condition 1e19) projects onto rounding noise as well.
+    a = jac[:, free]
+    norms = np.linalg.norm(a, axis=0)
+    norms[norms == 0] = 1.0
+    basis, sv, _ = np.linalg.svd(a / norms, full_matrices=False)
+    kept = sv > (sv[0] if sv.size else 0.0) * _linalg.rank_tolerance(*a.shape)
+    pred = float(np.sum((basis[:, kept].T @ r) ** 2))
+    return pred <= rtol * float(r @ r)

@@ -50,10 +50,11 @@ from ..model.base import Model
 from ..model.irregular import DEFAULT_REFINE, jacobian_at
 from ..record import UNIFORM_RTOL, as_records, record_info
 from ..results import Status
-from ._common import bounded_least_squares
+from ._common import bounded_least_squares, stationary
+from .identify import fit_lagged
 
 __all__ = ["fit", "prepare_data", "data_digest_of", "records_jacobian", "free_jacobian",
-           "central_differences", "rank_rcond", "data_digest", "stationary", "MAX_SCAN", "ESCAPE",
+           "central_differences", "rank_rcond", "data_digest", "MAX_SCAN", "ESCAPE",
            "PENALTY", "FD_RCOND"]
 
 #: Most starts the order scan may simulate (``order_grid ** n_orders`` per start model, summed
@@ -373,30 +374,6 @@ def records_jacobian(model, experiments, *, exact=True):
     return yhat, jac, "finite differences"
 
 
-def stationary(jac, r, x, lower, upper, rtol=1e-6):
-    """Whether ``x`` is a stationary point of ``||r||^2`` within its bounds (Gauss–Newton).
-
-    The reduction a Gauss–Newton step predicts, ``||P r||^2`` (``P`` the projection onto the
-    columns of ``jac`` not held at an active bound), is below ``rtol`` times ``||r||^2``: a
-    search that ends where it started there has converged (an estimate on a bound with a zero
-    projected gradient included); elsewhere it is stuck.
-    """
-    g = jac.T @ r                                   # d (||r||^2 / 2) / d x is -g
-    free = ~(((x <= lower) & (g < 0)) | ((x >= upper) & (g > 0)))
-    if not np.any(free):
-        return True
-    # The projection onto the columns' numerical range (equilibrated, singular values above
-    # the rank tolerance of _linalg): a plain QR of nearly dependent columns (estimated past
-    # levels beside a slow pole: condition 1e19) projects onto rounding noise as well.
-    a = jac[:, free]
-    norms = np.linalg.norm(a, axis=0)
-    norms[norms == 0] = 1.0
-    basis, sv, _ = np.linalg.svd(a / norms, full_matrices=False)
-    kept = sv > (sv[0] if sv.size else 0.0) * _linalg.rank_tolerance(*a.shape)
-    pred = float(np.sum((basis[:, kept].T @ r) ** 2))
-    return pred <= rtol * float(r @ r)
-
-
 #: Relative rank tolerance of a Jacobian by central differences: their error is about
 #: ``eps**(2/3)`` (4e-11) of a column, far above the default ``N eps`` of an exact one, so a
 #: dependence between columns hidden by that noise is still found.
@@ -446,8 +423,9 @@ def _order_grid(model, grid):
 
 
 @thin_solves
-def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_starts=3,
-        max_nfev=200, tol=1e-10, exact_jacobian=True, per_record=(), warmup=0, refine=None):
+def fit(model, u, y=None, *, method=None, options=None, start=None, sample_weight=None,
+        order_grid=5, n_starts=3, max_nfev=200, tol=1e-10, exact_jacobian=True, per_record=(),
+        warmup=0, refine=None):
     """Fit any :class:`fohw.Model` to a record (or several) by simulation (output) error.
 
     Parameters
@@ -456,6 +434,17 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
         The kind, its start values, and which parameters are free, fixed, tied or bounded (its
         :attr:`~fohw.Model.parameters`; pass ``model.with_parameters(parameters)`` to change
         them).
+    method : str, optional
+        None (default): this engine, for every kind. Or a method of :func:`fohw.identify`'s
+        table (``"varpro"``, ``"output_error"``, ``"structured"``, ``"hybrid"``, …;
+        :data:`fohw.estimators.identify.METHODS`) for the kind those methods fit, a
+        :class:`fohw.ThetaHW` (any other kind is refused, naming the engine): the model gives
+        the class, the operating point and its orders' bounds, the method its own starts, and
+        the result is an :class:`fohw.IdentificationResult`, exactly as ``identify`` with the
+        same class and bounds gives (``"output_error"`` there is the lagged kind's own search,
+        with its chain of nested starts). The engine's keywords below are then not taken.
+    options : mapping, optional
+        The method's options (as ``fohw.identify``'s keywords), with ``method`` only.
     u : array_like, Record or list of Record
         Input, as the kind takes it (1-D, or ``(N, m)`` for ``m`` input columns; a circuit takes
         ``[current, state of charge]``); or a :class:`fohw.Record` (then ``y`` is not given:
@@ -523,6 +512,22 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     --------
     See :class:`fohw.Model` for a kind written in a dozen lines and fitted with this function.
     """
+    if method is not None:
+        given = {name: value for name, value, default in (
+            ("start", start, None), ("sample_weight", sample_weight, None),
+            ("order_grid", order_grid, 5), ("n_starts", n_starts, 3), ("max_nfev", max_nfev, 200),
+            ("tol", tol, 1e-10), ("exact_jacobian", exact_jacobian, True),
+            ("per_record", per_record, ()), ("warmup", warmup, 0), ("refine", refine, None))
+            if not (value is default or (isinstance(value, (int, float, tuple))
+                                         and value == default))}
+        if given:
+            raise ParameterError(
+                f"{sorted(given)} are the engine's settings (method=None); method {method!r} "
+                "takes its own, as options={...} (fohw.identify's keywords of that method).")
+        return fit_lagged(model, u, y, method=method, options=options)
+    if options is not None:
+        raise ParameterError("`options` are a method's (with `method=`); the engine "
+                             "(method=None) takes its settings as keywords.")
     refine = None if refine is None else check_int(refine, "refine", minimum=1)
     experiments, info = prepare_data(model, u, y, sample_weight,
                                      check_int(warmup, "warmup", minimum=0), refine)

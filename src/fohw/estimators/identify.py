@@ -11,6 +11,7 @@ class are checked by :mod:`fohw.estimators.problem`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
@@ -21,13 +22,14 @@ from ..exceptions import ParameterError
 from ..model.basis import BasisLike
 from ..model.orders import OrdersLike
 from ..model.output_map import OutputMapLike
+from ..model.theta_hw import ThetaHW
 from ..record import check_sampling, record_data, record_info
 from ..results import IdentificationResult
 from . import hybrid, output_error, rls, structured, varpro
 from .options import MethodOptions
 from .problem import OPERATING_POINTS, fit_method
 
-__all__ = ["identify", "METHODS", "OPTIONS", "OPERATING_POINTS"]
+__all__ = ["identify", "fit_lagged", "METHODS", "OPTIONS", "OPERATING_POINTS"]
 
 #: Every method, the recommended one first.
 _TABLE = {m.name: m for m in (varpro.METHOD, output_error.METHOD, structured.METHOD,
@@ -203,6 +205,28 @@ def identify(u: ArrayLike, y: ArrayLike | None = None, *, na: int, nb: int, f_ba
     >>> paper.status.name, paper.nit
     ('NOT_TESTED', 1)
     """
+    if options is not None and method_options:
+        if not isinstance(options, Mapping):
+            raise ParameterError("pass a method's options either as keywords or as `options=`, "
+                                 f"not both; got `options` and {sorted(method_options)}.")
+        both = sorted(set(options) & set(method_options))
+        if both:
+            raise ParameterError(f"option(s) {both} given both as keywords and in `options`.")
+        options = {**options, **method_options}
+    elif method_options:
+        options = method_options
+    return _run(u, y, method=method, options=options, executor=executor, progress=progress,
+                dt=dt, inputs=inputs, na=na, nb=nb, f_basis=f_basis, g_basis=g_basis,
+                orders=orders, offset=offset, operating_point=operating_point, past=past,
+                alpha_bounds=alpha_bounds, output_map=output_map, nk=nk)
+
+
+def _run(u, y, *, method, options, executor, progress, dt, inputs, **model):
+    """One method of the table on one record (a Record or arrays): identify's and fit's path.
+
+    ``model`` holds :func:`~fohw.estimators.problem.prepare`'s keywords (the class by its
+    keywords, or ``structure=``), the operating point and the order bounds.
+    """
     records, u, y = record_data(u, y, what="u", several=False)
     info = {}
     if records is not None:
@@ -225,23 +249,59 @@ def identify(u: ArrayLike, y: ArrayLike | None = None, *, na: int, nb: int, f_ba
     if method not in _TABLE:
         raise ParameterError(f"`method` must be one of {METHODS}; got {method!r}.")
     declared = _TABLE[method]
-    if options is not None and method_options:
-        if not isinstance(options, Mapping):
-            raise ParameterError("pass a method's options either as keywords or as `options=`, "
-                                 f"not both; got `options` and {sorted(method_options)}.")
-        both = sorted(set(options) & set(method_options))
-        if both:
-            raise ParameterError(f"option(s) {both} given both as keywords and in `options`.")
-        options = {**options, **method_options}
-    elif method_options:
-        options = method_options
     opts = declared.options.build(method, options, others=OPTIONS)
     if progress is not None and not isinstance(progress, bool):
         raise ParameterError(f"`progress` must be True, False or None; got {progress!r}.")
+    if "structure" in model:
+        model.pop("inputs", None)
+    else:
+        model.update(dt=dt, inputs=inputs)
     with heartbeat(f"identify ({method})", progress):
-        result = fit_method(declared, opts, u, y, na=na, nb=nb, f_basis=f_basis,
-                            g_basis=g_basis, orders=orders, offset=offset,
-                            operating_point=operating_point, past=past, dt=dt,
-                            alpha_bounds=alpha_bounds, output_map=output_map,
-                            executor=executor, nk=nk, inputs=inputs)
+        result = fit_method(declared, opts, u, y, executor=executor, **model)
     return dataclasses.replace(result, data=info) if info else result
+
+
+def fit_lagged(model, u, y=None, *, method, options=None):
+    """``fohw.fit(model, data, method=name)`` for a method of :func:`fohw.identify`'s table.
+
+    The model (a :class:`fohw.ThetaHW`) gives the class (its structure), the operating point
+    and the bounds of its free orders (its :class:`fohw.Parameters`, the one statement of
+    them); the method makes its own starts, so the model's values are not a start. Every
+    other parameter must be as the method estimates it: free, untied and unbounded (a
+    method of the table estimates theta by least squares over all of it).
+
+    Raises
+    ------
+    ParameterError
+        ``model`` is not a ThetaHW (naming the kinds the method fits), or a parameter is
+        fixed, tied or bounded where the method cannot honour it (named).
+    """
+    if method not in _TABLE:
+        raise ParameterError(f"`method` must be None (the engine, every kind) or one of "
+                             f"{METHODS} (the lagged kind, fohw.ThetaHW); got {method!r}.")
+    if not isinstance(model, ThetaHW):
+        raise ParameterError(
+            f"method {method!r} fits {', '.join('fohw.' + k for k in _TABLE[method].kinds)} "
+            f"(the lagged kind's identification form); a {type(model).__name__} is fitted by "
+            "the engine, fohw.fit(model, data) (method=None).")
+    s = model.structure
+    params = model.parameters
+    bounds = {}
+    for name, par in params.items():
+        if par.order and name in s.orders.free:
+            if par.fixed or par.tie is not None:
+                raise ParameterError(
+                    f"the order {name!r} is {'fixed' if par.fixed else 'tied'} in the model's "
+                    f"Parameters, which method {method!r} cannot honour: fix or tie orders in "
+                    "the Structure (its `orders`), or fit with the engine (method=None).")
+            bounds[name] = par.bounds
+        elif par.fixed or par.tie is not None or par.bounds != (-math.inf, math.inf):
+            how = ("fixed" if par.fixed else "tied" if par.tie is not None
+                   else f"bounded to {par.bounds}")
+            raise ParameterError(
+                f"{name!r} is {how} in the model's Parameters; method {method!r} estimates "
+                "every coefficient freely. Fit with the engine, fohw.fit(model, data) "
+                "(method=None), which honours fixed, tied and bounded parameters.")
+    return _run(u, y, method=method, options=options, executor=None, progress=None, dt=s.dt,
+                inputs=None, structure=s, operating_point=model.operating_point,
+                alpha_bounds=bounds or (0.0, 1.0))

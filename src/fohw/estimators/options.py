@@ -288,6 +288,10 @@ class Method:
     output_map : bool
         ``run`` fits a series output map ``y = h(z)`` (a simulation-error method); the others
         are refused one by :func:`~fohw.estimators.problem.fit_method`.
+    kinds : tuple of str
+        The model kinds it fits (``fohw.fit(model, data, method=name)``): the lagged kind's
+        identification form, :class:`fohw.ThetaHW`, for every method of the table; every
+        other kind is fitted by the engine (``method=None``).
     """
 
     name: str
@@ -296,3 +300,4 @@ class Method:
     supports: Callable = every_structure
     parallel: bool = False
     output_map: bool = False
+    kinds: tuple = ("ThetaHW",)

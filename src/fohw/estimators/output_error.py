@@ -45,8 +45,8 @@ from ._common import (
     joint_levels_note,
     kept_above_zero,
     rms_scale,
+    stationary,
 )
-from .fit import stationary
 from .options import N_GRID, Anything, Integer, Method, MethodOptions
 from .profile import parameter_covariance
 from .starts import AGREEMENT_RTOL, Start, agreement, multi_start, nested_structure

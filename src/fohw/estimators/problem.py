@@ -65,27 +65,37 @@ class Problem:
         return self.builder.structure
 
 
-def prepare(u, y, *, na, nb, f_basis, g_basis, orders="commensurate", offset=False,
-            operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
-            output_map=None, nk=1, inputs=None):
+def prepare(u, y, *, na=None, nb=None, f_basis=None, g_basis=None, orders="commensurate",
+            offset=False, operating_point=None, past="rest", dt=1.0, alpha_bounds=(0.0, 1.0),
+            output_map=None, nk=1, inputs=None, structure=None):
     """Check a record and a model class; warn about the data once; return the :class:`Problem`.
 
     The keywords are those of :func:`fohw.identify`. ``u`` of shape ``(N, m)`` (or a pandas
     DataFrame, whose column names name the inputs) has ``m`` inputs; ``nb``, ``nk`` and
-    ``f_basis`` are then one per input (a list) or one for all.
+    ``f_basis`` are then one per input (a list) or one for all. Or the class itself,
+    ``structure`` (a :class:`fohw.Structure`, e.g. a :class:`fohw.ThetaHW`'s): then the
+    keywords that make one (``na`` … ``inputs``) are not given.
     """
-    u, inputs = split_inputs(u, names=inputs)
+    if structure is None:
+        u, inputs = split_inputs(u, names=inputs)
+    else:
+        u, _ = split_inputs(u, names=structure.inputs if structure.n_inputs > 1 else None)
+        if (u.ndim == 2) != (structure.n_inputs > 1):
+            raise DimensionError(f"the model has {structure.n_inputs} input(s); `u` has "
+                                 f"{1 if u.ndim == 1 else u.shape[1]} column(s).")
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
-    if not isinstance(offset, (bool, np.bool_)):
-        raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
-    if inputs is None:
-        if not isinstance(nb, (list, tuple, np.ndarray)):
-            nb = check_int(nb, "nb", minimum=1)
-        _check_single_basis(f_basis)
-    structure = Structure.make(na=check_int(na, "na", minimum=1), nb=nb, f_basis=f_basis,
-                               g_basis=g_basis, orders=orders, offset=bool(offset), past=past,
-                               dt=dt, nk=nk, inputs=inputs, output_map=output_map)
+    if structure is None:
+        if not isinstance(offset, (bool, np.bool_)):
+            raise ParameterError(f"`offset` must be True or False; got {offset!r}.")
+        if inputs is None:
+            if not isinstance(nb, (list, tuple, np.ndarray)):
+                nb = check_int(nb, "nb", minimum=1)
+            _check_single_basis(f_basis)
+        structure = Structure.make(na=check_int(na, "na", minimum=1), nb=nb, f_basis=f_basis,
+                                   g_basis=g_basis, orders=orders, offset=bool(offset), past=past,
+                                   dt=dt, nk=nk, inputs=inputs, output_map=output_map)
+    inputs = structure.inputs if structure.n_inputs > 1 else None
     point = _operating_point(operating_point, u, y)
     bounds = _order_bounds(structure, alpha_bounds)
     if inputs is None:
