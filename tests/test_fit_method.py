@@ -11,10 +11,10 @@ import warnings
 
 import numpy as np
 import pytest
-from test_model_protocol import KINDS
 
 import fohw
 from fohw.estimators.identify import METHODS
+from fohw.model.base import model_class, registered_kinds
 
 DATA = fohw.datasets.paper_example(300, random_state=3)
 CLASS = dict(na=2, nb=2, f_basis=2, g_basis=2)
@@ -68,14 +68,32 @@ def test_a_record_gives_its_sampling_and_names(reference):
         fohw.fit(reference.model, other, method="varpro")
 
 
-@pytest.mark.parametrize("factory", KINDS, ids=lambda f: f.__name__)
-def test_every_other_kind_is_sent_to_the_engine(factory):
-    true, start, u, _, _ = factory()
-    if isinstance(start, fohw.ThetaHW):
-        pytest.skip("the kind the table fits")
-    y = true.simulate(u)
-    with pytest.raises(fohw.ParameterError, match="method=None"):
-        fohw.fit(start, u, y, method="varpro")
+OCV = fohw.OCVTable([0.0, 1.0], [3.3, 4.2])
+#: One model of every other shipped kind (the test below checks the list is complete).
+OTHER_KINDS = {
+    "FractionalTF": lambda: fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0], dt=0.05),
+    "FractionalHW": lambda: fohw.FractionalHW(
+        fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.5, 0.0]), p=[1.0, 0.0], f_basis=2,
+        dt=0.05),
+    "HammersteinWiener": lambda: fohw.HammersteinWiener([0.1], [0.5, 0.1], [1.0, 0.0], [1.0],
+                                                        0.6),
+    "EquivalentCircuit": lambda: fohw.EquivalentCircuit(["zarc"], ocv=OCV),
+    "CircuitTables": lambda: fohw.CircuitTables(["zarc"], soc_points=[0.3, 0.7],
+                                                temperature_points=[5.0, 35.0], ocv=OCV),
+}
+
+
+def test_the_list_of_other_kinds_is_every_shipped_kind_but_theta_hw():
+    shipped = {k for k in registered_kinds() if model_class(k).__module__.startswith("fohw.")}
+    assert "FractionalTF" in shipped and shipped - {"ThetaHW"} == set(OTHER_KINDS)
+
+
+@pytest.mark.parametrize("kind", sorted(OTHER_KINDS))
+def test_every_other_kind_is_sent_to_the_engine(kind):
+    model = OTHER_KINDS[kind]()
+    assert type(model).__name__ == kind
+    with pytest.raises(fohw.ParameterError, match=rf"a {kind} is fitted by the engine"):
+        fohw.fit(model, DATA.u, DATA.y, method="varpro")
 
 
 @pytest.mark.parametrize("change, match", [
