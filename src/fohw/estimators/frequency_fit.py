@@ -164,8 +164,18 @@ class FrequencyProblem:
         return r if np.all(np.isfinite(r)) else self.escaped
 
     def jacobian(self, x):
-        """Central differences of :meth:`residual` in the free parameters."""
-        return self.jacobian_of(x, self.of_model)
+        """Central differences of :meth:`residual` in the free parameters (zeros where they fail).
+
+        As :func:`fohw.fit`'s Jacobian: where the response cannot be computed or is not finite
+        at a difference point, the search gets zeros (no direction) rather than an exception.
+        """
+        zeros = np.zeros((2 * self.target.size, len(self.names)))
+        try:
+            with np.errstate(all="ignore"):
+                jac = self.jacobian_of(x, self.of_model)
+        except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+            return zeros
+        return jac if np.all(np.isfinite(jac)) else zeros
 
     def jacobian_of(self, x, of_model):
         """Central differences of ``of_model(self.at(x))`` in the free parameters.
