@@ -1030,6 +1030,34 @@ API = [
                                         np.column_stack([U, 0.5 + 0 * U]), U, [1.0, 2.0],
                                         [0.02, 0.02], noise=(0.0, 0.01)),
      fohw.ParameterError, "`noise` must hold two positive, finite noise levels; got (0.0, 0.01)"),
+    ("fit_impedance", "f above the Nyquist frequency with discrete=True (issue 43, N22: was fitted)",
+     lambda t: fit_impedance(_S43, _F43, _C43.impedance(_F43), discrete=True), fohw.ParameterError,
+     "`f` has 26 of its 40 frequencies above the Nyquist frequency 1 / (2 dt) = 0.5 Hz of the "
+     "circuit"),
+    ("fit_impedance", "conj(Z), the \"-Im Z\" plotting convention (issue 43, N23: was fitted)",
+     lambda t: fit_impedance(_S43, _F43, np.conj(_C43.impedance(_F43))), fohw.ParameterError,
+     "`z` has a positive imaginary part at 40 of its 40 frequencies, where a capacitive impedance "
+     "(RC, ZARC and Warburg elements) has Im Z <= 0: this looks like the \"-Im Z\" convention"),
+    ("fit_impedance", "-Z (issue 43, N51: a rank-deficient fit)",
+     lambda t: fit_impedance(_S43, _F43, -_C43.impedance(_F43)), fohw.ParameterError,
+     "`z` has a negative real part at 40 of its 40 frequencies: a passive impedance has Re Z >= 0, "
+     "so this looks like -Z"),
+    ("fit_record_and_impedance", "a spectrum 10 times the record's impedance (issue 43, N24: was "
+     "fitted without a word)", lambda t: _disagreeing_data(t), fohw.DataWarning,
+     "The record and the spectrum disagree: at the joint estimate the record's RMS error is"),
+    ("fit_frequency_response", "a kind without a frequency response",
+     lambda t: fohw.fit_frequency_response(_NoResponse(), [1.0, 2.0], [1.0, 1.0]),
+     fohw.ParameterError, "a _NoResponse has no frequency response: its kind does not define the "
+     "fohw.Model hook `frequency_response(omega)`"),
+    ("fit_frequency_response", "a keyword the kind's response does not take",
+     lambda t: fohw.fit_frequency_response(_S43, 2 * np.pi * _F43, _C43.impedance(_F43), soc=0.5),
+     fohw.ParameterError, "`soc` is neither an argument of fit_frequency_response nor a keyword of "
+     "EquivalentCircuit.frequency_response (it takes 'discrete', 'capacity', 'ocv_slope')"),
+    ("fit_frequency_response", "the lagged kind above the Nyquist frequency",
+     lambda t: fohw.fit_frequency_response(M(), np.linspace(0.1, 5.0, 30),
+                                           M().frequency_response(np.linspace(0.1, 5.0, 30))),
+     fohw.ParameterError, "`omega` has 11 of its 30 frequencies above the Nyquist frequency "
+     "pi / dt = 3.14159 of this HammersteinWiener"),
 ]
 
 CLI = [
@@ -1217,6 +1245,27 @@ def _cell34(n=600, current=None, soc_shift=0.0):
 def _circ34(elements=("zarc",), ocv=lambda s: 3.3 + 0.9 * s, **kw):
     """The circuit fitted in issue 34 (``kw``: constructor settings)."""
     return fohw.EquivalentCircuit(list(elements), ocv=ocv, tau_bounds=(1.0, 500.0), **kw)
+
+
+#: Issue 43's circuit and spectrum: a ZARC cell at dt = 1 s, 40 frequencies from 0.01 to 1000 Hz.
+_C43 = fohw.EquivalentCircuit([fohw.ZARC(0.012, 5.0, 0.6)], r0=0.015, dt=1.0)
+_S43 = fohw.EquivalentCircuit(("zarc",), dt=1.0)
+_F43 = np.logspace(-2, 3, 40)
+
+
+def _disagreeing_data(t):
+    """Issue 43's N24: a record of the cell with an OCV and its spectrum times 10 (the warning raised)."""
+    import warnings
+
+    ocv = lambda s: 3.3 + 0.9 * np.asarray(s)  # noqa: E731
+    i = np.repeat(np.random.default_rng(0).uniform(-3, 1, 20), 20)
+    u = np.column_stack([i, 0.6 + np.cumsum(i) / 18000])
+    v = fohw.EquivalentCircuit([fohw.ZARC(0.012, 5.0, 0.6)], r0=0.015, ocv=ocv, dt=1.0).simulate(u)
+    f = np.logspace(-2, np.log10(0.5), 30)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", fohw.DataWarning)
+        fit_record_and_impedance(fohw.EquivalentCircuit(("zarc",), ocv=ocv, dt=1.0), u, v, f,
+                                 10 * _C43.impedance(f))
 
 
 def _hybrid():

@@ -17,6 +17,7 @@ from .analysis.profile_interval import ProfileInterval, profile_interval
 from .analysis.selection import Selection, select_structure
 from .analysis.validation import Validation, compare
 from .estimators.fit import fit
+from .estimators.frequency_fit import fit_frequency_response
 from .estimators.identify import identify
 from .exceptions import (
     ConvergenceWarning,
@@ -83,6 +84,7 @@ __all__ = [
     "Parameters",
     "register_model",
     "fit",
+    "fit_frequency_response",
     "FitResult",
     "bode",
     "nyquist",

@@ -3,11 +3,16 @@
 Not in the paper: the frequency-domain counterpart of :func:`fohw.fit` for
 :class:`fohw.EquivalentCircuit`. The circuit's impedance about zero current is
 ``Z(f) = R0 + sum_e Z_e(j 2 pi f)`` (:meth:`fohw.EquivalentCircuit.impedance`; with ``capacity``
-the open-circuit voltage's capacitor ``(dOCV/dsoc + b) / (3600 Q s)`` is added). Both fits run on
-the engine every fohw fit runs on: bounded nonlinear least squares
-(:func:`fohw.estimators._common.bounded_least_squares`, trust-region reflective) from the best
-points of a scan, the covariance ``s^2 (J^T J)^{-1}`` from the rank-revealing QR of
-:mod:`fohw._linalg`, and the result a :class:`fohw.FitResult`.
+the open-circuit voltage's capacitor ``(dOCV/dsoc + b) / (3600 Q s)`` is added).
+:func:`fit_impedance` is :func:`fohw.fit_frequency_response` for a circuit, run on the same
+stages (:mod:`fohw.estimators.frequency_fit`: held parameters, ranking, bounded nonlinear least
+squares by :func:`fohw.estimators._common.bounded_least_squares`, the covariance ``s^2 (J^T
+J)^{-1}`` from the rank-revealing QR of :mod:`fohw._linalg`, the status, a
+:class:`fohw.FitResult`) with the circuit's conventions: frequencies in Hz, the circuit's own
+scan of time constants over the spectrum's band as starts, and refusals named after the
+conventions a spectrum may come in (frequencies above the Nyquist frequency with
+``discrete=True``; ``-Z``; ``conj(Z)``, the "-Im Z" of Nyquist plots, which no circuit of
+capacitive elements can follow).
 
 The spectrum's residual (``weight="relative"``, the default) is the model's error relative to
 the measured modulus, real and imaginary parts stacked:
@@ -24,7 +29,10 @@ of that part's own fit (``sqrt(SSE / (n - p))``, from :func:`fohw.fit` and
 likelihood: a record of thousands of samples outweighs a spectrum of a few dozen frequencies
 unless the spectrum fits far better than the record. Pass ``noise=(sigma_time, sigma_spectrum)``
 to set them (e.g. multiply ``sigma_spectrum`` by ``sqrt(2 m / N)`` to give the two parts equal
-total weight).
+total weight). When a part's scaled squared error at the joint estimate is far beyond its
+noise level (:data:`DISAGREE_P`), the two data do not describe one circuit, and the fit says
+so (:class:`fohw.DataWarning`, with the ratio of the spectrum to the record's own fit's
+impedance: a factor of 10 is a unit error).
 """
 
 from __future__ import annotations
@@ -35,35 +43,35 @@ import warnings
 import numpy as np
 import scipy  # submodules load on first use
 
-from .. import _linalg
 from .._threads import thin_solves
 from .._validation import check_array, check_int, check_same_length, check_scalar
-from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarning
+from ..exceptions import ConvergenceWarning, DataWarning, ParameterError, RankDeficiencyWarning
 from ..fit_result import FitResult
 from ..model.circuit import EquivalentCircuit, check_spectrum, scan_combinations, unit_columns
 from ..results import Status
-from ._common import bounded_least_squares
-from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian, rank_rcond
+from .fit import PENALTY, check_weight, data_digest, fit, free_jacobian
+from .frequency_fit import (
+    WEIGHTS,
+    FrequencyProblem,
+    check_equations,
+    check_impedance_signs,
+    covariance_of,
+    finish,
+    frequency_result,
+    held_note,
+    idle_parameters,
+    rank_candidates,
+    refine,
+    response_weight,
+    starts_table,
+)
 
 __all__ = ["fit_impedance", "fit_record_and_impedance", "spectrum_residual", "WEIGHTS"]
 
-#: The weightings of the spectrum's residual: ``"relative"`` (divided by ``|Z|``, default),
-#: ``"unit"`` (ohms, unweighted); an array of one positive weight per frequency also works.
-WEIGHTS = ("relative", "unit")
-
-
-def _spectrum_weight(weight, z):
-    if isinstance(weight, str):
-        if weight not in WEIGHTS:
-            raise ParameterError(f"`weight` must be one of {', '.join(map(repr, WEIGHTS))} or an "
-                                 f"array of one positive weight per frequency; got {weight!r}.")
-        return 1.0 / np.abs(z) if weight == "relative" else np.ones(z.size)
-    w = check_array(weight, "weight")
-    if w.shape != z.shape or np.any(w <= 0):
-        raise ParameterError(f"`weight` given as an array must hold one positive weight per "
-                             f"frequency ({z.size}); got shape {w.shape}, values from "
-                             f"{w.min()!r} to {w.max()!r}.")
-    return w
+#: The tail probability below which the joint fit says its two parts disagree: a part whose
+#: weighted squared error at the joint estimate exceeds the chi-squared quantile of its number
+#: of values at this level (its noise level being its own fit's RMS residual).
+DISAGREE_P = 1e-6
 
 
 def spectrum_residual(model, f, z, w, *, discrete=False, capacity=None, ocv_slope=0.0):
@@ -73,65 +81,31 @@ def spectrum_residual(model, f, z, w, *, discrete=False, capacity=None, ocv_slop
     return np.concatenate([d.real, d.imag])
 
 
+def _check_circuit(model):
+    if not isinstance(model, EquivalentCircuit):
+        raise ParameterError(f"`model` must be an EquivalentCircuit; got {type(model).__name__}. "
+                             "Other kinds with a frequency response: fohw.fit_frequency_response.")
+
+
+def _check_conventions(model, f, z, discrete):
+    """The circuit's conventions: no frequency above Nyquist when discrete, Z's signs (named)."""
+    if discrete:
+        nyquist = 0.5 / model.dt
+        above = int(np.count_nonzero(f > nyquist))
+        if above:
+            raise ParameterError(
+                f"`f` has {above} of its {f.size} frequencies above the Nyquist frequency "
+                f"1 / (2 dt) = {nyquist:g} Hz of the circuit (dt = {model.dt!r} s; the highest is "
+                f"{float(f.max()):g} Hz): with discrete=True the model is the sampled circuit, "
+                "whose impedance repeats every 1 / dt Hz, so it cannot follow a spectrum measured "
+                "beyond 1 / (2 dt). Drop those frequencies, fit the continuous impedance "
+                "(discrete=False), or build the circuit with a smaller dt.")
+    check_impedance_signs(z, capacitive=True)
+
+
 def _enters(name, capacity):
     """Whether a circuit parameter enters the impedance (``a``, ``c3`` never; ``b`` with capacity)."""
     return name not in ("a", "c3") and (name != "b" or capacity is not None)
-
-
-def _check_circuit(model):
-    if not isinstance(model, EquivalentCircuit):
-        raise ParameterError(f"`model` must be an EquivalentCircuit; got {type(model).__name__}.")
-
-
-class _Problem:
-    """The free parameters of a circuit and the residual blocks of a fit (spectrum, record)."""
-
-    def __init__(self, model, params):
-        self.model, self.params = model, params
-        self.names = params.free_names
-        self.lower, self.upper = params.free_bounds()
-        self.tie = params.tie_matrix()
-
-    def at(self, x):
-        return self.model.with_parameters(self.params.with_free(np.clip(x, self.lower, self.upper)))
-
-    def spectrum_jacobian(self, x, residual):
-        """Central differences of ``residual(model)`` in the free parameters (one-sided at a bound).
-
-        The impedance is a closed form evaluated at a few dozen frequencies: the differences cost
-        nothing beside a simulation, and their step ``eps**(1/3) max(|x|, 1e-6)`` gives about
-        ten accurate digits (the impedance is linear in the resistances, where ``x`` may be 0).
-        """
-        cols = []
-        for j in range(x.size):
-            step = np.finfo(float).eps ** (1 / 3) * max(abs(x[j]), 1e-6)
-            hi = min(x[j] + step, self.upper[j])
-            lo = max(x[j] - step, self.lower[j])
-            xp, xm = x.copy(), x.copy()
-            xp[j], xm[j] = hi, lo
-            cols.append((residual(self.at(xp)) - residual(self.at(xm))) / (hi - lo))
-        return np.column_stack(cols)
-
-
-def _covariance(jac, sse, n, names, how):
-    inverse, fac = _linalg.inverse_gram(jac, rcond=rank_rcond(how, *jac.shape))
-    if inverse is None:
-        cols = ", ".join(names[i] for i in fac.dependent)
-        return None, (f"Rank deficient: rank {fac.rank} of {fac.n_columns}; the columns of {cols} "
-                      "are linear combinations of the others, so those parameters are not "
-                      "identifiable from these data (fix one of them).")
-    return sse / max(n - len(names), 1) * inverse, None
-
-
-def _finish(kind, status, messages, rank_note):
-    where = f"fohw.estimators.impedance_fit.{kind}(EquivalentCircuit)"
-    if rank_note:
-        status = Status.RANK_DEFICIENT if status != Status.FAILED else status
-        messages.append(rank_note)
-        warnings.warn(f"{where}: {rank_note}", RankDeficiencyWarning, stacklevel=3)
-    elif status in (Status.MAX_ITER, Status.FAILED):
-        warnings.warn(f"{where}: {' '.join(messages[1:])}", ConvergenceWarning, stacklevel=3)
-    return status, " ".join(messages)
 
 
 def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope):
@@ -200,38 +174,6 @@ def _scan_starts(model, params, f, z, w, keep, *, discrete, capacity, ocv_slope)
     return [model.with_parameters(params.with_values(v)) for _, v in found[:keep]]
 
 
-def _orders_of(problem, ranked):
-    """``FitResult.starts``: each ranked start's free orders and its sum of squares, best first."""
-    orders = [(j, n) for j, n in enumerate(problem.names) if problem.params[n].order]
-    return tuple(({n: float(x[j]) for j, n in orders}, sse) for sse, x in ranked)
-
-
-def _refine(problem, candidates, residual, jacobian, n_starts, max_nfev, tol):
-    """Rank the candidates by their residual, refine the best ``n_starts``; the best result."""
-    ranked = []
-    for m in candidates:
-        x = m.parameters.free_values()
-        if np.any(x < problem.lower) or np.any(x > problem.upper):
-            continue
-        try:
-            with np.errstate(all="ignore"):
-                r = residual(x)
-        except (ArithmeticError, ParameterError):
-            continue
-        if np.all(np.isfinite(r)):
-            ranked.append((float(r @ r), x))
-    ranked.sort(key=lambda t: t[0])
-    best = None
-    for sse0, x0 in ranked[:n_starts]:
-        x, status, ls = bounded_least_squares(residual, x0, jac=jacobian, lower=problem.lower,
-                                              upper=problem.upper, ftol=tol, xtol=tol, gtol=tol,
-                                              max_nfev=max_nfev)
-        r = residual(x)
-        sse = float(r @ r)
-        if best is None or sse < best[0]:
-            best = (sse, x, status, ls, sse0)
-    return best, ranked
-
 
 @thin_solves
 def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=None, ocv_slope=0.0,
@@ -245,12 +187,15 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     f : array_like, shape (m,)
         Frequencies [Hz], positive.
     z : array_like of complex, shape (m,)
-        The measured impedance [ohm] (``Z = V / I``, positive real part for a cell).
+        The measured impedance [ohm] (``Z = V / I``: positive real part, negative imaginary
+        part for a cell; a spectrum with Re z < 0 or Im z > 0 at more than half of its
+        frequencies is refused, naming ``-Z`` or the "-Im Z" convention).
     weight : {"relative", "unit"} or array_like, optional
         The residual's weighting (see the module's docstring): ``"relative"`` (default) divides
         by ``|z|``; ``"unit"`` leaves ohms; an array gives one positive weight per frequency.
     discrete : bool, optional
-        Fit the impedance of the model discretised at its ``dt`` (default: the continuous one).
+        Fit the impedance of the model discretised at its ``dt`` (default: the continuous one);
+        frequencies above the Nyquist frequency ``1 / (2 dt)`` are then refused.
     capacity : float, optional
         The cell's capacity [Ah]: the open-circuit voltage's capacitor enters the model (and
         ``b`` with it); see :meth:`fohw.EquivalentCircuit.impedance`.
@@ -275,7 +220,11 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     Starts: the model's values (when its resistances are not all 0) and the best points of a
     scan of the elements' time constants over ``1 / (2 pi f)`` of the band and their orders,
     the parameters that enter linearly solved by bounded linear least squares; the best
-    ``n_starts`` are refined by :func:`~fohw.estimators._common.bounded_least_squares`.
+    ``n_starts`` are refined by :func:`~fohw.estimators._common.bounded_least_squares`. The
+    parameters held are those the impedance does not read
+    (:func:`fohw.estimators.frequency_fit.idle_parameters`). The stages after the starts are
+    :func:`fohw.fit_frequency_response`'s, which fits a circuit too (given ``omega = 2 pi f``)
+    from its own starts (the order grid and the linear parameters solved) instead of the scan.
 
     Examples
     --------
@@ -289,63 +238,38 @@ def fit_impedance(model, f, z, *, weight="relative", discrete=False, capacity=No
     """
     _check_circuit(model)
     f, z = check_spectrum(f, z)
-    w = _spectrum_weight(weight, z)
+    _check_conventions(model, f, z, discrete)
+    w = response_weight(weight, z)
     n_starts = check_int(n_starts, "n_starts", minimum=1)
     max_nfev = check_int(max_nfev, "max_nfev", minimum=1)
     tol = check_scalar(tol, "tol", lower=np.finfo(float).eps, upper=1.0, upper_inclusive=False)
-    held = [n for n in model.parameters.names if not _enters(n, capacity)
-            and not model.parameters[n].fixed and model.parameters[n].tie is None]
+    options = dict(discrete=discrete, capacity=capacity, ocv_slope=ocv_slope)
+
+    def respond(m):
+        return m.impedance(f, **options)
+
+    held = idle_parameters(model, respond)
     params = model.parameters
     for n in held:
         params = params.replace(n, fixed=True)
-    problem = _Problem(model.with_parameters(params), params)
-    if not problem.names:
-        raise ParameterError("every parameter of the circuit that enters its impedance is fixed or "
-                             "tied: nothing to fit.")
-    if 2 * f.size <= len(problem.names):
-        raise ParameterError(f"the spectrum has {f.size} frequencies (2 m = {2 * f.size} real "
-                             f"equations) for {len(problem.names)} free parameters "
-                             f"({', '.join(problem.names)}); need more equations than parameters.")
-    options = dict(discrete=discrete, capacity=capacity, ocv_slope=ocv_slope)
-
-    def of_model(m):
-        return spectrum_residual(m, f, z, w, **options)
-
-    def residual(x):
-        return of_model(problem.at(x))
-
-    def jacobian(x):
-        return problem.spectrum_jacobian(x, of_model)
-
+    problem = FrequencyProblem(model.with_parameters(params), params, respond, z, w, step_floor=1e-6)
+    check_equations(problem.names, f.size, "the circuit's impedance")
     extra = [] if start is None else [start] if isinstance(start, EquivalentCircuit) else list(start)
     candidates = [problem.model] + [problem.model.with_parameters(params.with_values(
         s.parameters.valuesdict())) for s in extra]
     candidates += _scan_starts(problem.model, params, f, z, w, n_starts + 2, **options)
-    best, ranked = _refine(problem, candidates, residual, jacobian, n_starts, max_nfev, tol)
-    if best is None:
+    ranked = rank_candidates(problem, candidates, problem.residual)
+    if not ranked:
         raise ParameterError("no start of the circuit gave a finite impedance at these "
                              "frequencies; give a start (`start=`).")
-    sse, x, status, ls, _ = best
-    fitted = problem.at(x)
-    jac = jacobian(x)
-    r = residual(x)
-    covariance, rank_note = _covariance(jac, sse, r.size, problem.names, "finite differences")
-    messages = [f"impedance fit (scipy.optimize.least_squares): {ls.message}"]
-    if held:
-        names = " and ".join([", ".join(held[:-1]), held[-1]] if len(held) > 1 else held)
-        messages.append(f"{names} {'do' if len(held) > 1 else 'does'} not enter the impedance: "
-                        "held at the model's values.")
-    if status == Status.MAX_ITER:
-        messages.append(f"The search used its budget of {max_nfev} evaluations; raise `max_nfev`.")
-    status, message = _finish("fit_impedance", status, messages, rank_note)
-    return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
-                     status=status, sse=sse, n_samples=r.size, message=message,
-                     nfev=int(ls.nfev), jacobian="finite differences",
-                     starts=_orders_of(problem, ranked), residuals=r,
-                     data_digest=data_digest(f, np.concatenate([z.real, z.imag]), model.dt),
-                     options=dict(data="impedance", n_starts=n_starts, max_nfev=max_nfev, tol=tol,
-                                  weight=weight if isinstance(weight, str) else w.tolist(),
-                                  **options))
+    best = refine(problem, ranked, problem.residual, problem.jacobian, n_starts, max_nfev, tol)
+    return frequency_result(
+        problem, best, ranked, label="impedance fit",
+        caller="fohw.estimators.impedance_fit.fit_impedance",
+        held_note=held_note(held, "the impedance"),
+        max_nfev=max_nfev, digest=data_digest(f, np.concatenate([z.real, z.imag]), model.dt),
+        options=dict(data="impedance", n_starts=n_starts, max_nfev=max_nfev, tol=tol,
+                     weight=weight if isinstance(weight, str) else w.tolist(), **options))
 
 
 @thin_solves
@@ -387,6 +311,20 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
         ``n_samples - n_free`` when the noise levels are right); ``options`` holds the
         ``noise`` used, and ``options["separate"]`` the SSE of each part at the estimate.
 
+    Raises
+    ------
+    ParameterError
+        As :func:`fit_impedance` for the spectrum (its conventions included), and
+        :func:`fohw.fit` for the record; bad noise levels.
+
+    Warns
+    -----
+    DataWarning
+        The record and the spectrum disagree: at the joint estimate a part's scaled squared
+        error is beyond the chi-squared tail :data:`DISAGREE_P` of its number of values and its
+        RMS error more than 1.5 times its noise level (the message gives the ratio of ``|z|``
+        to the impedance of the record's own fit).
+
     Notes
     -----
     Starts: the separate fits' estimates (the spectrum's with ``a``, ``b``, ``c3`` of the
@@ -396,7 +334,8 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
     """
     _check_circuit(model)
     f, z = check_spectrum(f, z)
-    w = _spectrum_weight(weight, z)
+    _check_conventions(model, f, z, discrete)
+    w = response_weight(weight, z)
     u = model.check_input(u)
     y = check_array(y, "y")
     check_same_length(u, y, "u", "y")
@@ -423,7 +362,9 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
     if noise is None:
         s_time = math.sqrt(time_fit.sse / max(time_fit.n_samples - time_fit.n_free, 1))
         s_spec = math.sqrt(spec_fit.sse / max(spec_fit.n_samples - spec_fit.n_free, 1))
-    problem = _Problem(model, params)
+    problem = FrequencyProblem(model, params, lambda m: m.impedance(f, **options), z, w,
+                               step_floor=1e-6)
+    tie = params.tie_matrix()
     n_used = int(np.count_nonzero(sw))
     if n_used + 2 * f.size <= len(problem.names):
         raise ParameterError(f"{n_used} samples and {f.size} frequencies are too few for "
@@ -446,25 +387,26 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
 
     def jacobian(x):
         if "x" in last and np.array_equal(last["x"], x):
-            jt = last["jac"] @ problem.tie
+            jt = last["jac"] @ tie
         else:
             jt = free_jacobian(problem.at(x), u)[1]
         jt = -(sw[:, None] * jt) / s_time
-        return np.vstack([jt, problem.spectrum_jacobian(x, spec)])
+        return np.vstack([jt, problem.jacobian_of(x, spec)])
 
     t_values = time_fit.parameters.valuesdict()
     mixed = {**spec_fit.parameters.valuesdict(),
              **{n: t_values[n] for n in ("a", "b", "c3") if n in t_values and not _enters(n, capacity)}}
     candidates = [model] + [model.with_parameters(params.with_values(v)) for v in (t_values, mixed)]
-    best, ranked = _refine(problem, candidates, residual, jacobian, n_starts, max_nfev, tol)
-    if best is None:
+    ranked = rank_candidates(problem, candidates, residual)
+    if not ranked:
         raise ParameterError("no start of the circuit gave a finite joint residual.")
+    best = refine(problem, ranked, residual, jacobian, n_starts, max_nfev, tol)
     sse, x, status, ls, _ = best
     fitted = problem.at(x)
     r = residual(x)
     jac = jacobian(x)
     n = n_used + 2 * f.size
-    covariance, rank_note = _covariance(jac, sse, n, problem.names, "finite differences")
+    covariance, rank_note = covariance_of(jac, sse, n, problem.names)
     t_part, s_part = r[:y.size], r[y.size:]
     rms_time = s_time * math.sqrt(float(t_part @ t_part) / n_used)
     rms_spec = s_spec * math.sqrt(float(s_part @ s_part) / (2 * f.size))
@@ -474,11 +416,17 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
                 f"{rms_spec:.4g}."]
     if status == Status.MAX_ITER:
         messages.append(f"The search used its budget of {max_nfev} evaluations; raise `max_nfev`.")
-    status, message = _finish("fit_record_and_impedance", status, messages, rank_note)
+    disagree = _disagreement(t_part, s_part, n_used, time_fit, f, z, options)
+    if disagree:
+        messages.append(disagree)
+        warnings.warn(f"fohw.estimators.impedance_fit.fit_record_and_impedance: {disagree}",
+                      DataWarning, stacklevel=3)
+    status, message = finish("fohw.estimators.impedance_fit.fit_record_and_impedance(EquivalentCircuit)",
+                             status, messages, rank_note, stacklevel=3)
     return FitResult(model=fitted, parameters=fitted.parameters, covariance=covariance,
                      status=status, sse=sse, n_samples=n, message=message, nfev=int(ls.nfev),
                      jacobian="exact (record), finite differences (spectrum)",
-                     starts=_orders_of(problem, ranked), residuals=r,
+                     starts=starts_table(problem, ranked), residuals=r,
                      data_digest=data_digest(u, np.concatenate([y, f, z.real, z.imag]), model.dt,
                                              sample_weight),
                      options=dict(data="record and impedance", noise=[s_time, s_spec],
@@ -490,3 +438,28 @@ def fit_record_and_impedance(model, u, y, f, z, *, noise=None, sample_weight=Non
                                             "spectrum": float(s_part @ s_part) * s_spec ** 2},
                                   **options))
 
+
+
+def _disagreement(t_part, s_part, n_used, time_fit, f, z, options):
+    """A sentence when the record and the spectrum disagree at the joint estimate, else None.
+
+    Each part's scaled squared error at the joint estimate (its residual divided by its noise
+    level) is referred to the chi-squared distribution of its number of values: beyond its
+    :data:`DISAGREE_P` tail, and with the part's RMS error more than 1.5 times its noise level
+    (so that noise levels at rounding, from exact data, do not count), the two data sets do not
+    describe one circuit (or a noise level is far too small). The sentence gives the median of
+    ``|z|`` over the impedance of the record's own fit: a factor of 10 is a unit or scale error.
+    """
+    parts = []
+    for name, r, n in (("record", t_part, n_used), ("spectrum", s_part, s_part.size)):
+        ss = float(r @ r)
+        if ss > scipy.stats.chi2.isf(DISAGREE_P, n) and ss > 1.5 ** 2 * n:
+            parts.append(f"the {name}'s RMS error is {math.sqrt(ss / n):.3g} times its noise level")
+    if not parts:
+        return None
+    ratio = float(np.median(np.abs(z) / np.abs(time_fit.model.impedance(f, **options))))
+    return (f"The record and the spectrum disagree: at the joint estimate {' and '.join(parts)} "
+            f"(chi-squared tail below {DISAGREE_P:g}), so no one circuit fits both, or a noise "
+            f"level is far too small. |z| is on median {ratio:.3g} times the impedance of the "
+            "record's own fit at these frequencies (a factor such as 10 or 1000 is a scale or "
+            "unit error). Fit each part alone to see which one the model follows.")
