@@ -34,7 +34,7 @@ The stages, each a function below that :mod:`fohw.estimators.impedance_fit` runs
 4. the best ``n_starts`` are refined; the Jacobian is by central differences of the closed-form
    response (a few dozen frequencies: they cost nothing beside a simulation);
 5. the status and covariance as :func:`fohw.fit` gives them: ``FAILED`` for a search stuck at
-   its start (:func:`fohw.estimators.fit.stationary`), ``RANK_DEFICIENT`` naming the
+   its start (:func:`fohw.estimators._common.stationary`), ``RANK_DEFICIENT`` naming the
    dependent parameters (through :mod:`fohw._linalg`), a :class:`fohw.FitResult`.
 """
 
@@ -55,8 +55,8 @@ from ..exceptions import ConvergenceWarning, DataWarning, ParameterError, RankDe
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..results import Status
-from ._common import bounded_least_squares
-from .fit import MAX_SCAN, PENALTY, data_digest, rank_rcond, stationary
+from ._common import bounded_least_squares, stationary
+from .fit import MAX_SCAN, PENALTY, data_digest, rank_rcond
 
 __all__ = ["fit_frequency_response", "WEIGHTS", "AFFINE_RTOL", "FrequencyProblem", "response_weight",
            "idle_parameters", "check_equations", "check_impedance_signs", "rank_candidates",
