@@ -131,13 +131,13 @@ def shipped(battery=False):
     for orders in ("commensurate", "per_lag"):
         t0 = time.perf_counter()
         full = _quiet(fohw.identify, e.u, e.y, orders=orders, **kw)
-        test = _quiet(full.order_test, e.u, e.y, validation=(v.u, v.y))
+        test = _quiet(fohw.order_test, full, e.u, e.y, validation=(v.u, v.y))
         out.append(("cascaded tanks", orders, full.orders, test, time.perf_counter() - t0))
     arm = fohw.datasets.robot_arm()
     kw = dict(na=6, nb=6, f_basis=1, g_basis=1, method="output_error")
     t0 = time.perf_counter()
     full = _quiet(fohw.identify, arm.u[:512], arm.y[:512], orders="commensurate", **kw)
-    test = _quiet(full.order_test, arm.u[:512], arm.y[:512],
+    test = _quiet(fohw.order_test, full, arm.u[:512], arm.y[:512],
                   validation=(arm.u[512:], arm.y[512:]))
     out.append(("robot arm", "commensurate", full.orders, test, time.perf_counter() - t0))
     if battery:
