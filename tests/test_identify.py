@@ -274,7 +274,9 @@ def test_notebook_reprs(data2000):
     html = res._repr_html_()
     assert "<table>" in html and "q3a2" in html and "varpro" in html
     model_html = fohw.datasets.paper_model()._repr_html_()
-    assert "<table>" in model_html and ">0.1, 0.2<" in model_html and ">alpha<" in model_html
+    # the kind's one vocabulary (its parameters' names), as every kind's table
+    assert "<table>" in model_html and ">a2<" in model_html and ">0.2<" in model_html
+    assert ">alpha<" in model_html and ">q3<" in model_html and "g_basis" in model_html
 
 
 def test_every_option_is_declared_once_and_checked_by_one_check():

@@ -1,9 +1,10 @@
 """Every verb for every model kind: the conformance test of the fohw.Model protocol.
 
-Each kind in ``KINDS`` (``tests/model_kinds.py``) is a factory returning ``(true_model, start_model, u, noise_std,
-order_name)``: the system that made the record, where :func:`fohw.fit` starts, the input, the
-standard deviation of the white noise added to the output, and the free order the LR test and
-the profile interval are about. Adding a kind is one line in ``KINDS``.
+Each kind in ``KINDS`` (``tests/model_kinds.py``) is a factory returning ``(true_model,
+start_model, u, noise_std, order_name)``: the system that made the record, where
+:func:`fohw.fit` starts, the input, the standard deviation of the white noise added to the
+output, and the free order the LR test and the profile interval are about.
+Adding a kind is one line in ``KINDS``.
 
 The checks, per kind: ``fohw.simulate``; ``fohw.fit`` recovers the truth within 3 standard
 errors; ``fohw.compare``; ``save_model``/``load_model`` and ``save_result``/``load_result``
@@ -18,9 +19,9 @@ promises: values and settings through ``with_parameters``, a deterministic simul
 a wrong input, files, and the hooks it has, an exact Jacobian against differences included); the
 model files are checked there, the result files here.
 
-The small kind of ``tests/model_kinds.py`` (``FractionalLag``) is a subclass of ``fohw.Model`` with ``parameters``,
-``with_parameters`` and ``simulate`` and nothing else of the protocol (no Jacobian, no starts;
-``config`` to keep its step and bounds in files).
+The small kind of ``tests/model_kinds.py`` (``FractionalLag``) is a subclass of ``fohw.Model``
+with ``parameters``, ``with_parameters`` and ``simulate`` and nothing else of the protocol (no
+Jacobian, no starts; ``config`` to keep its step and bounds in files).
 """
 
 import json
@@ -424,6 +425,72 @@ def test_the_command_line_compares_a_model_of_two_inputs(tmp_path, capsys):
     assert main(["compare", "--model", str(tmp_path / "m.json"), "--data",
                  str(tmp_path / "d.txt"), "--columns", "i,v"]) == 2     # one input short
     assert "--columns needs 3 entries" in capsys.readouterr().err
+
+
+def test_order_test_answers_for_every_kind(case):
+    # The test of the same model with its free orders held at 0: an LRTest whose statistic is
+    # N log(RSS_0 / RSS) of the two fits, or a refusal that names the order (a ZARC's order
+    # lies in (0, 1], so orders 0 are outside its class); never a raw error. Where orders 0
+    # make two parameters one (a s^0 + 1 of a transfer function: a and the gain), the refit
+    # says so by name (tests/test_order_test_kinds.py has the cases with a proper null).
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            t = fohw.order_test(case.fit, case.u, case.y)
+        except fohw.ParameterError as exc:
+            assert case.order in str(exc), str(exc)
+            return
+    for w in caught:
+        assert issubclass(w.category, (fohw.RankDeficiencyWarning, fohw.ConvergenceWarning)), w
+        if issubclass(w.category, fohw.RankDeficiencyWarning):
+            assert "not identifiable" in str(w.message) and "columns of" in str(w.message)
+    assert case.order in t.hypothesis and math.isfinite(t.statistic) and 0 <= t.pvalue <= 1
+    with pytest.raises(fohw.ParameterError, match="fohw.order_test"):
+        case.fit.order_test(case.u, case.y)          # results sit below the refit: named
+
+
+def test_bode_and_nyquist_where_the_kind_has_a_response(case):
+    # The magnitude curve is the kind's own frequency_response at the plotted frequencies; a
+    # kind without one (or whose response needs an operating point) is refused by name.
+    has = type(case.true).frequency_response is not fohw.Model.frequency_response
+    for target in (case.fit.model, case.fit):
+        try:
+            fig = fohw.bode(target)
+        except fohw.ParameterError as exc:
+            assert not has or "operating point" in str(exc) or "soc" in str(exc), str(exc)
+            with pytest.raises(fohw.ParameterError):
+                fohw.nyquist(target)
+            continue
+        assert has
+        line = fig.axes[0].lines[0]
+        w, mag = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+        np.testing.assert_allclose(mag, 20 * np.log10(np.abs(case.fit.model.frequency_response(w))),
+                                   rtol=1e-12, atol=1e-12)
+        assert fohw.nyquist(target).axes
+
+
+def test_repr_html_and_summary_name_every_parameter(case):
+    # One vocabulary: the model's and the fit's views list the kind's parameter names.
+    for text in (case.start._repr_html_(), case.start.summary(), case.fit._repr_html_(),
+                 case.fit.summary()):
+        missing = [n for n in case.start.parameters if n not in text]
+        assert not missing, missing
+    html = case.fit._repr_html_()
+    assert case.fit.status.name in html and "95" in html       # the status and the intervals
+
+
+def test_the_command_line_compares_a_model_of_any_kind(case, tmp_path, capsys):
+    fohw.save_result(case.fit, tmp_path / "r.json")
+    u = np.asarray(case.u, dtype=float).reshape(case.y.size, -1)
+    names = [f"u{i}" for i in range(u.shape[1])] + ["y"]
+    np.savetxt(tmp_path / "d.txt", np.column_stack([u, case.y]), fmt="%.17g",
+               header=" ".join(names), comments="")
+    capsys.readouterr()
+    assert main(["compare", "--model", str(tmp_path / "r.json"), "--data", str(tmp_path / "d.txt"),
+                 "--columns", ",".join(names), "--json", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["free_run"]["fit_percent"] == pytest.approx(
+        fit_percent(case.y, case.fit.model.simulate(case.u)), rel=1e-12)
 
 
 def test_select_on_a_separate_validation_record(case):

@@ -283,14 +283,10 @@ class HammersteinWiener(Model):
 
     __hash__ = None
 
-    def _repr_html_(self):
-        from .._repr import html_table
-
-        rows = [(name, ", ".join(f"{v:.6g}" for v in getattr(self, name))) for name in "abpq"]
-        rows += [(name, v) for name, v in self.orders.items()]
-        return html_table("HammersteinWiener", ["block", "values"], rows,
-                          lines=[f"f_basis = {self.f_basis!r}, g_basis = {self.g_basis!r}",
-                                 f"orders: {self.structure.orders!r}"])
+    def description(self) -> list:
+        """The bases and the orders, then the sampling time (:meth:`fohw.Model.description`)."""
+        return [f"f_basis = {self.f_basis!r}, g_basis = {self.g_basis!r}",
+                f"orders: {self.structure.orders!r}", *super().description()]
 
     # --- the Model protocol ---------------------------------------------------------------
     def _names(self):
