@@ -6,19 +6,23 @@ reason); then the fit recovers the truth from a perturbed start on exact data (t
 exact data the search stops at ``tol = 1e-10`` and the estimate is the truth to rounding, the
 parameters of these problems being well conditioned), lies within a few standard errors of it
 on noisy data over several seeds, honours fixed flags, bounds and ties, and agrees with
-``fit_impedance`` on a circuit. Every shipped kind of ``tests/model_kinds.py`` is
+``fit_impedance`` on a circuit. Every shipped kind of ``tests/test_model_protocol.py`` is
 fitted, so none is left out; a kind without the hook is refused naming it.
 """
 
+import importlib
 import warnings
 
 import numpy as np
 import pytest
-from model_kinds import KINDS  # tests/ is on the path (conftest)
 
 import fohw
 from fohw.estimators.frequency_fit import FrequencyProblem, idle_parameters
 from fohw.estimators.impedance_fit import fit_impedance
+
+# The protocol tests' kinds, from the module pytest loads (``--import-mode=importlib`` names it
+# ``tests.test_model_protocol``; a second copy would register its kind twice).
+KINDS = importlib.import_module("tests.test_model_protocol").KINDS
 
 W = np.logspace(-2, 2, 40)
 
