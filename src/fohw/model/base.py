@@ -23,7 +23,7 @@ import inspect
 import numpy as np
 
 from .._validation import check_array
-from ..exceptions import DimensionError, ParameterError
+from ..exceptions import DimensionError, ModelHookError, ParameterError
 from .parameters import Parameters, bounds_overridden
 
 __all__ = ["Model", "register_model", "model_class", "registered_kinds"]
@@ -120,6 +120,10 @@ def _keep_settings(method):
         else:
             settings = getattr(self, _SETTINGS, None)
             new = method(self, values)
+        if not isinstance(new, Model):      # said here, not as a failure to attach settings
+            raise ModelHookError(f"{type(self).__name__}.with_parameters returned "
+                                 f"{type(new).__name__} {repr(new)[:40]}; it must return a new "
+                                 f"model of the kind (a {type(self).__name__}).", "with_parameters")
         if settings is not None and new is not self:
             _attach(new, settings)
         return new
