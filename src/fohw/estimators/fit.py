@@ -43,6 +43,7 @@ from .._validation import check_array, check_int, check_same_length, check_scala
 from ..exceptions import (
     ConvergenceWarning,
     DimensionError,
+    FohwError,
     ModelHookError,
     ParameterError,
     RankDeficiencyWarning,
@@ -606,9 +607,12 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
         Input, as the kind takes it (1-D, or ``(N, m)`` for ``m`` input columns; a circuit takes
         ``[current, state of charge]``); or a :class:`fohw.Record` (then ``y`` is not given:
         the record carries it, and its names, units and sampling reach the result); or a list
-        of Records: several experiments of one system, fitted as one data set (one model, the
-        criterion summed over the records, each record simulated from its own start). A record
-        with non-uniform time stamps is simulated on them by the kind's ``simulate_at``.
+        of Records (or a tuple, a generator, a numpy object array of them): several
+        experiments of one system, fitted as one data set (one model, the criterion summed over
+        the records, each record simulated from its own start), each record checked as one
+        record is. A record with non-uniform time stamps is simulated on them by the kind's
+        ``simulate_at``. The kind gets the samples read-only: the caller's arrays are never
+        changed.
     y : array_like, shape (N,), optional
         Measured output (with array ``u``).
     start : Model or sequence of Model, optional
@@ -631,16 +635,19 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
         ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in ``(0, 1)``.
     exact_jacobian : bool, optional
         Use the kind's exact Jacobian where it has one (default); False forces finite differences.
-    per_record : sequence of str, optional
-        Free parameters estimated once per record (nuisance parts such as an output offset);
-        the others are shared. The result's :attr:`~fohw.FitResult.per_record` holds each
-        record's value and standard error; its model holds the first record's; the covariance
-        of the shared parameters accounts for the per-record ones.
+    per_record : str or sequence of str, optional
+        Free parameters estimated once per record (nuisance parts such as an output offset;
+        None or ``()``: none); the others are shared. The result's
+        :attr:`~fohw.FitResult.per_record` holds each record's value and standard error; its
+        model holds the first record's; the covariance of the shared parameters accounts for
+        the per-record ones.
     warmup : int, optional
         Samples of each record's first input held before it (0: each record starts from rest).
         A record that starts where the system had settled under its first input (a step test
         from an operating point) is simulated from that state this way; a fractional kind
-        settles slowly (its memory decays like a power of time), so give it a long warm-up.
+        settles slowly (its memory decays like a power of time), so give it a long warm-up. At
+        most ``MAX_WARMUP_FACTOR`` (10) times the longest record, or ``MAX_WARMUP_FLOOR``
+        (10 000) samples if that is more: every simulation of the search runs through it.
     refine : int, optional
         For records with non-uniform instants: fine-grid steps per median step of the
         Grünwald–Letnikov kinds' scheme (:func:`fohw.model.irregular.simulate_at`; default 8).
@@ -654,14 +661,22 @@ def fit(model, u, y=None, *, start=None, sample_weight=None, order_grid=5, n_sta
     Raises
     ------
     ParameterError, DimensionError
-        Bad input (named): no excitation, a constant output, data beyond the range of doubles,
-        fewer samples than free parameters, nothing free, or no start with a finite simulation.
+        Bad input (named): no excitation, a constant output (in any record), data beyond the
+        range of doubles, fewer samples than free parameters, nothing free, a warm-up beyond
+        its cap, or no start with a finite simulation.
+    fohw.exceptions.ModelHookError
+        The kind broke the :class:`fohw.Model` protocol (named: the hook and what it returned):
+        an output of the wrong shape, a Jacobian that is not ``(yhat, J)`` with one column per
+        parameter or has NaN where the output is finite, a start or ``with_parameters`` result
+        that is not a model of the kind, or an exception from a hook other than fohw's own and
+        arithmetic ones (a write into its read-only input among them).
 
     Warns
     -----
     ConvergenceWarning
         The search used its budget, or failed (stuck at its start, or a fitted model that
-        does not simulate finitely).
+        does not simulate finitely). Stuck with the kind's exact Jacobian, that Jacobian is
+        probed against central differences and named when they disagree.
     RankDeficiencyWarning
         Some free parameters are not identifiable from the record (named).
 
@@ -988,6 +1003,23 @@ def _search(problem, table, *, n_starts, tol, max_nfev):
     return best
 
 
+def _estimate_jacobian(problem, x):
+    """``problem.full_jacobian(x)`` at the estimate; a kind's failure there named.
+
+    The search treats a run that raises as one that escaped; at the estimate (and its finite
+    difference steps) the run must work: a Python exception of the kind's own (a
+    ``ZeroDivisionError``, not a fohw error) is a :class:`~fohw.exceptions.ModelHookError`.
+    """
+    try:
+        with np.errstate(all="ignore"):
+            return problem.full_jacobian(x)
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        if isinstance(exc, FohwError):
+            raise
+        raise hook_error(problem.model, "jacobian" if problem.has_exact else "simulate",
+                         exc) from exc
+
+
 #: Relative difference (per column) between a kind's exact Jacobian and central differences
 #: beyond which :func:`_jacobian_probe` names the exact one as suspect: central differences err
 #: by about ``eps**(2/3)`` (4e-11) of a column times the curvature, a wrong derivative by O(1).
@@ -1048,8 +1080,7 @@ def _verdict(problem, estimate, max_nfev):
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
     y, sw, sse = problem.y, problem.sw, estimate.sse
-    with np.errstate(all="ignore"):
-        yhat, jac, how = problem.full_jacobian(np.asarray(x, dtype=float))
+    yhat, jac, how = _estimate_jacobian(problem, np.asarray(x, dtype=float))
     if problem.weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
     crit_r = (y - yhat) * sw

@@ -162,6 +162,15 @@ class Model(abc.ABC):
     reads in a terminal (:meth:`summary`) and a notebook (``_repr_html_``) as a table of its
     parameters; :meth:`description` adds the kind's own lines.
 
+    What fohw checks of a kind, once, in :func:`fohw.fit` (and the verbs built on it) and
+    :func:`fohw.simulate`: the input it hands the hooks is read-only (the caller's arrays are
+    never changed; copy before writing); ``simulate`` returns shape ``(N,)``; ``jacobian``
+    returns ``None`` or ``(yhat, J)`` with ``J`` of shape ``(N, n_parameters)``, finite where
+    ``yhat`` is; ``starts`` a list of models of the kind, ``linear_start`` one or ``None``;
+    ``with_parameters`` a model. A hook refuses values with a :class:`fohw.ParameterError`
+    (or returns a diverging output); anything else it raises, or returns against these rules,
+    is a :class:`fohw.exceptions.ModelHookError` naming the hook.
+
     Examples
     --------
     A first-order lag ``y[k] = a y[k-1] + b u[k-1]``, a kind of its own in a dozen lines:
