@@ -19,6 +19,7 @@ import fohw
 from fohw.analysis.metrics import effective_samples
 from fohw.cli import main as cli
 from fohw.estimators.impedance_fit import fit_impedance, fit_record_and_impedance
+from fohw.exceptions import ModelHookError
 from fohw.model.circuit import impedance_error
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,6 +46,93 @@ class _NoResponse(fohw.Model, register=False):
 
     def simulate(self, u, *, initial=None):
         return self.check_input(u)
+
+
+class _Lag43(fohw.Model, register=False):
+    """Issue 43's Lag (the fohw.Model docstring's example): y[k] = a y[k-1] + b u[k-1]."""
+
+    def __init__(self, a=0.5, b=1.0):
+        self.a, self.b = a, b
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("a", self.a, bounds=(-0.99, 0.99)),
+                                fohw.Parameter("b", self.b)])
+
+    def with_parameters(self, values):
+        v = self.parameters.with_values(values).valuesdict()
+        return type(self)(v["a"], v["b"])
+
+    def run(self, u):
+        y = np.zeros_like(u)
+        for k in range(1, u.size):
+            y[k] = self.a * y[k - 1] + self.b * u[k - 1]
+        return y
+
+    def simulate(self, u, *, initial=None):
+        return self.run(self.check_input(u))
+
+
+_U43 = np.random.default_rng(43).standard_normal(200)
+_Y43 = _Lag43(0.8, 2.0).simulate(_U43)
+
+
+def _misbehaving(**hooks):
+    """A _Lag43 whose hooks (``simulate=``, ``jacobian=``, ...) are replaced by functions."""
+    return type("Kind43", (_Lag43,), dict(hooks), register=False)()
+
+
+def _mut_simulate(self, u, *, initial=None):
+    a = np.asarray(u)
+    a *= 1.01                   # issue 43's N1: writes into its input
+    return self.run(np.array(a))
+
+
+def _unchanged(call):
+    """``call(u)`` on a copy of _U43, checking that the copy is unchanged afterwards."""
+    u = _U43.copy()
+    try:
+        return call(u)
+    finally:
+        assert np.array_equal(u, _U43), "the caller's array was changed"
+
+
+def _wrong_sign_jacobian(self, u):
+    y = self.run(self.check_input(u))
+    ja = np.r_[0.0, y[:-1]]              # d y[k] / d a, to first order (the probe is coarse)
+    for k in range(1, u.size):
+        ja[k] = y[k - 1] + self.a * ja[k - 1]
+    jb = _Lag43(self.a, 1.0).run(u)
+    return y, -np.column_stack([ja, jb])
+
+
+def _warned(call, category=fohw.ConvergenceWarning):
+    """``call()`` with ``category`` raised as an error (the catalogue's rows raise)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", category)
+        return call()
+
+
+_G43 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)
+_R43 = [fohw.Record(u=x, y=_G43.simulate(x), dt=0.1)
+        for x in np.random.default_rng(0).standard_normal((2, 300))]
+_FIT43 = dict(order_grid=2, n_starts=1, max_nfev=30)
+
+
+def _profile_per_record():
+    half = [fohw.Record(u=_R43[0].u[:150], y=_R43[0].y[:150], dt=0.1),
+            fohw.Record(u=_R43[0].u[150:], y=_R43[0].y[150:], dt=0.1)]
+    joint = fohw.fit(_G43, half, per_record=["b0"], **_FIT43)
+    return fohw.profile_interval(joint, "b0", u=half)
+
+
+def _order_test_on_its_own_record():
+    d = _PAPER100
+    full = fohw.identify(d.u, d.y, na=1, nb=1, f_basis=1, g_basis=1, method="output_error",
+                         orders="commensurate")
+    return fohw.order_test(full, d.u, d.y, validation=(d.u, d.y))
 
 
 def _bad_file(tmp, text, name="bad.dat"):
@@ -1058,6 +1146,71 @@ API = [
                                            M().frequency_response(np.linspace(0.1, 5.0, 30))),
      fohw.ParameterError, "`omega` has 11 of its 30 frequencies above the Nyquist frequency "
      "pi / dt = 3.14159 of this HammersteinWiener"),
+    # issue 43: the Model protocol's hooks checked once in the engine, the caller's data never
+    # handed writable to a kind, several records checked as one is
+    ("fit", "a kind that writes into its input (issue 43 N1: the caller's u scaled in place)",
+     lambda t: _unchanged(lambda u: fohw.fit(_misbehaving(simulate=_mut_simulate), u, _Y43)),
+     ModelHookError, "simulate must not write into its input; copy it first"),
+    ("simulate", "a kind that writes into its input (issue 43 N2: the caller's u changed)",
+     lambda t: _unchanged(lambda u: fohw.simulate(_misbehaving(simulate=_mut_simulate), u)),
+     ModelHookError, "fohw hands a kind the caller's data read-only"),
+    ("fit", "jacobian returns an array, not (yhat, J) (issue 43 N34: raw IndexError)",
+     lambda t: fohw.fit(_misbehaving(jacobian=lambda self, u: np.ones(3)), _U43, _Y43),
+     ModelHookError, "Kind43.jacobian returned an array of shape (3,) (dtype float64); it must "
+     "return a pair (yhat, J) or None"),
+    ("fit", "linear_start returns a dict (issue 43 N35: raw AttributeError)",
+     lambda t: fohw.fit(_misbehaving(linear_start=lambda self, u, y: {"a": 1.0}), _U43, _Y43),
+     ModelHookError, "Kind43.linear_start returned dict {'a': 1.0}; a start must be a model"),
+    ("fit", "jacobian's J all NaN (issue 43 N36: argmin of an empty sequence)",
+     lambda t: fohw.fit(_misbehaving(jacobian=lambda self, u: (self.simulate(u), np.full(
+         (len(u), 2), np.nan))), _U43, _Y43),
+     ModelHookError, "Kind43.jacobian returned a J with NaN or inf entries (the columns of a, b)"),
+    ("fit", "starts returns [None, 'x'] (issue 43 N37: raw AttributeError)",
+     lambda t: fohw.fit(_misbehaving(starts=lambda self, u, y: [None, "x"]), _U43, _Y43),
+     ModelHookError, "Kind43.starts returned, as start 0, NoneType None; a start must be a model"),
+    ("fit", "simulate returns shape (N, 2) (issue 43 N38: raw broadcast error)",
+     lambda t: fohw.fit(_misbehaving(simulate=lambda self, u, initial=None: np.zeros(
+         (len(u), 2))), _U43, _Y43),
+     ModelHookError, "Kind43.simulate returned an output of shape (200, 2) for an input of 200 "
+     "samples; it must return the output, shape (200,)"),
+    ("fit", "jacobian's J has 5 columns for 2 parameters (issue 43 N39: raw matmul error)",
+     lambda t: fohw.fit(_misbehaving(jacobian=lambda self, u: (self.simulate(u), np.ones(
+         (len(u), 5)))), _U43, _Y43),
+     ModelHookError, "Kind43.jacobian returned a J of shape (200, 5); J must have shape (200, 2)"),
+    ("fit", "simulate returns N + 1 samples (issue 43 N40: raw broadcast error)",
+     lambda t: fohw.fit(_misbehaving(simulate=lambda self, u, initial=None: np.zeros(
+         len(u) + 1)), _U43, _Y43),
+     ModelHookError, "Kind43.simulate returned an output of shape (201,) for an input of 200"),
+    ("fit", "with_parameters returns 42 (issue 43 N48: blamed __slots__)",
+     lambda t: fohw.fit(_misbehaving(with_parameters=lambda self, values: 42), _U43, _Y43),
+     ModelHookError, "Kind43.with_parameters returned int 42; it must return a new model of the "
+     "kind"),
+    ("fit", "an exact jacobian of the wrong sign (issue 43 N49: only 'stuck at its start')",
+     lambda t: _warned(lambda: fohw.fit(_misbehaving(jacobian=_wrong_sign_jacobian), _U43,
+                                        _Y43)),
+     fohw.ConvergenceWarning, "The exact Jacobian (Kind43.jacobian) disagrees with central "
+     "finite differences at the start: the columns of a, b"),
+    ("fit", "a constant y in one record of a list (issue 43 N27: fitted without a word)",
+     lambda t: fohw.fit(_G43, [_R43[0], fohw.Record(u=_R43[1].u, y=np.ones(300), dt=0.1)],
+                        **_FIT43),
+     fohw.ParameterError, "record 1: `y` is constant (1.0 at all 300 samples)"),
+    ("fit", "warmup=10**6 before two records of 300 (issue 43 N5: ran for minutes)",
+     lambda t: fohw.fit(_G43, _R43, warmup=10**6, **_FIT43), fohw.ParameterError,
+     "`warmup` must be at most 10000 samples (10 times the longest record, 300 samples, or "
+     "10000); got 1000000"),
+    ("fit", "per_record=3 (issue 43 N43: per_record=None was a raw TypeError; None is none)",
+     lambda t: fohw.fit(_G43, _R43, per_record=3, **_FIT43), fohw.ParameterError,
+     "`per_record` must be a parameter name or a sequence of names (() for none); got int 3"),
+    ("profile_interval", "a per-record parameter (issue 43 N44: scipy's 'f(a) and f(b) must "
+     "have different signs')",
+     lambda t: _profile_per_record(), fohw.ParameterError,
+     "`name` = 'b0' is estimated per record"),
+    ("order_test", "validation= the estimation record (issue 43 N28: 'significant and validates')",
+     lambda t: _order_test_on_its_own_record(), fohw.ParameterError,
+     "`validation` is the record the fit was estimated on (100 samples"),
+    ("stream_fits", "timeout=0 (issue 43: a per-record timeout)",
+     lambda t: fohw.stream_fits([(_U43, _Y43)], _Lag43(), timeout=0), fohw.ParameterError,
+     "`timeout` must be a positive number of seconds (or None: no limit); got 0"),
 ]
 
 CLI = [

@@ -7,9 +7,11 @@ outcome among the others; and records are read only as room frees up, so a run o
 generator yields its first outcome before the generator is exhausted.
 """
 
+import concurrent.futures
 import importlib
 import json
 import os
+import threading
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
@@ -221,3 +223,100 @@ def test_a_record_that_kills_its_worker_loses_only_itself():
     lost = out[3][1]
     assert isinstance(lost, TaskError) and "kills its worker" in lost.message
     assert [v for i, v in out if i != 3] == [x * x for x in range(10) if x != 3]
+
+
+# Issue 43: a per-record timeout (N4, N55) and a failed file for a worker that died (N21). The
+# kinds are issue 43's Lag with a record that hangs (it waits for an event no one sets in time)
+# or kills its worker process; at module level so that process workers can unpickle them.
+RELEASE = threading.Event()         # set at the end: an abandoned thread returns
+
+
+class Lag43(fohw.Model):
+    """y[k] = a y[k-1] + b u[k-1] (issue 43's fixtures)."""
+
+    def __init__(self, a=0.5, b=1.0):
+        self.a, self.b = a, b
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("a", self.a, bounds=(-0.99, 0.99)),
+                                fohw.Parameter("b", self.b)])
+
+    def with_parameters(self, values):
+        v = self.parameters.with_values(values).valuesdict()
+        return type(self)(v["a"], v["b"])
+
+    def simulate(self, u, *, initial=None):
+        u = self.check_input(u)
+        if u[0] == 321.0:
+            RELEASE.wait(1000)                       # hangs (N4)
+        if u[0] == 123.0 and os.getpid() != MAIN_PID:
+            os._exit(1)                              # kills its worker (N21)
+        y = np.zeros_like(u)
+        for k in range(1, u.size):
+            y[k] = self.a * y[k - 1] + self.b * u[k - 1]
+        return y
+
+
+def _records43(n, marked, mark):
+    out = []
+    for k in range(n):
+        u = np.random.default_rng(k).standard_normal(60)
+        y = Lag43(0.8, 2.0).simulate(u)
+        if k == marked:
+            u[0] = mark
+        out.append((u, y))
+    return out
+
+
+@pytest.mark.parametrize("backend", ["serial", "threads", "processes"])
+def test_a_record_past_its_timeout_is_a_failure_and_the_others_go_on(tmp_path, pools, backend):
+    records = _records43(4, 1, 321.0)
+    executor = None if backend == "serial" else pools[backend]
+    try:
+        items = list(fohw.stream_fits(records, Lag43(), executor=executor, ordered=False,
+                                      timeout=5.0, out_dir=tmp_path, **FAST))
+    finally:
+        RELEASE.set()                                # the abandoned thread (threads) returns
+        RELEASE.clear()
+    by_index = {item.index: item for item in items}
+    assert sorted(by_index) == [0, 1, 2, 3]
+    hung = by_index[1]
+    assert not hung.ok and isinstance(hung.error, fohw.exceptions.TaskTimeoutError)
+    assert "ran longer than `timeout` = 5 s" in hung.message
+    assert (tmp_path / "000001.failed.txt").read_text().startswith("TaskTimeoutError: the fit ran")
+    for k in (0, 2, 3):                              # the same fits as without a timeout
+        assert by_index[k].ok and _same(fohw.load_result(by_index[k].path),
+                                        fohw.fit(Lag43(), *records[k], **FAST))
+
+
+def test_a_worker_that_dies_leaves_a_failed_file(tmp_path):
+    records = _records43(8, 3, 123.0)
+    with ProcessPoolExecutor(2) as pool:
+        items = list(fohw.stream_fits(records, Lag43(), executor=pool, out_dir=tmp_path, **FAST))
+    assert [item.ok for item in items] == [k != 3 for k in range(8)]
+    assert items[3].path == str(tmp_path / "000003.failed.txt")
+    text = (tmp_path / "000003.failed.txt").read_text()
+    assert text.startswith("BrokenProcessPool") and "this task kills its worker" in text
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith(".")) == \
+        sorted([f"{k:06d}.json" for k in range(8) if k != 3] + ["000003.failed.txt"])
+
+
+class _DeadExecutor(concurrent.futures.Executor):
+    """An executor whose workers are gone: a task is accepted and never ends (issue 43 N55)."""
+
+    def submit(self, fn, *args, **kwargs):
+        return concurrent.futures.Future()
+
+
+def test_the_stream_gives_up_on_an_executor_that_runs_nothing(tmp_path, monkeypatch):
+    import fohw._parallel
+
+    monkeypatch.setattr(fohw._parallel, "STALL_GRACE", 0.2)
+    records = _records43(3, None, 0.0)
+    items = list(fohw.stream_fits(records, Lag43(), executor=_DeadExecutor(), timeout=0.1,
+                                  out_dir=tmp_path, **FAST))
+    assert [item.index for item in items] == [0, 1, 2] and not any(item.ok for item in items)
+    assert all(isinstance(item.error, fohw.exceptions.TaskTimeoutError) for item in items)
+    assert "no task ended within 0.3 s" in items[0].message
+    assert all((tmp_path / f"{k:06d}.failed.txt").exists() for k in range(3))

@@ -339,3 +339,58 @@ def test_select_structure_ranks_by_the_initial_state_it_will_be_validated_from()
         assert f"{n_values} values" in sel.validation
     with pytest.raises(fohw.ParameterError, match="validate_initial"):
         fohw.select_structure(ue, ye, grid, validation=(uv, yv), validate_initial="rest", **kw)
+
+
+def _json(result):
+    import json
+
+    return json.dumps(result.to_dict(), sort_keys=True)
+
+
+def test_several_records_in_any_container_are_the_same_fit():
+    """Issue 43 N50, N54, N43: an object array or a generator of Records is the list of them
+    (both were "`y` is missing"), and per_record=None is no per-record parameter (was a raw
+    TypeError)."""
+    g = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)
+    records = [fohw.Record(u=x, y=g.simulate(x), dt=0.1)
+               for x in np.random.default_rng(0).standard_normal((2, 300))]
+    options = dict(order_grid=2, n_starts=1, max_nfev=30)
+    reference = _json(fohw.fit(g, records, **options))
+    array = np.empty(2, object)
+    array[:] = records
+    assert _json(fohw.fit(g, array, **options)) == reference
+    assert _json(fohw.fit(g, (r for r in records), **options)) == reference
+    assert _json(fohw.fit(g, records, per_record=None, **options)) == reference
+
+
+def test_the_caller_arrays_are_never_handed_writable_to_a_kind():
+    """Issue 43 N1: every hook of the kind (starts, linear_start, simulate, jacobian) gets the
+    caller's data read-only, so a kind cannot change them (the fit stays the fit of them)."""
+    seen = []
+
+    class Looks(fohw.Model, register=False):
+        def __init__(self, k=1.0):
+            self.k = k
+
+        @property
+        def parameters(self):
+            return fohw.Parameters([fohw.Parameter("k", self.k)])
+
+        def with_parameters(self, values):
+            return Looks(self.parameters.with_values(values).valuesdict()["k"])
+
+        def simulate(self, u, *, initial=None):
+            seen.append(("simulate", np.shares_memory(u, data), u.flags.writeable))
+            return self.k * np.asarray(u)
+
+        def starts(self, u, y):
+            seen.append(("starts", np.shares_memory(u, data), u.flags.writeable))
+            return [self]
+
+    data = np.random.default_rng(1).standard_normal(50)
+    fit = fohw.fit(Looks(), data, 3.0 * data, order_grid=1, n_starts=1)
+    assert fit.parameters["k"].value == pytest.approx(3.0)
+    assert {hook for hook, _, _ in seen} == {"simulate", "starts"}
+    assert not any(writable for _, shared, writable in seen if shared)
+    assert any(shared for _, shared, _ in seen)          # the caller's samples, as a view
+    assert data.flags.writeable                          # the caller's array itself unchanged

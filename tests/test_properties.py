@@ -109,3 +109,101 @@ def test_loaders_never_crash_on_binary(tmp_path, blob):
         read_table(path)
     except fohw.DataFileError:
         pass
+
+
+# Issue 43: a user kind whose hooks misbehave at random. Each call of a hook takes the next
+# step of a schedule drawn by hypothesis (then behaves): a wrong shape, NaN, None, an exception,
+# a non-model. fohw.fit must end in a FitResult or a fohw error, never a raw Python or numpy
+# exception, and never change the caller's arrays.
+_STEPS = ["ok", "nan", "short", "two_columns", "value_error", "arithmetic", "none", "not_a_model",
+          "jacobian_shape", "jacobian_nan", "jacobian_single"]
+
+
+class _Wayward(fohw.Model, register=False):
+    """y[k] = a y[k-1] + b u[k-1], each hook call following the next step of ``plan``."""
+
+    def __init__(self, a=0.5, b=1.0, plan=None):
+        self.a, self.b = a, b
+        self.plan = {"steps": [], "calls": 0} if plan is None else plan
+
+    def _step(self):
+        k = self.plan["calls"]
+        self.plan["calls"] += 1
+        return self.plan["steps"][k] if k < len(self.plan["steps"]) else "ok"
+
+    @property
+    def parameters(self):
+        return fohw.Parameters([fohw.Parameter("a", self.a, bounds=(-0.99, 0.99)),
+                                fohw.Parameter("b", self.b)])
+
+    def with_parameters(self, values):
+        step = self._step()
+        if step == "not_a_model":
+            return 42
+        if step == "value_error":
+            raise ValueError("a kind's own bug")
+        v = self.parameters.with_values(values).valuesdict()
+        return _Wayward(v["a"], v["b"], self.plan)
+
+    def _run(self, u):
+        y = np.zeros_like(u)
+        for k in range(1, u.size):
+            y[k] = self.a * y[k - 1] + self.b * u[k - 1]
+        return y
+
+    def simulate(self, u, *, initial=None):
+        u = self.check_input(u)
+        step = self._step()
+        y = self._run(u)
+        return {"nan": lambda: np.full_like(y, np.nan), "short": lambda: y[:-1],
+                "two_columns": lambda: np.column_stack([y, y]), "none": lambda: None,
+                "not_a_model": lambda: "y",
+                "value_error": lambda: np.zeros(3) + np.zeros(4),     # a raw numpy error
+                "arithmetic": lambda: 1 / 0}.get(step, lambda: y)()
+
+    def jacobian(self, u):
+        u = self.check_input(u)
+        step = self._step()
+        y = self._run(u)
+        ja = np.zeros_like(y)
+        for k in range(1, u.size):
+            ja[k] = y[k - 1] + self.a * ja[k - 1]
+        jac = np.column_stack([ja, _Wayward(self.a, 1.0)._run(u)])
+        return {"jacobian_shape": lambda: (y, jac[:, :1]), "jacobian_nan": lambda: (y, jac * np.nan),
+                "jacobian_single": lambda: jac, "none": lambda: None, "short": lambda: (y[1:], jac),
+                "value_error": lambda: {}["missing"]}.get(step, lambda: (y, jac))()
+
+    def starts(self, u, y):
+        step = self._step()
+        return {"none": lambda: [None], "not_a_model": lambda: self,
+                "value_error": lambda: [self, "x"]}.get(step, lambda: [self])()
+
+    def linear_start(self, u, y):
+        step = self._step()
+        return {"not_a_model": lambda: {"a": 1.0}, "value_error": lambda: int("x")}.get(
+            step, lambda: None)()
+
+
+@settings(max_examples=25, deadline=None)
+@given(steps=st.lists(st.sampled_from(_STEPS), max_size=12), skip=st.integers(0, 30),
+       exact=st.booleans())
+def test_a_kind_that_misbehaves_at_random_gets_a_fohw_error_or_a_fit(steps, skip, exact):
+    import warnings
+
+    u = np.random.default_rng(4).standard_normal(40)
+    y = _Wayward(0.8, 2.0)._run(u)
+    u_before, y_before = u.copy(), y.copy()
+    kind = _Wayward(plan={"steps": ["ok"] * skip + steps, "calls": 0})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)      # a fit's own verdicts
+        warnings.simplefilter("ignore", fohw.RankDeficiencyWarning)
+        try:
+            result = fohw.fit(kind, u, y, order_grid=1, n_starts=1, max_nfev=20,
+                              exact_jacobian=exact)
+        except fohw.FohwError:
+            result = None
+    if result is not None:
+        assert isinstance(result, fohw.FitResult) and result.status is not None
+        assert np.all(np.isfinite(result.parameters.free_values()))
+    np.testing.assert_array_equal(u, u_before)
+    np.testing.assert_array_equal(y, y_before)

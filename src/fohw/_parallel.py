@@ -21,7 +21,7 @@ import threading
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
-from .exceptions import ParameterError
+from .exceptions import ParameterError, TaskTimeoutError
 
 __all__ = ["run_tasks", "stream_tasks", "as_executor", "progress_bar", "heartbeat", "TaskError",
            "end_with_parent", "process_pool", "max_jobs", "check_jobs"]
@@ -441,8 +441,14 @@ def _workers(executor):
         return None
 
 
+#: Seconds beyond a task's ``timeout`` that :func:`stream_tasks` waits for any task to end
+#: before it gives up on the tasks in flight (workers that died without the executor noticing:
+#: starting worker processes and moving the data take some of it).
+STALL_GRACE = 30.0
+
+
 def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", total=None,
-                 max_pending=None, ordered=True):
+                 max_pending=None, ordered=True, timeout=None):
     """``(i, fn(*task))`` for each task of an iterable, serially or on ``executor``, as they end.
 
     The streaming sibling of :func:`run_tasks`: ``tasks`` is read lazily (a generator is
@@ -470,6 +476,12 @@ def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", tota
     ordered : bool, optional
         Yield in task order (default), or as the tasks end (``False``: a slow task does not
         hold back the others, and a finished one is never kept waiting).
+    timeout : float, optional
+        Seconds a task is expected to take at most (``fn`` enforces it itself). With an
+        executor, when no task at all has ended for ``timeout + STALL_GRACE`` seconds, the
+        tasks in flight are given up as :class:`TaskError` (a
+        :class:`fohw.exceptions.TaskTimeoutError`) and cancelled: the stream never waits
+        forever for workers that died without a word. Default None: no limit.
 
     Yields
     ------
@@ -490,10 +502,12 @@ def stream_tasks(fn, tasks, *, executor=None, progress=None, label="tasks", tota
     if isinstance(max_pending, bool) or not isinstance(max_pending, numbers.Integral) \
             or max_pending < 1:
         raise ParameterError(f"`max_pending` must be a positive integer; got {max_pending!r}.")
-    return _stream_tasks(fn, tasks, executor, progress, label, total, int(max_pending), ordered)
+    return _stream_tasks(fn, tasks, executor, progress, label, total, int(max_pending), ordered,
+                         timeout)
 
 
-def _stream_tasks(fn, tasks, executor, progress, label, total, max_pending, ordered):
+def _stream_tasks(fn, tasks, executor, progress, label, total, max_pending, ordered,
+                  timeout=None):
     """The generator of :func:`stream_tasks` (its arguments checked)."""
     bar = progress_bar(total, label, progress, counting=True)
     try:
@@ -503,7 +517,8 @@ def _stream_tasks(fn, tasks, executor, progress, label, total, max_pending, orde
                 bar.update(1)
                 yield i, value
             return
-        yield from _stream(fn, enumerate(tasks), executor, max_pending, ordered, bar)
+        yield from _stream(fn, enumerate(tasks), executor, max_pending, ordered, bar,
+                           None if timeout is None else timeout + STALL_GRACE)
     finally:
         bar.close()
 
@@ -519,7 +534,14 @@ def _run_alone(fn, task):
         pool.shutdown(wait=True)
 
 
-def _stream(fn, numbered, executor, max_pending, ordered, bar):
+def _stalled(window):
+    """The TaskError of a task given up after no task ended for ``window`` seconds."""
+    return TaskError(TaskTimeoutError(
+        f"no task ended within {window:g} s (the timeout plus {STALL_GRACE:g} s): the executor's "
+        "workers died or hang without a word, so the tasks in flight were given up"))
+
+
+def _stream(fn, numbered, executor, max_pending, ordered, bar, window=None):
     pending = {}                    # future -> (i, task)
     ready = {}                      # i -> value, finished and not yet yielded (ordered)
     following = 0                   # the next i to yield (ordered)
@@ -549,7 +571,12 @@ def _stream(fn, numbered, executor, max_pending, ordered, bar):
                     return
                 continue
             if pending and not finished:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                done, _ = wait(pending, timeout=window, return_when=FIRST_COMPLETED)
+                if not done:                   # nothing ended in the window: give up on them
+                    for future, (i, _) in list(pending.items()):
+                        future.cancel()
+                        finished.append((i, _stalled(window)))
+                    pending.clear()
                 for future in done:
                     i, task = pending.pop(future)
                     try:

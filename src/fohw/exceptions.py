@@ -12,6 +12,8 @@ __all__ = [
     "ParameterError",
     "SimulationDivergedError",
     "DataFileError",
+    "ModelHookError",
+    "TaskTimeoutError",
     "NotFittedError",
     "EstimationDivergedError",
     "ConvergenceWarning",
@@ -102,6 +104,30 @@ class SimulationDivergedError(FohwError, ArithmeticError):
 
 class DataFileError(FohwError, ValueError):
     """A data file is malformed, truncated or does not match its expected checksum."""
+
+
+class ModelHookError(FohwError, ValueError):
+    """A model kind's hook broke the :class:`fohw.Model` protocol.
+
+    Raised by :func:`fohw.fit` (and the verbs built on it) and :func:`fohw.simulate` when a
+    kind's ``simulate``, ``jacobian``, ``starts``, ``linear_start`` or ``with_parameters``
+    returned something the protocol does not allow (an output of the wrong shape, a Jacobian
+    with the wrong columns or non-finite entries, a start that is not a model), or raised an
+    exception other than fohw's own and arithmetic ones. The message names the kind, the hook
+    and what it returned; ``hook`` holds the hook's name. A fault of the kind's code, not of
+    the data: fix the kind (``fohw.testing.check_model`` tests one).
+    """
+
+    def __init__(self, message, hook=""):
+        super().__init__(message)
+        self.hook = hook
+
+    def __reduce__(self):               # picklable across process and dask executors
+        return (type(self), (str(self), self.hook))
+
+
+class TaskTimeoutError(FohwError, TimeoutError):
+    """A task (one record's fit in :func:`fohw.stream_fits`) ran longer than its ``timeout``."""
 
 
 class NotFittedError(FohwError, AttributeError):

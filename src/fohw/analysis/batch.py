@@ -13,14 +13,17 @@ end when this process dies.
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
+import signal
+import threading
 import time
 import warnings
 from dataclasses import dataclass
 
 from .._parallel import TaskError, as_executor, end_with_parent, stream_tasks
-from ..exceptions import ConvergenceWarning, ParameterError
+from ..exceptions import ConvergenceWarning, ParameterError, TaskTimeoutError
 from ..model.base import Model
 from ..record import Record
 
@@ -113,42 +116,126 @@ def _check_record(index, record):
     return None
 
 
-def _fit_record(index, record, model, options, read, out_dir):
+def _read_and_fit(record, model, options, read):
+    """Read (a path) and fit one record: its result, or raise."""
+    if _is_path(record):
+        from ..io.text import read_record
+
+        record = read_record(record, **read)
+    if model is None:
+        return _identify(record, options)
+    from ..estimators.fit import fit
+
+    if isinstance(record, Record) or _is_records(record):
+        return fit(model, record, **options)      # its sampling and names go along
+    u, y = record
+    return fit(model, u, y, **options)
+
+
+def _fit_record(index, record, model, options, read, out_dir, timeout=None):
     """Read (a path) and fit one record; never raises: the error is part of the outcome."""
     start = time.perf_counter()
     result = error = path = None
     try:
-        if _is_path(record):
-            from ..io.text import read_record
-
-            record = read_record(record, **read)
-        if model is None:
-            result = _identify(record, options)
-        else:
-            from ..estimators.fit import fit
-
-            if isinstance(record, Record) or _is_records(record):
-                result = fit(model, record, **options)      # its sampling and names go along
-            else:
-                u, y = record
-                result = fit(model, u, y, **options)
+        result = _within(timeout, lambda: _read_and_fit(record, model, options, read))
     except Exception as exc:                 # one record never loses the others
         error = exc
     if out_dir is not None:
-        stem = os.path.join(out_dir, f"{index:06d}")
-        try:
-            if error is None:
-                from ..io.jsonio import save_result
-
-                save_result(result, path := stem + ".json")
-                result = None
-            else:
-                from ..io.files import write_text
-
-                write_text(f"{type(error).__name__}: {error}\n", path := stem + ".failed.txt")
-        except Exception as exc:             # noqa: BLE001 - e.g. a full disk: reported
-            result, error, path = None, exc, None
+        result, error, path = _write_outcome(out_dir, index, result, error)
     return result, error, path, time.perf_counter() - start
+
+
+def _write_outcome(out_dir, index, result, error, text=None):
+    """``(result, error, path)`` once written to ``out_dir``: NNNNNN.json or NNNNNN.failed.txt."""
+    stem = os.path.join(out_dir, f"{index:06d}")
+    try:
+        if error is None:
+            from ..io.jsonio import save_result
+
+            save_result(result, path := stem + ".json")
+            result = None
+        else:
+            from ..io.files import write_text
+
+            text = f"{type(error).__name__}: {error}" if text is None else text
+            write_text(text + "\n", path := stem + ".failed.txt")
+    except Exception as exc:             # noqa: BLE001 - e.g. a full disk: reported
+        result, error, path = None, exc, None
+    return result, error, path
+
+
+class _Deadline(BaseException):
+    """Raised by the alarm of :func:`_within`.
+
+    A BaseException, so that a kind's ``except Exception`` does not swallow it.
+    """
+
+
+def _within(timeout, work):
+    """``work()``, or a :class:`fohw.exceptions.TaskTimeoutError` once it has run ``timeout`` s.
+
+    In a process's main thread (serial runs, a process pool's workers) an alarm signal stops
+    the work where it is; elsewhere (a thread pool, dask's worker threads), or while another
+    alarm is set, the work runs in a daemon thread that is left behind when it overruns (a
+    thread cannot be stopped: it runs on until it returns, holding no worker of the executor).
+    """
+    if timeout is None:
+        return work()
+    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread() \
+            and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0):
+        return _with_alarm(timeout, work)
+    box = {}
+
+    def target():
+        try:
+            box["value"] = work()
+        except BaseException as exc:         # noqa: BLE001 - handed to the caller below
+            box["error"] = exc
+
+    thread = threading.Thread(target=target, name="fohw-fit", daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if thread.is_alive():
+        raise TaskTimeoutError(f"the fit ran longer than `timeout` = {timeout:g} s and was "
+                               "abandoned (it runs on in a background thread of its worker, "
+                               "which a thread executor cannot stop)")
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
+def _with_alarm(timeout, work):
+    """:func:`_within` by ``SIGALRM`` (main thread only)."""
+    state = {"done": False}
+
+    def ring(signum, frame):
+        if not state["done"]:
+            raise _Deadline
+
+    previous = signal.signal(signal.SIGALRM, ring)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        value = work()
+        state["done"] = True
+        return value
+    except _Deadline:
+        raise TaskTimeoutError(f"the fit ran longer than `timeout` = {timeout:g} s and was "
+                               "stopped") from None
+    finally:
+        state["done"] = True
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _check_timeout(timeout):
+    """``timeout`` as seconds (a positive finite number) or None."""
+    if timeout is None:
+        return None
+    if isinstance(timeout, bool) or not isinstance(timeout, numbers.Real) or \
+            not (math.isfinite(timeout) and timeout > 0):
+        raise ParameterError(f"`timeout` must be a positive number of seconds (or None: no "
+                             f"limit); got {timeout!r}.")
+    return float(timeout)
 
 
 def _identify(record, options):
@@ -185,7 +272,7 @@ def _check_call(model, read, out_dir):
 
 
 def stream_fits(records, model=None, *, executor=None, progress=None, read=None, out_dir=None,
-                ordered=True, max_pending=None, chunksize=1, total=None, **options):
+                ordered=True, max_pending=None, chunksize=1, total=None, timeout=None, **options):
     """Fit every record on its own, on any executor, yielding each outcome as it comes.
 
     A generator: the records are read one at a time, at most ``max_pending`` are in flight,
@@ -234,6 +321,16 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
         the records of its chunk.
     total : int, optional
         The number of records, for the progress bar, when ``records`` has no ``len``.
+    timeout : float, optional
+        Seconds one record's reading and fit may take (default None: no limit). A record that
+        takes longer is a failed outcome (a :class:`fohw.exceptions.TaskTimeoutError`; with
+        ``out_dir``, its ``NNNNNN.failed.txt``) and the others go on. Serially and in a process
+        pool's workers the fit is stopped where it is; in a thread pool or on dask's worker
+        threads it is abandoned (a thread cannot be stopped: it runs on in the background
+        until it returns, but no longer holds a worker). With an executor, the stream also
+        stops waiting when no task at all has ended for ``timeout`` times ``chunksize`` plus a
+        grace of 30 s (workers that died without a word): the
+        tasks in flight are then failed outcomes saying so.
     **options
         Keywords of :func:`fohw.fit` with ``model`` (``order_grid``, ``n_starts``, ...), else of
         :func:`fohw.identify` (``na``, ``nb``, ``f_basis``, ``g_basis``, ...).
@@ -249,8 +346,8 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     ------
     ParameterError
         ``model`` is not a :class:`fohw.Model`, ``read`` not a dict, ``out_dir`` not a folder,
-        ``executor`` not an executor, or ``max_pending`` or ``chunksize`` not a positive
-        integer (when called, before any record is read).
+        ``executor`` not an executor, ``max_pending`` or ``chunksize`` not a positive
+        integer, or ``timeout`` not a positive number (when called, before any record is read).
 
     See Also
     --------
@@ -262,7 +359,9 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     ParameterError naming it); :func:`identify_many` raises instead. Records given as arrays
     travel to the workers with their task; give paths to let each worker read its own (on a
     cluster, a path every worker can open). A worker process that dies is handled as in
-    :func:`fohw.select_structure`: only the record that kills its worker is lost.
+    :func:`fohw.select_structure`: only the record that kills its worker is lost, and it is a
+    failed outcome like any other (with ``out_dir``, its ``NNNNNN.failed.txt`` is written by
+    this process, saying what happened).
 
     Examples
     --------
@@ -280,6 +379,7 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     2 FitResult
     """
     out_dir = _check_call(model, read, out_dir)
+    timeout = _check_timeout(timeout)
     executor = as_executor(executor)
     if total is None and hasattr(records, "__len__"):
         total = len(records)
@@ -291,7 +391,7 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
 
     def task(number, chunk):
         chunks[number] = [(j, name) for j, name, _, _ in chunk]
-        return [(j, r, b) for j, _, r, b in chunk], model, options, read, out_dir
+        return [(j, r, b) for j, _, r, b in chunk], model, options, read, out_dir, timeout
 
     def tasks():
         chunk, number = [], 0
@@ -307,19 +407,24 @@ def stream_fits(records, model=None, *, executor=None, progress=None, read=None,
     if total is not None:
         total = -(-total // chunksize)
     stream = stream_tasks(_task, tasks(), executor=executor, progress=progress, label="fits",
-                          total=total, max_pending=max_pending, ordered=ordered)
-    return _items(stream, chunks)
+                          total=total, max_pending=max_pending, ordered=ordered,
+                          timeout=None if timeout is None else timeout * chunksize)
+    return _items(stream, chunks, out_dir)
 
 
-def _items(stream, chunks):
+def _items(stream, chunks, out_dir=None):
     """The generator of :func:`stream_fits`: each record's outcome as a :class:`BatchItem`."""
     try:
         for task, value in stream:
             for k, (i, name) in enumerate(chunks.pop(task)):
                 if isinstance(value, TaskError):     # the executor lost it (pickling, a worker)
-                    yield BatchItem(i, name, error=value.exception,
-                                    message=_message(i, name, value.exception) +
-                                    f" ({value.message})")
+                    error, path = value.exception, None
+                    message = _message(i, name, error) + f" ({value.message})"
+                    if out_dir is not None:          # no worker wrote it: written here
+                        _, error, path = _write_outcome(
+                            out_dir, i, None, error,
+                            f"{type(error).__name__}: {str(error).strip()} ({value.message})")
+                    yield BatchItem(i, name, error=error, message=message, path=path)
                     continue
                 result, error, path, seconds = value[k]
                 yield BatchItem(i, name, result=result, error=error,
@@ -329,10 +434,11 @@ def _items(stream, chunks):
         stream.close()
 
 
-def _task(chunk, model, options, read, out_dir):
-    """One task: the records of a chunk, each read and fitted on its own."""
+def _task(chunk, model, options, read, out_dir, timeout=None):
+    """One task: the records of a chunk, each read and fitted on its own (within ``timeout`` s)."""
     return [(None, bad, None, 0.0) if bad is not None else
-            _fit_record(i, record, model, options, read, out_dir) for i, record, bad in chunk]
+            _fit_record(i, record, model, options, read, out_dir, timeout)
+            for i, record, bad in chunk]
 
 
 def identify_many(records, *, executor=None, progress=None, model=None, read=None, **kwargs):

@@ -130,4 +130,41 @@ def validation_fits(restricted, full, u, y):
                              f"undefined otherwise); got shape {y.shape}"
                              + (f", constant {float(y[0])!r}" if y.ndim == 1 and y.size else "")
                              + ".")
+    if _is_estimation_record(full, u, y):
+        raise ParameterError(
+            f"`validation` is the record the fit was estimated on ({y.size} samples, on which the "
+            "full fit's errors are its own residuals): a verdict needs held-back data the fits "
+            "never saw. Hold back a part of the experiment (fit the first 70 % of the samples "
+            "and validate on the rest) or another experiment.")
     return _free_run_fit(restricted, u, y), _free_run_fit(full, u, y)
+
+
+def _is_estimation_record(result, u, y):
+    """Whether ``(u, y)`` is the record ``result`` was fitted to, to rounding.
+
+    A :class:`fohw.FitResult` of one record: its free run on ``u`` leaves its stored residuals;
+    a lagged result: its one-step criterion ``J`` recomputed on ``(u, y)``. False where neither
+    applies (several records, a warm-up, a series output map) or the run fails.
+    """
+    if getattr(result, "n_samples", None) != y.size:
+        return False
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            residuals = getattr(result, "residuals", None)
+            if residuals is not None:
+                options = getattr(result, "options", None) or {}
+                if np.shape(residuals) != y.shape or options.get("warmup") or \
+                        getattr(result, "per_record", None):
+                    return False
+                e = y - np.asarray(result.simulate(u), dtype=float)
+                scale = max(float(np.max(np.abs(y))), 1e-300)
+                return bool(np.allclose(e, residuals, rtol=1e-9, atol=1e-12 * scale))
+            structure = getattr(result, "structure", None)
+            if structure is None or structure.output_map is not None or \
+                    not callable(getattr(result, "predict", None)):
+                return False
+            J = float(np.mean((y - np.asarray(result.predict(u, y), dtype=float)) ** 2))
+            return bool(np.isclose(J, float(result.J), rtol=1e-9, atol=1e-300))
+    except (FohwError, ArithmeticError, ValueError, TypeError):
+        return False

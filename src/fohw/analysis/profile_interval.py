@@ -425,6 +425,13 @@ def _interval(name, est, level, stat, grid, values, k, quantile, lo, hi, xtol):
         inner = k
         for j in idx:
             if values[j] > quantile:
+                if values[inner] > quantile:        # no sign change for Brent: say why
+                    raise ParameterError(
+                        f"the profile of {name!r} does not cross the {level:g} quantile "
+                        f"({quantile:.4g}) between {grid[inner]:.6g} and {grid[j]:.6g}: the "
+                        f"refit nearest the estimate already has a statistic of "
+                        f"{values[inner]:.4g}, so the refits do not reproduce the fit there "
+                        "(a search that stops early: raise the fit's max_nfev or n_starts).")
                 a, b = grid[inner], grid[j]
                 return scipy.optimize.brentq(lambda v: stat(v) - quantile, min(a, b),
                                              max(a, b), xtol=xtol), False
@@ -449,6 +456,12 @@ def _profile_fit(result, name, level, u, y, n_grid, xtol, n_effective):
     if not isinstance(name, str) or name not in free:
         raise ParameterError(f"`name` must be one of the free parameters {list(free)} of the "
                              f"{type(result.model).__name__} fit; got {name!r}.")
+    if name in (result.per_record or {}):
+        raise ParameterError(
+            f"`name` = {name!r} is estimated per record (the fit's per_record: one value for each "
+            f"of its {len(result.per_record[name]['values'])} records): a profile fixes one value, "
+            "which such a parameter does not have. Profile a shared parameter, or refit with "
+            f"{name!r} shared (per_record without it) to profile it.")
     u, y = check_fit_record(result, u, y, "result")
     rss_hat, n = result.sse, check_n_effective(n_effective, result.n_samples)
     quantile = float(scipy.stats.chi2.ppf(level, 1))

@@ -31,6 +31,7 @@ import hashlib
 import inspect
 import itertools
 import warnings
+from collections.abc import Iterator
 from typing import NamedTuple
 
 import numpy as np
@@ -42,13 +43,16 @@ from .._validation import check_array, check_int, check_same_length, check_scala
 from ..exceptions import (
     ConvergenceWarning,
     DimensionError,
+    FohwError,
+    ModelHookError,
     ParameterError,
     RankDeficiencyWarning,
 )
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..model.irregular import DEFAULT_REFINE, jacobian_at
-from ..record import UNIFORM_RTOL, as_records, record_info
+from ..model.simulation import HOOK_REFUSALS, call_hook, hook_error, read_only
+from ..record import UNIFORM_RTOL, Record, as_records, record_info
 from ..results import Status
 from ._common import bounded_least_squares, stationary
 from .identify import fit_lagged
@@ -95,11 +99,100 @@ def check_weight(sample_weight, y):
     return w
 
 
-def _hook(method, u, y, weight):
-    """Call a kind's ``starts``/``linear_start``, with ``sample_weight`` if given and it takes one."""
-    if weight is not None and "sample_weight" in inspect.signature(method).parameters:
-        return method(u, y, sample_weight=weight)
-    return method(u, y)
+def _hook(model, hook, u, y, weight):
+    """A kind's ``starts`` or ``linear_start``, with ``sample_weight`` if given and it takes one.
+
+    What it returns is checked (:func:`_check_start`): ``starts`` a list of models of the kind,
+    ``linear_start`` one or None; anything else, or an exception other than a refusal, is a
+    :class:`~fohw.exceptions.ModelHookError` naming the hook.
+    """
+    method = getattr(model, hook)
+    takes = weight is not None and "sample_weight" in inspect.signature(method).parameters
+    out = call_hook(model, hook, u, y, **({"sample_weight": weight} if takes else {}))
+    if hook == "linear_start":
+        return None if out is None else _check_start(model, hook, out)
+    if isinstance(out, (Model, str, bytes)) or not hasattr(out, "__iter__"):
+        raise ModelHookError(f"{type(model).__name__}.starts returned {_described(out)}; it must "
+                             "return a list of start models of the kind.", hook)
+    return [_check_start(model, hook, m, k) for k, m in enumerate(out)]
+
+
+def _described(x):
+    """What a hook returned, in a few words (``a tuple of 3 entries``, ``an array of shape (5,)``)."""
+    if isinstance(x, np.ndarray):
+        return f"an array of shape {x.shape} (dtype {x.dtype})"
+    if isinstance(x, (list, tuple)):
+        return f"a {type(x).__name__} of {len(x)} entries"
+    text = repr(x)
+    return f"{type(x).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+
+
+def _check_start(model, hook, m, k=None):
+    """A start model ``m`` returned by ``model``'s ``hook``: a Model with the kind's parameters."""
+    what = f"{type(model).__name__}.{hook} returned" + ("" if k is None else f", as start {k},")
+    if not isinstance(m, Model):
+        raise ModelHookError(f"{what} {_described(m)}; a start must be a model of the kind "
+                             f"(a {type(model).__name__}).", hook)
+    names, own = m.parameters.names, model.parameters.names
+    if names != own:
+        raise ModelHookError(f"{what} a {type(m).__name__} with parameters {list(names)}; a start "
+                             f"has the model's parameters {list(own)}.", hook)
+    return m
+
+
+def _with(model, values):
+    """``model.with_parameters(values)``, checked to be a model (a kind's fault named)."""
+    new = call_hook(model, "with_parameters", values)
+    if not isinstance(new, Model):
+        raise ModelHookError(f"{type(model).__name__}.with_parameters returned {_described(new)}; "
+                             f"it must return a new model of the kind (a {type(model).__name__}).",
+                             "with_parameters")
+    return new
+
+
+def _output(model, hook, yhat, n):
+    """A kind's output ``yhat`` for ``n`` input samples as a float array of shape ``(n,)``, or raise."""
+    kind = type(model).__name__
+    if np.iscomplexobj(yhat):
+        raise ModelHookError(f"{kind}.{hook} returned a complex output; it must return the real "
+                             f"output, shape ({n},).", hook)
+    try:
+        arr = np.asarray(yhat, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelHookError(f"{kind}.{hook} returned {_described(yhat)}, not numbers; it must "
+                             f"return the output, an array of shape ({n},).", hook) from None
+    if arr.shape != (n,):
+        raise ModelHookError(f"{kind}.{hook} returned an output of shape {arr.shape} for an input "
+                             f"of {n} samples; it must return the output, shape ({n},).", hook)
+    return arr
+
+
+def _jacobian_pair(model, out, n):
+    """A kind's ``jacobian`` output ``(yhat, J)`` checked (shapes, a finite ``J``), or None."""
+    kind = type(model).__name__
+    if out is None:
+        return None
+    if not isinstance(out, (tuple, list)) or len(out) != 2:
+        raise ModelHookError(f"{kind}.jacobian returned {_described(out)}; it must return a pair "
+                             "(yhat, J) or None (then fohw uses finite differences).", "jacobian")
+    yhat = _output(model, "jacobian", out[0], n)
+    names = model.parameters.names
+    try:
+        jac = np.asarray(out[1], dtype=float)
+    except (TypeError, ValueError):
+        jac = None
+    if jac is None or np.iscomplexobj(out[1]) or jac.shape != (n, len(names)):
+        got = _described(out[1]) if jac is None else f"a J of shape {jac.shape}"
+        raise ModelHookError(f"{kind}.jacobian returned {got}; J must have shape ({n}, "
+                             f"{len(names)}): one row per sample, one column per parameter "
+                             f"({', '.join(names)}), fixed and tied ones included.", "jacobian")
+    if np.all(np.isfinite(yhat)) and not np.all(np.isfinite(jac)):
+        cols = [names[j] for j in np.flatnonzero(~np.all(np.isfinite(jac), axis=0))]
+        raise ModelHookError(f"{kind}.jacobian returned a J with NaN or inf entries (the columns "
+                             f"of {', '.join(cols)}) where its output is finite; fix the kind's "
+                             "jacobian, or fit with exact_jacobian=False (finite differences).",
+                             "jacobian")
+    return yhat, jac
 
 
 def check_record(model, u, y):
@@ -114,8 +207,9 @@ def check_record(model, u, y):
         raise ParameterError("`u` is zero at every sample: the record has no excitation, so no "
                              "parameter of the model can be identified from it.")
     if np.ptp(y) == 0.0:
-        raise ParameterError(f"`y` is constant ({y[0]!r} at all {y.size} samples): it carries no "
-                             "information on the dynamics; fit a record in which the output moves.")
+        raise ParameterError(f"`y` is constant ({float(y[0])!r} at all {y.size} samples): it carries "
+                             "no information on the dynamics; fit a record in which the output "
+                             "moves.")
     for name, x in (("u", uu), ("y", y)):
         big = float(np.max(np.abs(x)))
         if big > DATA_RANGE[1] or 0.0 < big < DATA_RANGE[0]:
@@ -136,7 +230,8 @@ class _Experiment:
 
     def __init__(self, u, y, weight, *, t=None, intersample="zoh", warmup=0, name="",
                  refine=None):
-        self.u, self.y, self.weight, self.t = u, y, weight, t
+        # the kind gets the input read-only: the caller's array is never changed
+        self.u, self.y, self.weight, self.t = read_only(u), y, weight, t
         self.intersample, self.warmup, self.name = intersample, warmup, name
         self.refine = refine
         self.step = None
@@ -161,25 +256,40 @@ class _Experiment:
         return ({"step": self.step} if self.step is not None else {"refine": self.refine})
 
     def simulate(self, model):
-        """The model's free run on this record (after its warm-up)."""
+        """The model's free run on this record (after its warm-up), its shape checked."""
+        held = self._held()
         if self.t is not None:
             # every kind has simulate_at: the fine-grid scheme, its own exact one, or a refusal
             # naming the alternative (the lagged kind, discrete in samples)
-            yhat = model.simulate_at(self._held(), self._instants(),
-                                     intersample=self.intersample, **self._grid())
+            hook = "simulate_at"
+            yhat = call_hook(model, hook, held, self._instants(), intersample=self.intersample,
+                             **self._grid())
         else:
-            yhat = model.simulate(self._held())
-        return np.asarray(yhat, dtype=float)[self.warmup:]
+            hook = "simulate"
+            yhat = call_hook(model, hook, held)
+        return _output(model, hook, yhat, held.shape[0])[self.warmup:]
 
     def jacobian(self, model, exact):
-        """``(yhat, J)`` on this record: ``J`` over every parameter (:meth:`Model.jacobian`)."""
+        """``(yhat, J)`` on this record: ``J`` over every parameter (:meth:`Model.jacobian`).
+
+        Checked (:func:`_jacobian_pair`): a pair, ``J`` with a column per parameter, finite
+        where the output is.
+        """
         if exact:
-            out = (model.jacobian(self._held()) if self.t is None else   # time stamps: the
-                   jacobian_at(model, self._held(), self._instants(),   # fine grid's, or None
-                               intersample=self.intersample, **self._grid()))
+            held = self._held()
+            if self.t is None:
+                out = call_hook(model, "jacobian", held)
+            else:       # time stamps: the fine grid's, or None
+                try:
+                    out = jacobian_at(model, held, self._instants(), intersample=self.intersample,
+                                      **self._grid())
+                except HOOK_REFUSALS:
+                    raise
+                except Exception as exc:            # noqa: BLE001 - the kind's fault, named
+                    raise hook_error(model, "jacobian", exc) from exc
+            out = _jacobian_pair(model, out, held.shape[0])
             if out is not None:
-                return (np.asarray(out[0], dtype=float)[self.warmup:],
-                        np.asarray(out[1], dtype=float)[self.warmup:])
+                return out[0][self.warmup:], out[1][self.warmup:]
         return None
 
 
@@ -209,12 +319,16 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
     Arrays ``u, y`` or a Record or a list of Records (``y`` None), as :func:`fit` takes them;
     :func:`data_digest_of` of the experiments is the fit's ``data_digest``.
     """
+    u = _record_sequence(u)
     records = as_records(u, y, what="u")
     if records is None:
-        return [_array_experiment(model, u, y, sample_weight, warmup, refine)], None
+        experiment = _array_experiment(model, u, y, sample_weight, warmup, refine)
+        _check_warmup(warmup, [experiment.y.size])
+        return [experiment], None
     if not isinstance(model, Model):
         raise ParameterError(f"`model` must be a fohw.Model (a model kind); got "
                              f"{type(model).__name__}.")
+    _check_warmup(warmup, [r.y.size for r in records])
     weights = _record_weights(records, sample_weight, several=isinstance(u, (list, tuple)))
     _check_shared_fields(records)
     _check_sampling(model, records)
@@ -223,6 +337,39 @@ def prepare_data(model, u, y, sample_weight, warmup, refine=None):
     y_all = np.concatenate([e.y for e in experiments])
     check_record(model, u_all if model.n_inputs > 1 else u_all[:, 0], y_all)
     return experiments, record_info(records)
+
+
+#: The longest warm-up :func:`fit` takes: :data:`MAX_WARMUP_FACTOR` times the longest record's
+#: samples, or :data:`MAX_WARMUP_FLOOR` samples if that is more. Every simulation of the search
+#: runs through the warm-up, so its cost grows with it (a warm-up of 10**6 samples before two
+#: records of 300 ran for minutes); a power-law memory has decayed to a few per cent of its
+#: first sample's weight after ten record lengths.
+MAX_WARMUP_FACTOR = 10
+MAX_WARMUP_FLOOR = 10_000
+
+
+def _check_warmup(warmup, lengths):
+    """Raise unless ``warmup`` is within :data:`MAX_WARMUP_FACTOR` record lengths (or the floor)."""
+    cap = max(MAX_WARMUP_FACTOR * max(lengths), MAX_WARMUP_FLOOR)
+    if warmup > cap:
+        raise ParameterError(f"`warmup` must be at most {cap} samples ({MAX_WARMUP_FACTOR} times "
+                             f"the longest record, {max(lengths)} samples, or {MAX_WARMUP_FLOOR}); "
+                             f"got {warmup}. Every simulation of the fit runs through the warm-up.")
+
+
+def _record_sequence(u):
+    """A numpy object array or an iterator (a generator) of Records as a list; others as given.
+
+    ``fohw.fit(model, (r for r in records))`` and an object array of Records are the list of
+    those records; an iterator of anything else is read into a list (then refused or taken
+    as arrays, as a list would be).
+    """
+    if isinstance(u, np.ndarray) and u.dtype == object and u.ndim == 1 and u.size and \
+            all(isinstance(r, Record) for r in u):
+        return list(u)
+    if isinstance(u, Iterator) and not isinstance(u, Record):
+        return list(u)
+    return u
 
 
 def _array_experiment(model, u, y, sample_weight, warmup, refine):
@@ -289,8 +436,8 @@ def _record_experiments(model, records, weights, warmup, refine):
     experiments = []
     for k, (r, w) in enumerate(zip(records, weights)):
         label = f"record {k}{_named(r.name)}"
-        try:
-            uu = model.check_input(r.u)
+        try:        # each record checked as one record is (a constant output, no excitation)
+            uu = check_record(model, r.u, r.y)[0] if len(records) > 1 else model.check_input(r.u)
         except (ParameterError, DimensionError) as exc:
             raise type(exc)(f"{label}: {exc}") from None
         weight = None if w is None else check_weight(w, r.y)
@@ -367,7 +514,7 @@ def records_jacobian(model, experiments, *, exact=True):
                 np.vstack([np.asarray(o[1], dtype=float) @ t for o in outs]), "exact")
 
     def run(v):
-        m = model.with_parameters(params.with_free(v))
+        m = _with(model, params.with_free(v))
         return np.concatenate([e.simulate(m) for e in experiments])
 
     yhat, jac = central_differences(run, params.free_values(), *params.free_bounds())
@@ -418,7 +565,7 @@ def _order_grid(model, grid):
     if n_points > MAX_SCAN:
         raise ParameterError(f"`order_grid` = {grid} scans {n_points} points for {len(orders)} free "
                              f"orders, more than {MAX_SCAN}; use a smaller grid (or give starts).")
-    return [model.with_parameters(params.with_values(dict(zip(orders, combo))))
+    return [_with(model, params.with_values(dict(zip(orders, combo))))
             for combo in itertools.product(*axes)]
 
 
@@ -449,9 +596,12 @@ def fit(model, u, y=None, *, method=None, options=None, start=None, sample_weigh
         Input, as the kind takes it (1-D, or ``(N, m)`` for ``m`` input columns; a circuit takes
         ``[current, state of charge]``); or a :class:`fohw.Record` (then ``y`` is not given:
         the record carries it, and its names, units and sampling reach the result); or a list
-        of Records: several experiments of one system, fitted as one data set (one model, the
-        criterion summed over the records, each record simulated from its own start). A record
-        with non-uniform time stamps is simulated on them by the kind's ``simulate_at``.
+        of Records (or a tuple, a generator, a numpy object array of them): several
+        experiments of one system, fitted as one data set (one model, the criterion summed over
+        the records, each record simulated from its own start), each record checked as one
+        record is. A record with non-uniform time stamps is simulated on them by the kind's
+        ``simulate_at``. The kind gets the samples read-only: the caller's arrays are never
+        changed.
     y : array_like, shape (N,), optional
         Measured output (with array ``u``).
     start : Model or sequence of Model, optional
@@ -474,16 +624,19 @@ def fit(model, u, y=None, *, method=None, options=None, start=None, sample_weigh
         ``ftol``, ``xtol`` and ``gtol`` of :func:`scipy.optimize.least_squares`, in ``(0, 1)``.
     exact_jacobian : bool, optional
         Use the kind's exact Jacobian where it has one (default); False forces finite differences.
-    per_record : sequence of str, optional
-        Free parameters estimated once per record (nuisance parts such as an output offset);
-        the others are shared. The result's :attr:`~fohw.FitResult.per_record` holds each
-        record's value and standard error; its model holds the first record's; the covariance
-        of the shared parameters accounts for the per-record ones.
+    per_record : str or sequence of str, optional
+        Free parameters estimated once per record (nuisance parts such as an output offset;
+        None or ``()``: none); the others are shared. The result's
+        :attr:`~fohw.FitResult.per_record` holds each record's value and standard error; its
+        model holds the first record's; the covariance of the shared parameters accounts for
+        the per-record ones.
     warmup : int, optional
         Samples of each record's first input held before it (0: each record starts from rest).
         A record that starts where the system had settled under its first input (a step test
         from an operating point) is simulated from that state this way; a fractional kind
-        settles slowly (its memory decays like a power of time), so give it a long warm-up.
+        settles slowly (its memory decays like a power of time), so give it a long warm-up. At
+        most ``MAX_WARMUP_FACTOR`` (10) times the longest record, or ``MAX_WARMUP_FLOOR``
+        (10 000) samples if that is more: every simulation of the search runs through it.
     refine : int, optional
         For records with non-uniform instants: fine-grid steps per median step of the
         Grünwald–Letnikov kinds' scheme (:func:`fohw.model.irregular.simulate_at`; default 8).
@@ -497,14 +650,22 @@ def fit(model, u, y=None, *, method=None, options=None, start=None, sample_weigh
     Raises
     ------
     ParameterError, DimensionError
-        Bad input (named): no excitation, a constant output, data beyond the range of doubles,
-        fewer samples than free parameters, nothing free, or no start with a finite simulation.
+        Bad input (named): no excitation, a constant output (in any record), data beyond the
+        range of doubles, fewer samples than free parameters, nothing free, a warm-up beyond
+        its cap, or no start with a finite simulation.
+    fohw.exceptions.ModelHookError
+        The kind broke the :class:`fohw.Model` protocol (named: the hook and what it returned):
+        an output of the wrong shape, a Jacobian that is not ``(yhat, J)`` with one column per
+        parameter or has NaN where the output is finite, a start or ``with_parameters`` result
+        that is not a model of the kind, or an exception from a hook other than fohw's own and
+        arithmetic ones (a write into its read-only input among them).
 
     Warns
     -----
     ConvergenceWarning
         The search used its budget, or failed (stuck at its start, or a fitted model that
-        does not simulate finitely).
+        does not simulate finitely). Stuck with the kind's exact Jacobian, that Jacobian is
+        probed against central differences and named when they disagree.
     RankDeficiencyWarning
         Some free parameters are not identifiable from the record (named).
 
@@ -602,8 +763,8 @@ def _start_models(model, params, start, u, data):
         if type(s) is not type(model) or s.parameters.names != params.names:
             raise ParameterError(f"`start` must hold models of the same kind and parameters as "
                                  f"`model` ({type(model).__name__}); got {type(s).__name__}.")
-    return [m.with_parameters(params.with_values(m.parameters.valuesdict()))
-            for m in list(_hook(model.starts, u, data.y, data.weight)) + extra]
+    return [_with(m, params.with_values(m.parameters.valuesdict()))
+            for m in _hook(model, "starts", u, data.y, data.weight) + extra]
 
 
 class _Problem:
@@ -655,7 +816,7 @@ class _Problem:
         free = x[:len(self.names)].copy()
         for i in range(len(self.per_record)):
             free[self.pr_index[i]] = x[self.column(i, r)]
-        return self.model.with_parameters(self.params.with_free(free))
+        return _with(self.model, self.params.with_free(free))
 
     def extend(self, x0):
         """A shared-parameter vector with each per-record copy at its record-0 value."""
@@ -786,12 +947,12 @@ def _linear_start(m, params, u, data):
     """``m`` with its linear parameters solved (:meth:`~fohw.Model.linear_start`), or None."""
     try:
         with np.errstate(all="ignore"):
-            solved = _hook(m.linear_start, u, data.y, data.weight)
+            solved = _hook(m, "linear_start", u, data.y, data.weight)
     except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
         solved = None
     if solved is None:
         return None
-    return solved.with_parameters(params.with_values(
+    return _with(solved, params.with_values(
         {n: v for n, v in solved.parameters.valuesdict().items() if params[n].tie is None}))
 
 
@@ -847,6 +1008,58 @@ def _search(problem, table, *, n_starts, tol, max_nfev):
     return best
 
 
+def _estimate_jacobian(problem, x):
+    """``problem.full_jacobian(x)`` at the estimate; a kind's failure there named.
+
+    The search treats a run that raises as one that escaped; at the estimate (and its finite
+    difference steps) the run must work: a Python exception of the kind's own (a
+    ``ZeroDivisionError``, not a fohw error) is a :class:`~fohw.exceptions.ModelHookError`.
+    """
+    try:
+        with np.errstate(all="ignore"):
+            return problem.full_jacobian(x)
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        if isinstance(exc, FohwError):
+            raise
+        raise hook_error(problem.model, "jacobian" if problem.has_exact else "simulate",
+                         exc) from exc
+
+
+#: Relative difference (per column) between a kind's exact Jacobian and central differences
+#: beyond which :func:`_jacobian_probe` names the exact one as suspect: central differences err
+#: by about ``eps**(2/3)`` (4e-11) of a column times the curvature, a wrong derivative by O(1).
+PROBE_RTOL = 1e-3
+
+
+def _jacobian_probe(problem, x):
+    """``[sentence]`` when the kind's exact Jacobian at ``x`` disagrees with central differences.
+
+    Run where the search is stuck at its start with the kind's exact Jacobian; ``[]`` when they
+    agree (each column within :data:`PROBE_RTOL` of the larger of the two).
+    """
+    try:
+        with np.errstate(all="ignore"):
+            _, exact = problem.run(x, True)
+            _, fd = central_differences(lambda v: problem.run(v, False)[0], x, problem.lower,
+                                        problem.upper)
+    except (ArithmeticError, ParameterError, np.linalg.LinAlgError):
+        return []
+    if exact is None or not (np.all(np.isfinite(exact)) and np.all(np.isfinite(fd))):
+        return []
+    size = np.maximum(np.linalg.norm(exact, axis=0), np.linalg.norm(fd, axis=0))
+    off = np.linalg.norm(exact - fd, axis=0) / np.where(size > 0, size, 1.0)
+    bad = np.flatnonzero(off > PROBE_RTOL)
+    if not bad.size:
+        return []
+    names = list(problem.names) + problem.extra_names
+    kind = type(problem.model).__name__
+    return [f"The exact Jacobian ({kind}.jacobian) disagrees with central finite differences "
+            f"at the start: the columns of {', '.join(names[j] for j in bad)} differ by up to "
+            f"{100 * float(off[bad].max()):.3g} % of their size, and a wrong Jacobian stops the "
+            f"search. Check {kind}.jacobian, or fit with exact_jacobian=False (finite "
+            "differences)."]
+
+
 class _Verdict(NamedTuple):
     """What :func:`_verdict` concludes about an estimate."""
 
@@ -872,8 +1085,7 @@ def _verdict(problem, estimate, max_nfev):
         messages.append(f"The search used its budget of {max_nfev} simulations before meeting "
                         "`tol`; raise `max_nfev` or give a better start.")
     y, sw, sse = problem.y, problem.sw, estimate.sse
-    with np.errstate(all="ignore"):
-        yhat, jac, how = problem.full_jacobian(np.asarray(x, dtype=float))
+    yhat, jac, how = _estimate_jacobian(problem, np.asarray(x, dtype=float))
     if problem.weight is not None:                  # the criterion's Jacobian and residual
         jac = jac * sw[:, None]
     crit_r = (y - yhat) * sw
@@ -889,6 +1101,8 @@ def _verdict(problem, estimate, max_nfev):
         status = Status.FAILED
         messages.append("The search is stuck at its start: it made no step that lowered the "
                         "simulation error, so the estimate is where it started, not a minimum.")
+        if how == "exact":          # a wrong exact Jacobian sends the search the wrong way
+            messages.extend(_jacobian_probe(problem, np.asarray(x, dtype=float)))
     absurd = free_run_problem(yhat, y, where=problem.where)
     if absurd:
         return _Verdict(Status.IMPLAUSIBLE, messages + [absurd], sse, yhat, how, None)
@@ -974,9 +1188,18 @@ def _message(problem, x, verdict):
 
 def _check_per_record(per_record, params, n_records):
     """``per_record`` as a tuple of free, untied parameter names no other parameter is tied to."""
+    if per_record is None:          # None: none, as ()
+        per_record = ()
     if isinstance(per_record, str):
         per_record = (per_record,)
-    per_record = tuple(per_record)
+    try:
+        per_record = tuple(per_record)
+    except TypeError:
+        raise ParameterError(f"`per_record` must be a parameter name or a sequence of names (() "
+                             f"for none); got {type(per_record).__name__} {per_record!r}.") from None
+    bad = [n for n in per_record if not isinstance(n, str)]
+    if bad:
+        raise ParameterError(f"`per_record` must hold parameter names (strings); got {bad[0]!r}.")
     for n in per_record:
         if n not in params:
             raise ParameterError(f"`per_record`: {n!r} is not a parameter of the model "

@@ -23,7 +23,7 @@ import inspect
 import numpy as np
 
 from .._validation import check_array
-from ..exceptions import DimensionError, ParameterError
+from ..exceptions import DimensionError, ModelHookError, ParameterError
 from .parameters import Parameters, bounds_overridden
 
 __all__ = ["Model", "register_model", "model_class", "registered_kinds"]
@@ -120,6 +120,10 @@ def _keep_settings(method):
         else:
             settings = getattr(self, _SETTINGS, None)
             new = method(self, values)
+        if not isinstance(new, Model):      # said here, not as a failure to attach settings
+            raise ModelHookError(f"{type(self).__name__}.with_parameters returned "
+                                 f"{type(new).__name__} {repr(new)[:40]}; it must return a new "
+                                 f"model of the kind (a {type(self).__name__}).", "with_parameters")
         if settings is not None and new is not self:
             _attach(new, settings)
         return new
@@ -157,6 +161,15 @@ class Model(abc.ABC):
     :meth:`default_frequencies`, :meth:`response_label` and :attr:`response_kind`). Every kind
     reads in a terminal (:meth:`summary`) and a notebook (``_repr_html_``) as a table of its
     parameters; :meth:`description` adds the kind's own lines.
+
+    What fohw checks of a kind, once, in :func:`fohw.fit` (and the verbs built on it) and
+    :func:`fohw.simulate`: the input it hands the hooks is read-only (the caller's arrays are
+    never changed; copy before writing); ``simulate`` returns shape ``(N,)``; ``jacobian``
+    returns ``None`` or ``(yhat, J)`` with ``J`` of shape ``(N, n_parameters)``, finite where
+    ``yhat`` is; ``starts`` a list of models of the kind, ``linear_start`` one or ``None``;
+    ``with_parameters`` a model. A hook refuses values with a :class:`fohw.ParameterError`
+    (or returns a diverging output); anything else it raises, or returns against these rules,
+    is a :class:`fohw.exceptions.ModelHookError` naming the hook.
 
     Examples
     --------

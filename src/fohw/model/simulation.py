@@ -31,7 +31,13 @@ from .._validation import (
     check_scalar,
     unpack_pair,
 )
-from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
+from ..exceptions import (
+    DimensionError,
+    FohwError,
+    ModelHookError,
+    ParameterError,
+    SimulationDivergedError,
+)
 from . import _compiled
 from .base import Model
 from .gl import gl_weights, gl_weights_unchecked, past_transient
@@ -39,7 +45,8 @@ from .kernels import HalfMerge, causal_convolve, divide_and_conquer
 from .structure import Structure
 
 __all__ = ["simulate", "simulate_record", "check_record_sampling", "record_list", "own_dt",
-           "generic_model", "simulate_predictor", "equation_noise", "free_run",
+           "generic_model", "read_only", "hook_error", "call_hook", "HOOK_REFUSALS",
+           "simulate_predictor", "equation_noise", "free_run",
            "forcing", "recursion", "accumulators", "output_terms", "Accumulators", "apply_output_map",
            "check_input_point", "FAST_SIMULATION_THRESHOLD", "LEAF_SIZE", "LEAF_SIZE_COMPILED"]
 
@@ -183,7 +190,8 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
                                  f"HammersteinWiener kind; a {type(other).__name__} is simulated "
                                  "by its own simulate(u, initial=...) (add noise to the output "
                                  "yourself).")
-        return other.simulate(u, initial=initial)
+        # the caller's array read-only: a kind never changes it
+        return call_hook(other, "simulate", read_only(u), initial=initial)
     if (isinstance(initial, str) and initial == "estimate") or (
             isinstance(initial, tuple) and initial and isinstance(initial[0], str)
             and initial[0] == "estimate"):
@@ -195,7 +203,7 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
     history = None if result else measured_history(initial, type(model).__name__)
     if isinstance(model, Model):        # a model kind (the lagged HammersteinWiener among them)
         _only_for_structure(params, operating_point, f"a {type(model).__name__}")
-        return model.simulate(u, noise=noise, noise_std=noise_std, random_state=random_state,
+        return model.simulate(read_only(u), noise=noise, noise_std=noise_std, random_state=random_state,
                               divergence_threshold=divergence_threshold, initial=history)
     if isinstance(model, Structure):
         if params is None:
@@ -218,6 +226,57 @@ def simulate(model: Model | Structure | Any, u: ArrayLike, *,
         return simulate(model.structure, u, params=np.r_[model.linear, model.nonlinear],
                         operating_point=getattr(model, "operating_point", (0.0, 0.0)), **kwargs)
     raise ParameterError(f"`model` must be {kinds}; got {type(model).__name__}.")
+
+
+#: What a kind's hook may raise as a refusal that fohw's engines handle themselves (fohw's own
+#: errors: values the kind refuses, a run that diverges; arithmetic and linear-algebra failures).
+#: Anything else a hook raises is a fault of the kind (:func:`hook_error`).
+HOOK_REFUSALS = (FohwError, ArithmeticError, np.linalg.LinAlgError)
+
+
+def read_only(a):
+    """``a`` as a read-only view when it is a writable ndarray (else as it is).
+
+    What fohw hands a kind of the caller's data: a kind that writes into its input then fails
+    (:func:`hook_error` says so) instead of changing the caller's array.
+    """
+    if isinstance(a, np.ndarray) and a.flags.writeable:
+        a = a.view()
+        a.flags.writeable = False
+    return a
+
+
+def hook_error(model, hook, exc):
+    """The :class:`fohw.exceptions.ModelHookError` for ``exc``, raised by ``model``'s ``hook``.
+
+    Raise it ``from exc`` (the kind's traceback stays attached). A write into the read-only
+    input (:func:`read_only`) is named as such.
+    """
+    kind = type(model).__name__
+    text = str(exc).strip()
+    said = f"{kind}.{hook} raised {type(exc).__name__}" + (f": {text}" if text else "")
+    if isinstance(exc, ValueError) and "read-only" in text:
+        advice = (f"fohw hands a kind the caller's data read-only, so that it is never changed: "
+                  f"{kind}.{hook} must not write into its input; copy it first (np.array(u)).")
+    else:
+        advice = (f"A kind refuses values with fohw's ParameterError (or returns an output that "
+                  f"diverges); any other exception is a fault of the kind: fix {kind}.{hook} "
+                  "(fohw.testing.check_model tests a kind).")
+    return ModelHookError(f"{said.rstrip('.')}. {advice}", hook)
+
+
+def call_hook(model, hook, *args, **kwargs):
+    """``model.<hook>(*args, **kwargs)``, a kind's fault named.
+
+    An exception other than a refusal (:data:`HOOK_REFUSALS`) becomes a
+    :class:`fohw.exceptions.ModelHookError` naming the kind and the hook.
+    """
+    try:
+        return getattr(model, hook)(*args, **kwargs)
+    except HOOK_REFUSALS:
+        raise
+    except Exception as exc:                    # noqa: BLE001 - the kind's fault, named
+        raise hook_error(model, hook, exc) from exc
 
 
 def record_list(data):
