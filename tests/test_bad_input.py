@@ -1123,6 +1123,10 @@ API = [
          "zz": {"values": [1, 2], "standard_errors": None}})), fohw.DataFileError,
      "field 'per_record' has an entry 'zz', which is not a free parameter of the model (its free "
      "parameters: b0, a0, alpha0)"),
+    ("Parameters", "a tied parameter whose value contradicts its tie (N20: b = 2.0 reported)",
+     lambda t: fohw.Parameters([fohw.Parameter("a", 1.0),
+                                fohw.Parameter("b", 2.0, bounds=(0, 1), tie=("a", 5.0))]).valuesdict(),
+     fohw.ParameterError, "parameter 'b' is tied to 'a' (5 times it, 5.0), but its value is 2.0"),
     ("FitResult.from_dict", "covariance = 'eye' (N30: numpy's float conversion error)",
      lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance="eye")), fohw.ParameterError,
      "field 'covariance' must be null or a matrix (list of equal rows) of finite numbers; got 'eye'"),
