@@ -1127,6 +1127,9 @@ API = [
      lambda t: fohw.Parameters([fohw.Parameter("a", 1.0),
                                 fohw.Parameter("b", 2.0, bounds=(0, 1), tie=("a", 5.0))]).valuesdict(),
      fohw.ParameterError, "parameter 'b' is tied to 'a' (5 times it, 5.0), but its value is 2.0"),
+    ("Record.from_dataframe", "the output column also the input (N25: accepted)",
+     lambda t: fohw.Record.from_dataframe(_frame43(), "v", "v", dt=0.1), fohw.ParameterError,
+     "`y` = 'v' is also an input column (in `u`)"),
     ("FitResult.from_dict", "covariance = 'eye' (N30: numpy's float conversion error)",
      lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance="eye")), fohw.ParameterError,
      "field 'covariance' must be null or a matrix (list of equal rows) of finite numbers; got 'eye'"),
@@ -1139,9 +1142,22 @@ API = [
     ("FitResult.from_dict", "a list, not a dict (N33: 'list indices must be integers')",
      lambda t: fohw.FitResult.from_dict([1, 2]), fohw.ParameterError,
      "a fit's content must be an object (a dict, as FitResult.to_dict makes)"),
+    ("Record.from_dataframe", "a dict of arrays, not a DataFrame (N41: AttributeError)",
+     lambda t: fohw.Record.from_dataframe({"i": _U43, "v": _Y43}, "i", "v", dt=0.1),
+     fohw.ParameterError, "`frame` must be a pandas DataFrame; got dict"),
+    ("Record.from_dataframe", "units as a list (N42: dict's ValueError)",
+     lambda t: fohw.Record.from_dataframe(_frame43(), "i", "v", dt=0.1, units=["A", "V"]),
+     fohw.ParameterError, "`units` must be a mapping column -> unit (e.g. {'i': 'A', 'v': 'V'}); "
+     "got ['A', 'V']"),
     ("load_result", "a fit's file without its model field (N47: 'missing field method')",
      lambda t: fohw.load_result(_fit43_file(t, drop=("model",))), fohw.DataFileError,
      "fit43.json: missing field 'model'"),
+    ("Record.from_dataframe", "a NaT in the DatetimeIndex (N52: 't must be strictly increasing')",
+     lambda t: fohw.Record.from_dataframe(_frame43(index=_nat_index43()), "i", "v"),
+     fohw.ParameterError, "the DataFrame's time index holds a missing instant (NaT) at row 3 of 300"),
+    ("Record.from_dataframe", "two columns named v (N53: '`y` must be 1-D')",
+     lambda t: fohw.Record.from_dataframe(_frame43(("i", "v", "v")), "i", "v", dt=0.1),
+     fohw.ParameterError, "the DataFrame has 2 columns named 'v'"),
 ]
 
 CLI = [
@@ -1377,6 +1393,29 @@ def test_every_public_callable_has_a_bad_input_case():
     public |= set(SUBMODULE_ENTRY_POINTS)
     missing = sorted(public - covered)
     assert not missing, f"public callables with no bad-input case: {missing}"
+
+
+def test_compare_matches_a_records_inputs_by_name():
+    """Issue 43 N26: a Record's input names are matched to the result's, as a DataFrame's
+    columns are: the record with its columns swapped scores what the record in order scores
+    (it scored -13 % against 100 %), and a record with other names is refused."""
+    import pandas as pd
+
+    d = fohw.datasets.paper_example(300, random_state=0)
+    u = np.column_stack([d.u, np.random.default_rng(5).uniform(-1, 1, 300)])
+    y = fohw.identify(u, d.y, na=1, nb=[1, 1], f_basis=2, g_basis=1).simulate(u)
+    frame = pd.DataFrame({"a": u[:, 0], "b": u[:, 1], "y": y})
+    res = fohw.identify(fohw.Record.from_dataframe(frame, u=["a", "b"], y="y", dt=1.0),
+                        na=1, nb=[1, 1], f_basis=2, g_basis=1)
+    in_order = fohw.compare(res, fohw.Record.from_dataframe(frame, u=["a", "b"], y="y", dt=1.0))
+    swapped = fohw.compare(res, fohw.Record.from_dataframe(frame, u=["b", "a"], y="y", dt=1.0))
+    assert in_order.fit_simulation > 99.0                   # the data are the model's own run
+    assert swapped.fit_simulation == in_order.fit_simulation
+    assert fohw.compare(res, frame[["b", "a"]], y).fit_simulation == in_order.fit_simulation
+    other = fohw.Record.from_dataframe(frame.rename(columns={"a": "c"}), u=["c", "b"], y="y", dt=1.0)
+    with pytest.raises(fohw.DimensionError, match=r"is a Record with the inputs \['c', 'b'\], but "
+                                                  r"the model's inputs are \['a', 'b'\]"):
+        fohw.compare(res, other)
 
 
 def markdown():
