@@ -1130,6 +1130,10 @@ API = [
     ("Record.from_dataframe", "the output column also the input (N25: accepted)",
      lambda t: fohw.Record.from_dataframe(_frame43(), "v", "v", dt=0.1), fohw.ParameterError,
      "`y` = 'v' is also an input column (in `u`)"),
+    ("resample", "dt longer than the record (N29: one sample returned)",
+     lambda t: fohw.model.irregular.resample(np.linspace(0.0, 30.0, 301), np.ones(301), dt=1e6),
+     fohw.ParameterError, "`dt` = 1000000.0 is longer than the record (its instants span 30, "
+     "from t[0] to t[-1]): the grid would hold one sample; give dt <= 30"),
     ("FitResult.from_dict", "covariance = 'eye' (N30: numpy's float conversion error)",
      lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance="eye")), fohw.ParameterError,
      "field 'covariance' must be null or a matrix (list of equal rows) of finite numbers; got 'eye'"),
