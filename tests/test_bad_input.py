@@ -1100,6 +1100,17 @@ API = [
                                         [0.02, 0.02], noise=(0.0, 0.01)),
      fohw.ParameterError, "`noise` must hold two positive, finite noise levels; got (0.0, 0.01)"),
     # issue 43 (data): FitResult dicts and files, Parameters, Record, resample, CircuitTables
+    ("CircuitTables.simulate", "a SOC beyond the last breakpoint (N10: held without a word)",
+     lambda t: _tables43().simulate(_cu43(soc=0.95)), fohw.ExtrapolationWarning,
+     "the state of charge `u[:, 1]` leaves the breakpoints `soc_points` [0.2, 0.8] (by more "
+     "than 5% of their span) at 400 of 400 samples (first: 0.95 at sample 0)"),
+    ("CircuitTables.simulate", "a temperature beyond the breakpoints (N11: held without a word)",
+     lambda t: _tables43().simulate(_cu43(temperature=60.0)), fohw.ExtrapolationWarning,
+     "the temperature `u[:, 2]` leaves the breakpoints `temperature_points` [10, 30]"),
+    ("CircuitTables", "temperature breakpoints below absolute zero (N12: accepted)",
+     lambda t: _tables43(temperature_points=[-300.0, 10.0], temperature_interpolation="arrhenius"),
+     fohw.ParameterError, "`temperature_points` are in degC and must lie above absolute zero "
+     "(-273.15 degC); got [-300.0, 10.0]"),
     ("FitResult.from_dict", "a covariance with negative variances (N13: NaN standard errors)",
      lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance=(-np.eye(3)).tolist())),
      fohw.ParameterError, "field 'covariance' has a negative variance (-1.0 on its diagonal at 0)"),
