@@ -250,8 +250,8 @@ def test_module_map_names_every_module():
 LAYERS = (
     ("foundation", lambda top: top.startswith("_") or top in ("exceptions", "frequency_plots")),
     ("model", lambda top: top == "model"),
-    ("results", lambda top: top in ("results", "fit_result", "presentation", "record",
-                                    "lr_statistic")),
+    ("results", lambda top: top in ("results", "fit_result", "result_checks", "presentation",
+                                    "record", "lr_statistic")),
     ("estimators", lambda top: top == "estimators"),
     ("io", lambda top: top in ("io", "datasets")),
     ("analysis", lambda top: top == "analysis"),

@@ -6,6 +6,7 @@ a hang or NaNs. docs/bad_input.md is generated from this table:
 and a test checks that the page is current.
 """
 
+import functools
 import io
 import os
 import sys
@@ -225,6 +226,74 @@ def _nan_result():
     import dataclasses
 
     return dataclasses.replace(_result(), J=float("nan"))
+
+
+_G43 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)        # 1/(s^0.8 + 1)
+_U43 = np.random.default_rng(43).standard_normal(300)
+_Y43 = _G43.simulate(_U43)
+
+
+@functools.cache
+def _fit43(joint=False):
+    """Issue 43's fits: of one record, or of its halves with ``b0`` per record (as JSON)."""
+    import json
+
+    halves = [fohw.Record(u=_U43[:150], y=_Y43[:150], dt=0.1),
+              fohw.Record(u=_U43[150:], y=_Y43[150:], dt=0.1)]
+    fit = (fohw.fit(_G43, halves, per_record=["b0"], order_grid=2, n_starts=1) if joint else
+           fohw.fit(_G43, fohw.Record(u=_U43, y=_Y43, dt=0.1), order_grid=2, n_starts=1))
+    return fit, json.dumps(fit.to_dict())
+
+
+def _fit43_dict(joint=False, **change):
+    """A fresh copy of an issue-43 fit's ``to_dict()`` with fields changed."""
+    import json
+
+    d = json.loads(_fit43(joint)[1])
+    d.update(change)
+    return d
+
+
+def _fit43_file(tmp, joint=False, drop=(), **change):
+    """An issue-43 fit saved, then its fields changed (``drop``: fields deleted)."""
+    import json
+
+    path = tmp / "fit43.json"
+    fohw.save_result(_fit43(joint)[0], path)
+    d = json.loads(path.read_text())
+    d.update(change)
+    for key in drop:
+        del d[key]
+    path.write_text(json.dumps(d))
+    return path
+
+
+def _tables43(**kw):
+    """Issue 43's CircuitTables: one RC, breakpoints SOC 0.2, 0.8 and 10, 30 degC."""
+    kw = {"soc_points": [0.2, 0.8], "temperature_points": [10.0, 30.0], **kw}
+    return fohw.CircuitTables(["rc"], ocv=lambda s: 3.3 + 0.9 * np.asarray(s), **kw)
+
+
+def _cu43(soc=None, temperature=20.0):
+    """Issue 43's CU3: 20-s current steps from U(-3, 1) A, soc from 0.6, 400 samples."""
+    i = np.repeat(np.random.default_rng(3).uniform(-3.0, 1.0, 20), 20)
+    s = 0.6 + np.cumsum(i) / 18000 if soc is None else np.full(400, soc)
+    return np.column_stack([i, s, np.full(400, temperature)])
+
+
+def _frame43(columns=("i", "v"), index=None):
+    import pandas as pd
+
+    data = np.column_stack([_U43, _Y43, _Y43])[:, :len(columns)]
+    return pd.DataFrame(data, columns=list(columns), index=index)
+
+
+def _nat_index43():
+    import pandas as pd
+
+    stamps = pd.date_range("2024-01-01", periods=300, freq="100ms").to_series().reset_index(drop=True)
+    stamps[3] = pd.NaT
+    return pd.DatetimeIndex(stamps)
 
 
 # (where, what is wrong, call, exception, text the message must contain)
@@ -1211,6 +1280,80 @@ API = [
     ("stream_fits", "timeout=0 (issue 43: a per-record timeout)",
      lambda t: fohw.stream_fits([(_U43, _Y43)], _Lag43(), timeout=0), fohw.ParameterError,
      "`timeout` must be a positive number of seconds (or None: no limit); got 0"),
+    # issue 43 (data): FitResult dicts and files, Parameters, Record, resample, CircuitTables
+    ("CircuitTables.simulate", "a SOC beyond the last breakpoint (N10: held without a word)",
+     lambda t: _tables43().simulate(_cu43(soc=0.95)), fohw.ExtrapolationWarning,
+     "the state of charge `u[:, 1]` leaves the breakpoints `soc_points` [0.2, 0.8] (by more "
+     "than 5% of their span) at 400 of 400 samples (first: 0.95 at sample 0)"),
+    ("CircuitTables.simulate", "a temperature beyond the breakpoints (N11: held without a word)",
+     lambda t: _tables43().simulate(_cu43(temperature=60.0)), fohw.ExtrapolationWarning,
+     "the temperature `u[:, 2]` leaves the breakpoints `temperature_points` [10, 30]"),
+    ("CircuitTables", "temperature breakpoints below absolute zero (N12: accepted)",
+     lambda t: _tables43(temperature_points=[-300.0, 10.0], temperature_interpolation="arrhenius"),
+     fohw.ParameterError, "`temperature_points` are in degC and must lie above absolute zero "
+     "(-273.15 degC); got [-300.0, 10.0]"),
+    ("FitResult.from_dict", "a covariance with negative variances (N13: NaN standard errors)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance=(-np.eye(3)).tolist())),
+     fohw.ParameterError, "field 'covariance' has a negative variance (-1.0 on its diagonal at 0)"),
+    ("FitResult.from_dict", "n_per_record = -3 in a joint fit's dict (N14: accepted)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(True, n_per_record=-3)), fohw.ParameterError,
+     "field 'n_per_record' must be an integer >= 0; got -3"),
+    ("FitResult.from_dict", "n_samples = 0 (N15: accepted)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(n_samples=0)), fohw.ParameterError,
+     "field 'n_samples' must be an integer >= 1; got 0"),
+    ("FitResult.from_dict", "n_samples = 2.7 (N16: truncated to 2)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(n_samples=2.7)), fohw.ParameterError,
+     "field 'n_samples' must be an integer >= 1; got 2.7"),
+    ("FitResult.from_dict", "5 residuals for 300 samples (N17: accepted)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(residuals=[0.0] * 5)), fohw.ParameterError,
+     "field 'residuals' has 5 values for n_samples = 300"),
+    ("FitResult.from_dict", "sse = -1 (N18: accepted)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(sse=-1.0)), fohw.ParameterError,
+     "FitResult.from_dict(d): field 'sse' must be a finite number >= 0; got -1.0"),
+    ("load_result", "a joint fit's per_record naming no parameter (N19: loaded)",
+     lambda t: fohw.load_result(_fit43_file(t, True, per_record={
+         "zz": {"values": [1, 2], "standard_errors": None}})), fohw.DataFileError,
+     "field 'per_record' has an entry 'zz', which is not a free parameter of the model (its free "
+     "parameters: b0, a0, alpha0)"),
+    ("Parameters", "a tied parameter whose value contradicts its tie (N20: b = 2.0 reported)",
+     lambda t: fohw.Parameters([fohw.Parameter("a", 1.0),
+                                fohw.Parameter("b", 2.0, bounds=(0, 1), tie=("a", 5.0))]).valuesdict(),
+     fohw.ParameterError, "parameter 'b' is tied to 'a' (5 times it, 5.0), but its value is 2.0"),
+    ("Record.from_dataframe", "the output column also the input (N25: accepted)",
+     lambda t: fohw.Record.from_dataframe(_frame43(), "v", "v", dt=0.1), fohw.ParameterError,
+     "`y` = 'v' is also an input column (in `u`)"),
+    ("resample", "dt longer than the record (N29: one sample returned)",
+     lambda t: fohw.model.irregular.resample(np.linspace(0.0, 30.0, 301), np.ones(301), dt=1e6),
+     fohw.ParameterError, "`dt` = 1000000.0 is longer than the record (its instants span 30, "
+     "from t[0] to t[-1]): the grid would hold one sample; give dt <= 30"),
+    ("FitResult.from_dict", "covariance = 'eye' (N30: numpy's float conversion error)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(covariance="eye")), fohw.ParameterError,
+     "field 'covariance' must be null or a matrix (list of equal rows) of finite numbers; got 'eye'"),
+    ("FitResult.from_dict", "options = [1, 2] (N31: dict's TypeError)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(options=[1, 2])), fohw.ParameterError,
+     "field 'options' must be an object; got [1, 2]"),
+    ("FitResult.from_dict", "sse = 'abc' (N32: float's ValueError)",
+     lambda t: fohw.FitResult.from_dict(_fit43_dict(sse="abc")), fohw.ParameterError,
+     "field 'sse' must be a finite number >= 0; got 'abc'"),
+    ("FitResult.from_dict", "a list, not a dict (N33: 'list indices must be integers')",
+     lambda t: fohw.FitResult.from_dict([1, 2]), fohw.ParameterError,
+     "a fit's content must be an object (a dict, as FitResult.to_dict makes)"),
+    ("Record.from_dataframe", "a dict of arrays, not a DataFrame (N41: AttributeError)",
+     lambda t: fohw.Record.from_dataframe({"i": _U43, "v": _Y43}, "i", "v", dt=0.1),
+     fohw.ParameterError, "`frame` must be a pandas DataFrame; got dict"),
+    ("Record.from_dataframe", "units as a list (N42: dict's ValueError)",
+     lambda t: fohw.Record.from_dataframe(_frame43(), "i", "v", dt=0.1, units=["A", "V"]),
+     fohw.ParameterError, "`units` must be a mapping column -> unit (e.g. {'i': 'A', 'v': 'V'}); "
+     "got ['A', 'V']"),
+    ("load_result", "a fit's file without its model field (N47: 'missing field method')",
+     lambda t: fohw.load_result(_fit43_file(t, drop=("model",))), fohw.DataFileError,
+     "fit43.json: missing field 'model'"),
+    ("Record.from_dataframe", "a NaT in the DatetimeIndex (N52: 't must be strictly increasing')",
+     lambda t: fohw.Record.from_dataframe(_frame43(index=_nat_index43()), "i", "v"),
+     fohw.ParameterError, "the DataFrame's time index holds a missing instant (NaT) at row 3 of 300"),
+    ("Record.from_dataframe", "two columns named v (N53: '`y` must be 1-D')",
+     lambda t: fohw.Record.from_dataframe(_frame43(("i", "v", "v")), "i", "v", dt=0.1),
+     fohw.ParameterError, "the DataFrame has 2 columns named 'v'"),
 ]
 
 CLI = [
@@ -1467,6 +1610,29 @@ def test_every_public_callable_has_a_bad_input_case():
     public |= set(SUBMODULE_ENTRY_POINTS)
     missing = sorted(public - covered)
     assert not missing, f"public callables with no bad-input case: {missing}"
+
+
+def test_compare_matches_a_records_inputs_by_name():
+    """Issue 43 N26: a Record's input names are matched to the result's, as a DataFrame's
+    columns are: the record with its columns swapped scores what the record in order scores
+    (it scored -13 % against 100 %), and a record with other names is refused."""
+    import pandas as pd
+
+    d = fohw.datasets.paper_example(300, random_state=0)
+    u = np.column_stack([d.u, np.random.default_rng(5).uniform(-1, 1, 300)])
+    y = fohw.identify(u, d.y, na=1, nb=[1, 1], f_basis=2, g_basis=1).simulate(u)
+    frame = pd.DataFrame({"a": u[:, 0], "b": u[:, 1], "y": y})
+    res = fohw.identify(fohw.Record.from_dataframe(frame, u=["a", "b"], y="y", dt=1.0),
+                        na=1, nb=[1, 1], f_basis=2, g_basis=1)
+    in_order = fohw.compare(res, fohw.Record.from_dataframe(frame, u=["a", "b"], y="y", dt=1.0))
+    swapped = fohw.compare(res, fohw.Record.from_dataframe(frame, u=["b", "a"], y="y", dt=1.0))
+    assert in_order.fit_simulation > 99.0                   # the data are the model's own run
+    assert swapped.fit_simulation == in_order.fit_simulation
+    assert fohw.compare(res, frame[["b", "a"]], y).fit_simulation == in_order.fit_simulation
+    other = fohw.Record.from_dataframe(frame.rename(columns={"a": "c"}), u=["c", "b"], y="y", dt=1.0)
+    with pytest.raises(fohw.DimensionError, match=r"is a Record with the inputs \['c', 'b'\], but "
+                                                  r"the model's inputs are \['a', 'b'\]"):
+        fohw.compare(res, other)
 
 
 def markdown():

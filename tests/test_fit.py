@@ -118,6 +118,14 @@ def test_parameters_ties_values_and_files():
         p.with_values({"alpha1": 0.1})
     with pytest.raises(fohw.ParameterError, match="not itself tied"):
         fohw.Parameters([fohw.Parameter("a", 1.0, tie=("b", 1.0))])
+    # issue 43 N20: a tied value that contradicts its tie is refused; replace sets it
+    with pytest.raises(fohw.ParameterError, match=r"'alpha1' is tied to 'alpha0' \(2 times it, "
+                                                  r"0.8\), but its value is 0.5"):
+        fohw.Parameters([p["alpha0"], p["alpha1"].replace(value=0.5)])
+    assert p.replace("alpha0", value=0.25)["alpha1"].value == 0.5           # the tie follows
+    assert p.replace("alpha1", tie=("alpha0", 3.0))["alpha1"].value == pytest.approx(1.2)
+    with pytest.raises(fohw.ParameterError, match="but its value is 0.1"):
+        p.replace("alpha1", value=0.1)
     with pytest.raises(fohw.ParameterError, match="unique"):
         fohw.Parameters([fohw.Parameter("a", 1.0), fohw.Parameter("a", 2.0)])
 

@@ -271,7 +271,7 @@ def test_a_zarc_order_is_bounded_away_from_0_so_the_null_is_refused(kind):
         model = fohw.EquivalentCircuit([fohw.ZARC(0.012, 50.0, 0.55)], r0=0.015, ocv=ocv)
         u = np.column_stack([i, 0.8 + np.cumsum(i) / 18000])
     else:
-        model = fohw.CircuitTables(["zarc"], soc_points=[0.3, 0.7], temperature_points=[5.0, 35.0],
+        model = fohw.CircuitTables(["zarc"], soc_points=[0.3, 0.8], temperature_points=[5.0, 35.0],
                                    ocv=ocv)
         u = np.column_stack([i, 0.8 + np.cumsum(i) / 18000, np.full(i.size, 25.0)])
     y = model.simulate(u)

@@ -7,6 +7,7 @@ import dataclasses
 import functools
 import json
 import pickle
+import re
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -416,3 +417,73 @@ def test_a_result_file_whose_facts_disagree_is_refused_naming_the_field(tmp_path
     """Issue 28 #10/#23: each was loaded (or failed later, or named a TypeError)."""
     with pytest.raises(fohw.DataFileError, match=match):
         fohw.load_result(_v3_file(tmp_path, name, change))
+
+
+@functools.cache
+def _fit_of_another_kind(joint):
+    """A FractionalTF fitted to one record, or to its halves with ``b0`` per record."""
+    G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)
+    u = np.random.default_rng(7).standard_normal(200)
+    y = G.simulate(u)
+    data = ([fohw.Record(u=u[:100], y=y[:100], dt=0.1), fohw.Record(u=u[100:], y=y[100:], dt=0.1)]
+            if joint else fohw.Record(u=u, y=y, dt=0.1))
+    return fohw.fit(G, data, order_grid=2, n_starts=1, **({"per_record": ["b0"]} if joint else {}))
+
+
+@pytest.mark.parametrize("joint, change, drop, match", [
+    (False, {"covariance": (-np.eye(3)).tolist()}, (), "field 'covariance' has a negative variance"),
+    (False, {"covariance": [[1.0, 0.0], [0.0, 1.0]]}, (), r"field 'covariance' has shape \(2, 2\)"),
+    (False, {"covariance": "eye"}, (), "field 'covariance' must be null or a matrix"),
+    (False, {"n_samples": 0}, (), "field 'n_samples' must be an integer >= 1; got 0"),
+    (False, {"n_samples": 2.7}, (), "field 'n_samples' must be an integer >= 1; got 2.7"),
+    (False, {"residuals": [0.0] * 5}, (), "field 'residuals' has 5 values for n_samples = 200 and "
+     "the records' 200 samples"),
+    (True, {"residuals": [0.0] * 250}, (), "field 'residuals' has 250 values for n_samples = 200"),
+    (False, {"sse": -1.0}, (), "field 'sse' must be a finite number >= 0; got -1.0"),
+    (False, {"sse": "abc"}, (), "field 'sse' must be a finite number >= 0; got 'abc'"),
+    (False, {"options": [1, 2]}, (), "field 'options' must be an object; got \\[1, 2\\]"),
+    (False, {"status": "FINE"}, (), "field 'status' must be one of"),
+    (False, {"starts": [[{"alpha0": "x"}, 1.0]]}, (), "field 'starts' must be a list of"),
+    (False, {"extra": 1}, (), "field 'extra' is not part of a"),
+    (False, {}, ("model",), "missing field 'model'"),
+    (True, {"n_per_record": -3}, (), "field 'n_per_record' must be an integer >= 0; got -3"),
+    (True, {"n_per_record": 4}, (), "field 'n_per_record' is 4, but field 'per_record' holds 1"),
+    (True, {"per_record": {"zz": {"values": [1, 2], "standard_errors": None}}}, (),
+     "field 'per_record' has an entry 'zz', which is not a free parameter"),
+    (True, {"per_record": {"b0": {"values": [1, 2, 3], "standard_errors": None}}}, (),
+     "field 'per_record' gives 3 values per parameter, but field 'data' lists 2 records"),
+    (True, {"per_record": {"b0": {"values": [1.0, 2.0], "standard_errors": [0.1, -0.1]}}}, (),
+     "field 'per_record' must be an object name -> "),
+])
+def test_a_fits_dict_and_its_file_are_checked_alike(tmp_path, joint, change, drop, match):
+    """Issue 43: FitResult.from_dict checks what load_result checks, by one validator
+    (fohw.result_checks): the same edit is refused by both, naming the same field; the dict
+    with a ParameterError, the file with a DataFileError naming the file."""
+    fit = _fit_of_another_kind(joint)
+    d = json.loads(json.dumps(fit.to_dict()))
+    assert fohw.FitResult.from_dict(d).to_dict() == d           # the untouched dict is read
+    d.update(change)
+    for key in drop:
+        del d[key]
+    with pytest.raises(fohw.ParameterError, match=r"^FitResult.from_dict\(d\): .*" + match):
+        fohw.FitResult.from_dict(d)
+    path = tmp_path / "fit.json"
+    path.write_text(json.dumps({"format": "fohw-result", "version": RESULT_FORMAT_VERSION, **d}))
+    with pytest.raises(fohw.DataFileError, match="^" + re.escape(str(path)) + ": .*" + match):
+        fohw.load_result(path)
+
+
+def test_a_weighted_fit_reads_back_from_its_dict_its_pickle_and_its_file(tmp_path):
+    """A sample_weight of 0 leaves samples out of n_samples (180 of 200) but not out of the
+    residuals (one per sample): the residuals' check took them for a contradiction, so the file
+    of a weighted fit could not be loaded (and, with one validator, nor its pickle)."""
+    G = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)
+    u = np.random.default_rng(7).standard_normal(200)
+    weight = np.r_[np.zeros(20), np.ones(180)]
+    for data in ((u, G.simulate(u)), (fohw.Record(u=u, y=G.simulate(u), dt=0.1),)):
+        fit = fohw.fit(G, *data, sample_weight=weight, order_grid=2, n_starts=1)
+        assert (fit.n_samples, fit.residuals.size) == (180, 200)
+        fohw.save_result(fit, tmp_path / "w.json")
+        for back in (fohw.FitResult.from_dict(fit.to_dict()), pickle.loads(pickle.dumps(fit)),
+                     fohw.load_result(tmp_path / "w.json")):
+            assert back.to_dict() == fit.to_dict()

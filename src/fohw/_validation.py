@@ -157,14 +157,25 @@ def _columns_by_name(u, names, name):
     """``u``'s columns in the order of ``names`` when ``u`` is a DataFrame; ``u`` otherwise."""
     if not type(u).__module__.startswith("pandas") or np.ndim(u) != 2:
         return u
-    columns = [str(c) for c in u.columns]
+    order = column_order(u.columns, names, name)
+    return u if order is None else np.asarray(u)[:, order]
+
+
+def column_order(columns, names, name="u", what="a DataFrame with the columns"):
+    """The indices that put named ``columns`` in the order of the model's input ``names``.
+
+    None keeps them as they are: already in order, or the model knows no names (the defaults
+    ``u1, u2, …``: it was fitted to an array). Other names are a DimensionError naming ``name``.
+    One rule for a DataFrame's columns and a :class:`fohw.Record`'s input names.
+    """
+    columns = [str(c) for c in columns]
     if columns == list(names):
-        return u
+        return None
     if sorted(columns) == sorted(names) and len(set(columns)) == len(columns):
-        return np.asarray(u)[:, [columns.index(n) for n in names]]
-    if names == tuple(f"u{i}" for i in range(1, len(names) + 1)):
-        return u                            # the model knows no names: the columns in order
-    raise DimensionError(f"`{name}` is a DataFrame with the columns {columns}, but the model's inputs "
+        return [columns.index(n) for n in names]
+    if tuple(names) == tuple(f"u{i}" for i in range(1, len(names) + 1)):
+        return None                         # the model knows no names: the columns in order
+    raise DimensionError(f"`{name}` is {what} {columns}, but the model's inputs "
                          f"are {list(names)} (the names kept from its fit); fohw matches columns by "
                          f"name. Select and rename them (e.g. {name}[{list(names)}]), or pass an "
                          "array whose columns are in the model's order.")

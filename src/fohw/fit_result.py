@@ -22,6 +22,7 @@ from .model.base import Model
 from .model.parameters import Parameters
 from .model.simulation import record_list, simulate
 from .record import describe_data
+from .result_checks import check_fit_result_dict
 
 __all__ = ["FitResult"]
 
@@ -294,8 +295,13 @@ class FitResult:
 
     @classmethod
     def from_dict(cls, d) -> FitResult:
-        """Inverse of :meth:`to_dict`."""
-        model = Model.from_dict(d["model"])
+        """Inverse of :meth:`to_dict`, every field checked first.
+
+        The checks are :func:`fohw.result_checks.check_fit_result_dict`'s, the same that
+        :func:`fohw.load_result` makes: a field missing, unknown, of the wrong type, out of
+        range or contradicting another is a :class:`~fohw.ParameterError` naming it.
+        """
+        model = check_fit_result_dict(d)
         cov = d.get("covariance")
         res = d.get("residuals")
         try:

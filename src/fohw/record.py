@@ -7,6 +7,7 @@ mean, and splitting it into estimation and validation parts keeps that meaning.
 from __future__ import annotations
 
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -277,12 +278,37 @@ class Record:
             ``column -> unit``.
         **kwargs
             Further :class:`Record` fields (``name``, ``time_unit``, ``source``, ``intersample``).
+
+        Raises
+        ------
+        ParameterError
+            ``frame`` is not a DataFrame; a column named in ``u``, ``y`` or ``time`` is missing,
+            named twice in the frame or given twice (the output also an input); ``units`` is not
+            a mapping; the time index holds a missing instant (``NaT``).
         """
+        if not all(hasattr(frame, a) for a in ("columns", "index", "to_numpy")):
+            raise ParameterError(f"`frame` must be a pandas DataFrame; got {type(frame).__name__} "
+                                 "(a dict of columns: pass pandas.DataFrame(frame), or build "
+                                 "fohw.Record(u=..., y=..., dt=...) from the arrays).")
         columns = [u] if isinstance(u, str) else list(u)
-        for col in columns + [y] + ([] if time is None else [time]):
+        named = columns + [y] + ([] if time is None else [time])
+        for col in named:
             if col not in frame.columns:
                 raise ParameterError(f"{col!r} is not a column of the DataFrame (columns: "
                                      f"{', '.join(map(str, frame.columns))}).")
+            if list(frame.columns).count(col) > 1:
+                raise ParameterError(f"the DataFrame has {list(frame.columns).count(col)} columns "
+                                     f"named {col!r}; name its columns uniquely (the record's "
+                                     "channels are taken by name).")
+        for col in named:
+            if named.count(col) > 1:
+                what = (f"`y` = {y!r} is also an input column (in `u`)" if col == y and col in columns
+                        else f"the column {col!r} is given twice among `u`, `y` and `time`")
+                raise ParameterError(f"{what}: the inputs, the output and the time are distinct "
+                                     "columns.")
+        if units is not None and not isinstance(units, Mapping):
+            raise ParameterError(f"`units` must be a mapping column -> unit (e.g. "
+                                 f"{{{columns[0]!r}: 'A', {y!r}: 'V'}}); got {units!r}.")
         units = dict(units or {})
         t = None
         if time is not None:
@@ -292,6 +318,11 @@ class Record:
             kind = getattr(index, "inferred_type", "")
             if kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
                     str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64")):
+                missing = np.flatnonzero(np.asarray(index.isna()))
+                if missing.size:
+                    raise ParameterError(f"the DataFrame's time index holds a missing instant "
+                                         f"(NaT) at row {int(missing[0])} of {len(index)}; drop "
+                                         "or fill those rows (or give `dt`).")
                 delta = np.asarray(index - index[0]).astype("timedelta64[ns]").astype(np.int64)
                 t = delta / 1e9
                 kwargs.setdefault("time_unit", "s")

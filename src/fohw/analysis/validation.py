@@ -23,7 +23,7 @@ import numpy as np
 
 from .._plausible import ENVELOPE, check_envelope, implausible_message, implausible_sample
 from .._types import ArrayLike
-from .._validation import check_array, check_inputs, check_int, check_same_length
+from .._validation import check_array, check_inputs, check_int, check_same_length, column_order
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.initial import InitialState, initial_state, simulate_from
 from ..model.regressors import RegressorBuilder
@@ -395,7 +395,7 @@ def _compare_record(model, record, **kw):
                                  "stamps is simulated from rest (the kind's simulate_at).")
         out = _compare_model(_OnInstants(other, record), record.u, record.y, **kw)
     else:
-        out = compare(model, record.u, record.y, **kw)
+        out = compare(model, _inputs_by_name(model, record), record.y, **kw)
     out.dt = record.dt if record.dt is not None else out.dt
     out.t = None if record.t is None else np.array(record.t)
     out.t0 = record.t0
@@ -403,6 +403,17 @@ def _compare_record(model, record, **kw):
     out.output_label = record.label("y") if record.output_unit or \
         record.output_name not in ("", "y") else ""
     return out
+
+
+def _inputs_by_name(model, record):
+    """``record.u`` with its columns in the order of the model's input names (as a DataFrame's)."""
+    names = tuple(getattr(getattr(model, "structure", None), "inputs", ()) or ()) or \
+        tuple((getattr(model, "data", None) or {}).get("input_names") or ())
+    defaults = tuple(f"u{j}" for j in range(1, record.n_inputs + 1))
+    if record.n_inputs < 2 or len(names) != record.n_inputs or record.input_names == defaults:
+        return record.u                     # one input, or a record without names: in order
+    order = column_order(record.input_names, names, "u", "a Record with the inputs")
+    return record.u if order is None else record.u[:, order]
 
 
 class _OnInstants:

@@ -28,9 +28,18 @@ from ..fit_result import FitResult
 from ..model.base import Model
 from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis
 from ..model.orders import ORDER_RANGE
-from ..model.parameters import Parameters
 from ..model.structure import Structure
 from ..model.system import HammersteinWiener
+from ..result_checks import (
+    bad_field,
+    check_covariance,
+    check_fit_result_dict,
+    check_integer,
+    check_model_dict,
+    check_number,
+    is_number,
+    require_fields,
+)
 from ..results import IdentificationResult, Status
 from .files import read_json, write_json
 
@@ -63,37 +72,20 @@ def _check_header(d, kind, path):
 
 def _require_fields(d, names, kind, version, path):
     """Exactly the fields ``names``: a missing one or one the format does not have is an error."""
-    for key in names:
-        if key not in d:
-            raise DataFileError(f"{path}: missing field {key!r}.")
-    unknown = sorted(set(d) - set(names) - set(_HEADER))
-    if unknown:
-        raise DataFileError(f"{path}: field {unknown[0]!r} is not part of a {kind} file of version "
-                            f"{version} (it stores each fact once, in the fields "
-                            f"{', '.join(sorted(names))}).")
+    require_fields(d, names, f"a {kind} file of version {version}", path, header=_HEADER,
+                   error=DataFileError)
 
 
 def _bad(d, key, need, path):
-    raise DataFileError(f"{path}: field {key!r} must be {need}; got {d.get(key)!r}.")
-
-
-def _is_number(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
+    bad_field(d, key, need, path, DataFileError)
 
 
 def _number(d, key, path, lower=None, optional=False):
-    value = d.get(key)
-    if value is None and optional:
-        return
-    if not _is_number(value) or not np.isfinite(value) or (lower is not None and value < lower):
-        _bad(d, key, "a finite number" + ("" if lower is None else f" >= {lower:g}")
-             + (" or null" if optional else ""), path)
+    check_number(d, key, path, lower, optional, DataFileError)
 
 
 def _integer(d, key, path, lower):
-    value = d.get(key)
-    if isinstance(value, bool) or not isinstance(value, int) or value < lower:
-        _bad(d, key, f"an integer >= {lower}", path)
+    check_integer(d, key, path, lower, DataFileError)
 
 
 def _finite_pair(d, key, path, optional=False):
@@ -101,7 +93,7 @@ def _finite_pair(d, key, path, optional=False):
     if value is None and optional:
         return
     if not isinstance(value, list) or len(value) != 2 or not all(
-            _is_number(v) and np.isfinite(v) for v in value):
+            is_number(v) and np.isfinite(v) for v in value):
         raise DataFileError(f"{path}: field {key!r} must be a pair of finite numbers"
                             + (" or null" if optional else "") + f"; got {value!r}.")
 
@@ -118,8 +110,8 @@ def _inputs_pairs(d, path):
 
     def finite_list(value):
         return isinstance(value, list) and len(value) >= 2 and all(
-            _is_number(v) and np.isfinite(v) for v in value)
-    if not finite_list(point[0]) or not (_is_number(point[1]) and np.isfinite(point[1])):
+            is_number(v) and np.isfinite(v) for v in value)
+    if not finite_list(point[0]) or not (is_number(point[1]) and np.isfinite(point[1])):
         raise DataFileError(f"{path}: field 'operating_point' must be [[u0 per input], y0] of "
                             f"finite numbers; got {point!r}.")
     ranges = d.get("input_range")
@@ -141,14 +133,14 @@ def _inputs_pairs(d, path):
 def _finite_list(d, key, path):
     value = d.get(key)
     if not isinstance(value, list) or not value or not all(
-            _is_number(v) and np.isfinite(v) for v in value):
+            is_number(v) and np.isfinite(v) for v in value):
         _bad(d, key, "a non-empty list of finite numbers", path)
 
 
 def _orders_field(d, key, path):
     orders = d.get(key)
     if not isinstance(orders, dict) or not all(
-            _is_number(v) and np.isfinite(v) for v in orders.values()):
+            is_number(v) and np.isfinite(v) for v in orders.values()):
         _bad(d, key, "an object of finite numbers (the estimated orders)", path)
     lo, hi = ORDER_RANGE
     for name, value in orders.items():
@@ -168,7 +160,7 @@ def _array_field(d, key, path, *, name=None):
         raise DataFileError(f"{path}: field {name!r} must be null or an object with 'shape' and "
                             "'data' lists.")
     data = entry["data"]
-    if not all(_is_number(v) for v in data):
+    if not all(is_number(v) for v in data):
         raise DataFileError(f"{path}: field {name!r} holds an entry that is not a number.")
     arr = np.array(data, dtype=np.float64)
     if not np.all(np.isfinite(arr)):
@@ -227,38 +219,21 @@ def _basis(d, given, name, path) -> Basis:
 
 
 # ---- models and results of any other kind (fohw.Model, fohw.FitResult) -------------------------
-#: The fields of a model file of a kind other than the lagged one (:meth:`fohw.Model.to_dict`).
-GENERIC_MODEL_FIELDS = ("kind", "config", "parameters")
-#: The fields of a result file of another kind (:meth:`fohw.FitResult.to_dict`).
-GENERIC_RESULT_FIELDS = ("model", "covariance", "status", "sse", "n_samples", "message", "nfev",
-                         "jacobian", "starts", "residuals", "data_digest", "options")
-#: Fields a result file of another kind may have besides those: what the data were (names, units,
-#: sampling of the records) and the per-record estimates of a fit to several records.
-GENERIC_RESULT_OPTIONAL = ("data", "per_record", "n_per_record")
-#: The keys of a result file's ``data`` field (:attr:`fohw.FitResult.data`).
-DATA_FIELDS = ("input_names", "input_units", "output_name", "output_unit", "time_unit", "dt",
-               "records")
-
-
-def _number_list(d, key, path, ndim):
-    """A JSON list (of lists, for ``ndim`` 2) of finite numbers as an array, or raise."""
-    value = d[key]
-    rows = value if ndim == 2 else [value]
-    if not isinstance(value, list) or not all(
-            isinstance(r, list) and all(_is_number(v) and np.isfinite(v) for v in r)
-            for r in rows) or len({len(r) for r in rows}) > 1:
-        need = "a list of finite numbers" if ndim == 1 else "a matrix (list of equal rows)"
-        raise DataFileError(f"{path}: field {key!r} must be null or {need} of finite numbers.")
-    return np.array(value, dtype=np.float64).reshape(-1, len(rows[0]) if rows else 0) \
-        if ndim == 2 else np.array(value, dtype=np.float64)
-
-
 def _is_generic_model(body):
     return isinstance(body, dict) and "kind" in body
 
 
+#: Fields only the lagged kind's result has: a result without them and without ``model`` is
+#: a fit of another kind that lost its ``model`` field, not a lagged result.
+_LAGGED_ONLY = ("method", "structure", "theta")
+#: Fields only a fit of another kind has (:data:`fohw.result_checks.FIT_RESULT_FIELDS`).
+_GENERIC_ONLY = ("model", "sse", "jacobian", "starts", "residuals", "data_digest")
+
+
 def _is_generic_result(body):
-    return isinstance(body, dict) and _is_generic_model(body.get("model"))
+    """A fit of a kind other than the lagged one (it may have lost its ``model`` field)."""
+    return isinstance(body, dict) and ("model" in body or (
+        not any(k in body for k in _LAGGED_ONLY) and any(k in body for k in _GENERIC_ONLY)))
 
 
 def _generic_model_from_dict(body, version, path, field="the file"):
@@ -267,95 +242,23 @@ def _generic_model_from_dict(body, version, path, field="the file"):
         raise DataFileError(f"{path}: a model of kind {body['kind']!r} in a version-{version} "
                             f"file; models of any kind are written from version "
                             f"{MODEL_FORMAT_VERSION} on.")
-    _require_fields(body, GENERIC_MODEL_FIELDS, "fohw-model", version, path)
-    if not isinstance(body["kind"], str):
-        _bad(body, "kind", "the name of a registered model kind (a string)", path)
-    if not isinstance(body["config"], dict):
-        _bad(body, "config", "an object (the kind's settings)", path)
-    if not isinstance(body["parameters"], dict) or not body["parameters"]:
-        _bad(body, "parameters", "an object name -> parameter", path)
-    try:
-        stored = Parameters.from_dict(body["parameters"])
-        model = Model.from_dict(body)
-    except (ParameterError, DimensionError, TypeError, ValueError, KeyError,
-            AttributeError) as exc:
-        raise DataFileError(f"{path}: cannot rebuild the {body['kind']!r} model of {field}: "
-                            f"{exc}") from None
-    if model.parameters != stored:
-        raise DataFileError(f"{path}: the {body['kind']!r} model rebuilt from {field} has the "
-                            f"parameters {model.parameters!r}, not the file's {stored!r}: the "
-                            "kind or the file disagree.")
-    return model
-
-
-def _check_data_fields(body, path):
-    """The optional ``data``, ``per_record`` and ``n_per_record`` fields of a result, checked."""
-    if "n_per_record" in body:
-        _integer(body, "n_per_record", path, 0)
-    if "data" in body:
-        data = body["data"]
-        if not isinstance(data, dict):
-            _bad(body, "data", "an object", path)
-        if data:
-            if set(data) != set(DATA_FIELDS):
-                _bad(body, "data", f"an object with the keys {', '.join(DATA_FIELDS)}", path)
-            if not (isinstance(data["records"], list) and data["records"] and all(
-                    isinstance(r, dict) and isinstance(r.get("n_samples"), int)
-                    for r in data["records"])):
-                _bad(body, "data", "an object whose 'records' is a list of {name, n_samples, "
-                     "t0, uniform, dt}", path)
-    if "per_record" in body:
-        per = body["per_record"]
-        if not isinstance(per, dict):
-            _bad(body, "per_record", "an object", path)
-        for name, entry in per.items():
-            ok = isinstance(entry, dict) and set(entry) == {"values", "standard_errors"} and \
-                isinstance(entry["values"], list) and all(_is_number(v) for v in entry["values"])
-            se = entry.get("standard_errors") if isinstance(entry, dict) else None
-            ok = ok and (se is None or (isinstance(se, list) and len(se) == len(entry["values"])
-                                        and all(_is_number(v) for v in se)))
-            if not ok:
-                _bad(body, "per_record", f"an object name -> {{values: [numbers], "
-                     f"standard_errors: [numbers] or null}} (entry {name!r})", path)
+    return check_model_dict(body, path, field=field, what=f"a fohw-model file of version {version}",
+                            error=DataFileError)
 
 
 def _generic_result_from_dict(body, version, path):
-    """A FitResult of any kind but the lagged one, every field checked before it is built."""
-    _require_fields(body, GENERIC_RESULT_FIELDS + tuple(k for k in GENERIC_RESULT_OPTIONAL
-                                                        if k in body), "fohw-result", version, path)
-    _check_data_fields(body, path)
-    model = _generic_model_from_dict(body["model"], version, path, "field 'model'")
-    if body["status"] not in Status.__members__:
-        _bad(body, "status", f"one of {list(Status.__members__)}", path)
-    _number(body, "sse", path, lower=0.0)
-    _integer(body, "n_samples", path, 1)
-    _integer(body, "nfev", path, 0)
-    for key in ("message", "jacobian", "data_digest"):
-        if not isinstance(body[key], str):
-            _bad(body, key, "a string", path)
-    if not isinstance(body["options"], dict):
-        _bad(body, "options", "an object", path)
-    starts = body["starts"]
-    if not isinstance(starts, list) or not all(
-            isinstance(r, list) and len(r) == 2 and isinstance(r[0], dict)
-            and (r[1] is None or _is_number(r[1])) for r in starts):
-        _bad(body, "starts", "a list of [order values, sse or null]", path)
-    n_free = len(model.parameters.free_names)
-    cov = None
-    if body["covariance"] is not None:
-        cov = _number_list(body, "covariance", path, 2)
-    if body["residuals"] is not None:
-        res = _number_list(body, "residuals", path, 1)
-        if res.shape != (body["n_samples"],):
-            raise DataFileError(f"{path}: field 'residuals' has {res.size} values for "
-                                f"n_samples = {body['n_samples']}: the file contradicts itself.")
+    """A FitResult of any kind but the lagged one, every field checked before it is built.
+
+    The checks are :meth:`fohw.FitResult.from_dict`'s own
+    (:func:`fohw.result_checks.check_fit_result_dict`), here naming the file.
+    """
+    check_fit_result_dict(body, where=path, what=f"a fohw-result file of version {version}",
+                          error=DataFileError)
     try:
-        result = FitResult.from_dict(body)
+        return FitResult.from_dict(body)
     except (ParameterError, DimensionError, KeyError, TypeError, ValueError) as exc:
         raise DataFileError(f"{path}: malformed fohw-result file ({type(exc).__name__}: "
                             f"{exc})") from None
-    _check_covariance(cov, n_free, path)
-    return result
 
 
 # ---- models -----------------------------------------------------------------------------------
@@ -467,7 +370,7 @@ def _check_result_fields(d, version, path):
                     "fohw-result", version, path)
     if "output_map_params" in d:
         params = d["output_map_params"]
-        if not isinstance(params, dict) or not all(_is_number(v) and np.isfinite(v)
+        if not isinstance(params, dict) or not all(is_number(v) and np.isfinite(v)
                                                    for v in params.values()):
             _bad(d, "output_map_params", "an object of finite numbers", path)
         if "output_map" not in d["structure"]:
@@ -589,7 +492,7 @@ def _check_bounds(body, free, path):
     pairs = bounds if isinstance(bounds, dict) else {n: bounds for n in free}
     for name in free:
         pair = pairs.get(name)
-        if not isinstance(pair, list) or len(pair) != 2 or not all(_is_number(v) for v in pair) \
+        if not isinstance(pair, list) or len(pair) != 2 or not all(is_number(v) for v in pair) \
                 or not ORDER_RANGE[0] <= pair[0] < pair[1] <= ORDER_RANGE[1]:
             raise DataFileError(f"{path}: field 'options.alpha_bounds' must be a pair (low, high) "
                                 f"with 0 <= low < high <= 2, or such a pair per free order; got "
@@ -618,7 +521,7 @@ def _check_detail(key, value, path):
         _check_starts(value, path)
         return
     if ndim == 0:
-        ok = _is_number(value) and limits[0] <= value <= limits[1]
+        ok = is_number(value) and limits[0] <= value <= limits[1]
     elif isinstance(value, dict):
         arr = _array_field({key: value}, key, path, name=f"details.{key}")
         ok = arr.ndim == ndim and (limits is None or bool(
@@ -644,8 +547,8 @@ def _check_starts(value, path):
                                 f"{sorted(_START_FIELDS)}; got {got!r}."[:400])
         numbers = [entry["start_sse"]] + ([] if entry["sse"] is None else [entry["sse"]])
         if not (isinstance(entry["start"], str) and isinstance(entry["orders"], dict)
-                and all(_is_number(v) for v in entry["orders"].values())
-                and all(_is_number(v) and v >= 0 for v in numbers)
+                and all(is_number(v) for v in entry["orders"].values())
+                and all(is_number(v) and v >= 0 for v in numbers)
                 and (entry["status"] is None or entry["status"] in Status.__members__)
                 and (entry["nfev"] is None or (isinstance(entry["nfev"], int)
                                                and not isinstance(entry["nfev"], bool)
@@ -655,18 +558,7 @@ def _check_starts(value, path):
 
 
 def _check_covariance(cov, n_estimates, path):
-    if cov is None:
-        return
-    if cov.shape != (n_estimates, n_estimates):
-        raise DataFileError(f"{path}: field 'covariance' has shape {cov.shape}; the estimates "
-                            f"need ({n_estimates}, {n_estimates}).")
-    if not np.allclose(cov, cov.T, rtol=1e-10, atol=0.0):
-        raise DataFileError(f"{path}: field 'covariance' is not symmetric.")
-    if np.any(np.diag(cov) < 0):
-        i = int(np.flatnonzero(np.diag(cov) < 0)[0])
-        raise DataFileError(f"{path}: field 'covariance' has a negative variance "
-                            f"({float(cov[i, i])!r} on its diagonal at {i}); a covariance matrix has "
-                            "none.")
+    check_covariance(cov, n_estimates, path, DataFileError)
 
 
 def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, path="<dict>"):
@@ -685,7 +577,8 @@ def result_from_dict(d: dict, *, f_basis=None, g_basis=None, output_map=None, pa
     version = _check_header(d, "fohw-result", path)
     body = {k: v for k, v in d.items() if k not in _HEADER}
     if _is_generic_result(body):
-        _no_bases(f_basis, g_basis, output_map, body["model"]["kind"], path)
+        kind = body["model"].get("kind") if isinstance(body.get("model"), dict) else None
+        _no_bases(f_basis, g_basis, output_map, kind, path)
         return _generic_result_from_dict(body, version, path)
     _check_result_fields(body, version, path)
     f = _basis(body["structure"]["f_basis"], f_basis, "f_basis", path)

@@ -4,7 +4,8 @@ The circuit of :class:`fohw.EquivalentCircuit` (``R0`` and RC/ZARC elements besi
 open-circuit voltage), with every resistance, time constant and the voltage offset given at
 breakpoints of the state of charge and the temperature, the way PyBaMM's equivalent-circuit
 parameter sets are written (``R0(SOC, T)``, ``R1(SOC, T)``, ``tau1(SOC, T)``, ...), and
-interpolated linearly between them (held at the end values outside the table), or, with
+interpolated linearly between them (held at the end values outside the table, which
+:meth:`CircuitTables.simulate` warns of), or, with
 ``temperature_interpolation="arrhenius"``, their logarithms linearly in SOC and ``1/T``. The orders of
 the ZARC elements are shared by every breakpoint (one ``alpha`` per element).
 
@@ -34,13 +35,14 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 
 import numpy as np
 import scipy
 
 from .._threads import thin_solves
-from .._validation import check_array, check_int, check_scalar
-from ..exceptions import ParameterError
+from .._validation import RANGE_TOLERANCE, check_array, check_int, check_scalar, input_in_range
+from ..exceptions import ExtrapolationWarning, ParameterError
 from .base import Model
 from .circuit import CURRENT_SIGNS, RC, ZARC, EquivalentCircuit, OCVTable
 from .gl import gl_weights_derivative, gl_weights_unchecked
@@ -220,6 +222,10 @@ class CircuitTables(Model):
         self.kinds = kinds
         self.soc_points = self._points(soc_points, "soc_points")
         self.temperature_points = self._points(temperature_points, "temperature_points")
+        if self.temperature_points[0] <= -273.15:
+            raise ParameterError(f"`temperature_points` are in degC and must lie above absolute zero "
+                                 f"(-273.15 degC); got {self.temperature_points.tolist()!r} (the "
+                                 "Arrhenius interpolation works in 1 / (T + 273.15)).")
         self.step = check_scalar(dt, "dt", lower=0.0, lower_inclusive=False)
         if tau_bounds is None:
             tau_bounds = (self.dt, 1000.0 * self.dt)
@@ -377,6 +383,25 @@ class CircuitTables(Model):
                                  f"{float(temp[k])!r} at sample {k} (kelvin? subtract 273.15).")
         return i, soc, temp
 
+    @staticmethod
+    def _check_within(x, points, what, name):
+        """Warn (ExtrapolationWarning) when ``x`` leaves the breakpoints (the end values held).
+
+        Beyond them by more than ``RANGE_TOLERANCE`` of their span (the rule of the lagged
+        kind's estimation range: a record at an end breakpoint drifts past it a little).
+        """
+        if points.size < 2 or input_in_range(x, (points[0], points[-1])):
+            return                          # one point: the tables are constant along this axis
+        slack = RANGE_TOLERANCE * (points[-1] - points[0])
+        outside = np.flatnonzero((x < points[0] - slack) | (x > points[-1] + slack))
+        k = int(outside[0])
+        warnings.warn(ExtrapolationWarning(
+            f"{what} leaves the breakpoints `{name}` [{points[0]:g}, {points[-1]:g}] (by more "
+            f"than {RANGE_TOLERANCE:.0%} of their span) at {outside.size} of {x.size} samples "
+            f"(first: {float(x[k]):g} at sample {k}); the tables are held at their end values "
+            "there, not extrapolated: check the simulation before trusting it, or add "
+            "breakpoints that cover the record."), stacklevel=3)
+
     def weights(self, u):
         """``(N, n_soc * n_T)`` interpolation weights of the record's samples (:func:`table_weights`)."""
         _, soc, temp = self._signals(u)
@@ -433,11 +458,19 @@ class CircuitTables(Model):
         return z, dz
 
     def simulate(self, u, *, initial=None):
-        """Terminal voltage [V] for ``u = [current, soc, temperature]`` (elements at rest at k = 0)."""
+        """Terminal voltage [V] for ``u = [current, soc, temperature]`` (elements at rest at k = 0).
+
+        Warns (:class:`fohw.ExtrapolationWarning`) when the state of charge or the temperature
+        leaves the breakpoints (by more than ``RANGE_TOLERANCE``, 5 %, of their span): the
+        tables are held at their end values there.
+        """
         if initial is not None and not (isinstance(initial, str) and initial == "rest"):
             raise ParameterError(f"a CircuitTables starts at rest (`initial` None or 'rest'); got "
                                  f"{initial!r}.")
         i, soc, temp = self._signals(u)
+        self._check_within(soc, self.soc_points, "the state of charge `u[:, 1]`", "soc_points")
+        self._check_within(temp, self.temperature_points, "the temperature `u[:, 2]`",
+                           "temperature_points")
         w = self._weights(soc, temp)
         v = self._ocv(soc) + self.value("a", w) + self.value("R0", w) * i
         for e in range(1, len(self.kinds) + 1):

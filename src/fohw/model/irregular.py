@@ -502,6 +502,12 @@ def resample(t, u, y=None, *, dt=None, intersample="zoh"):
     t_new, u_new[, y_new] : ndarray
         The grid ``t[0] + k dt`` up to ``t[-1]``, and the signals on it.
 
+    Raises
+    ------
+    ParameterError
+        ``dt`` is not positive, longer than the record (the grid would hold one sample), or
+        so short that the grid would hold more than :data:`MAX_FINE_SAMPLES` samples.
+
     Examples
     --------
     >>> import numpy as np
@@ -517,7 +523,18 @@ def resample(t, u, y=None, *, dt=None, intersample="zoh"):
     if dt is None:
         dt = float(np.median(np.diff(t)))
     dt = check_scalar(dt, "dt", lower=0.0, lower_inclusive=False)
-    t_new = t[0] + dt * np.arange(int(np.floor((t[-1] - t[0]) / dt * (1 + 1e-12))) + 1)
+    span = float(t[-1] - t[0])
+    n_new = np.floor(span / dt * (1 + 1e-12)) + 1
+    if n_new < 2:
+        raise ParameterError(f"`dt` = {dt!r} is longer than the record (its instants span "
+                             f"{span:.6g}, from t[0] to t[-1]): the grid would hold one sample; "
+                             f"give dt <= {span:.6g} (the median step is "
+                             f"{float(np.median(np.diff(t))):.6g}).")
+    if n_new > MAX_FINE_SAMPLES:
+        raise ParameterError(f"`dt` = {dt!r} puts {n_new:.4g} samples on the record's span "
+                             f"{span:.6g}, more than MAX_FINE_SAMPLES = {MAX_FINE_SAMPLES:,}; give a "
+                             "longer dt.")
+    t_new = t[0] + dt * np.arange(int(n_new))
     if intersample == "zoh":
         u_new = u[np.searchsorted(t, t_new, side="left")]
     elif u.ndim == 1:

@@ -212,7 +212,9 @@ class Parameters(Mapping):
     ----------
     parameters : iterable of Parameter
         In the model's order; names must be unique and every tie must name a parameter of the
-        set that is not itself tied.
+        set that is not itself tied. A tied parameter's value must be its tie's,
+        ``factor * source`` (to rounding): a value that contradicts it is refused, naming both
+        (:meth:`replace` and :meth:`with_values` set a tied value themselves).
 
     Examples
     --------
@@ -243,6 +245,12 @@ class Parameters(Mapping):
                     raise ParameterError(
                         f"parameter {par.name!r} is tied to {par.tie[0]!r}, which must be a parameter "
                         f"of the same model that is not itself tied; names are {list(items)}.")
+                tied = par.tie[1] * source.value
+                if not math.isclose(par.value, tied, rel_tol=1e-12, abs_tol=1e-300):
+                    raise ParameterError(
+                        f"parameter {par.name!r} is tied to {par.tie[0]!r} ({par.tie[1]:g} times it, "
+                        f"{tied!r}), but its value is {par.value!r}: a tied parameter takes its "
+                        f"tie's value (give value={tied!r}, or no tie).")
         self._items = items
 
     # Mapping protocol
@@ -345,11 +353,20 @@ class Parameters(Mapping):
         return self.with_values(dict(zip(names, x.tolist())))
 
     def replace(self, name, **changes) -> Parameters:
-        """A copy in which parameter ``name`` has some attributes changed (see :meth:`Parameter.replace`)."""
+        """A copy in which parameter ``name`` has some attributes changed (see :meth:`Parameter.replace`).
+
+        Tied parameters follow their sources: a new ``tie`` without a ``value`` takes the tie's
+        value ``factor * source``, and a new value of a source moves the parameters tied to it.
+        """
         if name not in self._items:
             raise ParameterError(f"no parameter {name!r}; names are {list(self._items)}.")
         par = self[name]
-        return Parameters(par.replace(**changes) if n == name else p for n, p in self._items.items())
+        items = {n: par.replace(**changes) if n == name else p for n, p in self._items.items()}
+        for n, p in items.items():
+            source = items.get(p.tie[0]) if p.tie is not None else None
+            if source is not None and source.tie is None and (n != name or "value" not in changes):
+                items[n] = _placed(p, p.tie[1] * source.value)
+        return Parameters(items.values())
 
     def merged(self, other) -> Parameters:
         """A copy with the value, bounds, fixed flag and tie of every parameter of ``other``.
