@@ -229,8 +229,8 @@ def _nan_result():
 
 
 _G43 = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.8, 0.0], dt=0.1)        # 1/(s^0.8 + 1)
-_U43 = np.random.default_rng(43).standard_normal(300)
-_Y43 = _G43.simulate(_U43)
+_UD43 = np.random.default_rng(43).standard_normal(300)
+_YD43 = _G43.simulate(_UD43)
 
 
 @functools.cache
@@ -238,10 +238,10 @@ def _fit43(joint=False):
     """Issue 43's fits: of one record, or of its halves with ``b0`` per record (as JSON)."""
     import json
 
-    halves = [fohw.Record(u=_U43[:150], y=_Y43[:150], dt=0.1),
-              fohw.Record(u=_U43[150:], y=_Y43[150:], dt=0.1)]
+    halves = [fohw.Record(u=_UD43[:150], y=_YD43[:150], dt=0.1),
+              fohw.Record(u=_UD43[150:], y=_YD43[150:], dt=0.1)]
     fit = (fohw.fit(_G43, halves, per_record=["b0"], order_grid=2, n_starts=1) if joint else
-           fohw.fit(_G43, fohw.Record(u=_U43, y=_Y43, dt=0.1), order_grid=2, n_starts=1))
+           fohw.fit(_G43, fohw.Record(u=_UD43, y=_YD43, dt=0.1), order_grid=2, n_starts=1))
     return fit, json.dumps(fit.to_dict())
 
 
@@ -284,7 +284,7 @@ def _cu43(soc=None, temperature=20.0):
 def _frame43(columns=("i", "v"), index=None):
     import pandas as pd
 
-    data = np.column_stack([_U43, _Y43, _Y43])[:, :len(columns)]
+    data = np.column_stack([_UD43, _YD43, _YD43])[:, :len(columns)]
     return pd.DataFrame(data, columns=list(columns), index=index)
 
 
@@ -1339,7 +1339,7 @@ API = [
      lambda t: fohw.FitResult.from_dict([1, 2]), fohw.ParameterError,
      "a fit's content must be an object (a dict, as FitResult.to_dict makes)"),
     ("Record.from_dataframe", "a dict of arrays, not a DataFrame (N41: AttributeError)",
-     lambda t: fohw.Record.from_dataframe({"i": _U43, "v": _Y43}, "i", "v", dt=0.1),
+     lambda t: fohw.Record.from_dataframe({"i": _UD43, "v": _YD43}, "i", "v", dt=0.1),
      fohw.ParameterError, "`frame` must be a pandas DataFrame; got dict"),
     ("Record.from_dataframe", "units as a list (N42: dict's ValueError)",
      lambda t: fohw.Record.from_dataframe(_frame43(), "i", "v", dt=0.1, units=["A", "V"]),
