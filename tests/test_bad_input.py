@@ -1180,7 +1180,38 @@ CLI = [
     ("fohw identify", "the data file a FIFO (the read never ended)",
      lambda t: ["identify", os.mkfifo(t / "f.dat") or str(t / "f.dat"), "--na", "1", "--nb", "1"],
      "is a FIFO, not a regular file"),
+    # issue 43 (cli) and issue 42: the time column is read, and checked
+    ("fohw data", "paper_example --samples 1000000000 (ran > 60 s: no upper bound)",
+     lambda t: ["data", "paper_example", "--samples", "1000000000", "--out", str(t / "x.csv")],
+     "argument --samples: expected at most 1_000_000 samples"),
+    ("fohw identify", "t steps 0.5 under '# dt: 4 s' (the t column was never read)",
+     lambda t: ["identify", _bad_file(t, "# dt: 4 s\nt,u,y\n" + _rows(0.5 * np.arange(50)),
+                                      "f.csv"), "--columns", "u,y", "--na", "1", "--nb", "1"],
+     "f.csv: line 4: the time column 't' steps 0.5 s from line 3, but `# dt: 4 s` (line 1) "
+     "says 4 s"),
+    ("fohw identify", "'# units: q=V' naming no column (the unit was dropped)",
+     lambda t: ["identify", _bad_file(t, "# units: q=V\nu,y\n" + "1,2\n" * 5, "f.csv"),
+                "--na", "1", "--nb", "1"],
+     "f.csv: line 1: `# units:` names 'q', which is not a column (u, y)"),
+    ("fohw identify", "rows 10 and 11 of t swapped (output as for the clean file)",
+     lambda t: ["identify", _bad_file(t, "t,u,y\n" + _rows(np.r_[0:10, 11, 10, 12:50] * 0.5),
+                                      "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 13: the time column 't' goes back from 5.5 (line 12) to 5.0"),
+    ("fohw identify", "an instant repeated (output as for the clean file)",
+     lambda t: ["identify", _bad_file(t, "t,u,y\n" + _rows(np.r_[0:11, 10, 12:50] * 0.5),
+                                      "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 13 repeats the instant 5.0 of line 12 (time column 't')"),
+    ("fohw identify", "ISO stamps out of order",
+     lambda t: ["identify", _bad_file(t, "time,u,y\n2024-01-01T00:00:01,1,2\n"
+                                      "2024-01-01T00:00:00,2,3\n", "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 3: the time column 'time' goes back from 0.0 (line 2) to -1.0"),
 ]
+
+
+def _rows(t):
+    """CSV rows ``t,u,y`` of the instants ``t`` (u, y made up)."""
+    return "".join(f"{v!r},{float(np.sin(k))!r},{float(np.cos(k))!r}\n"
+                   for k, v in enumerate(map(float, t)))
 
 
 def _lr_fit(orders, n=50, method="varpro", **kw):

@@ -91,7 +91,11 @@ def test_simulate_command(tmp_path, capsys):
     np.savetxt(tmp_path / "u.txt", u)
     assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
                  str(tmp_path / "u.txt"), "--output", str(tmp_path / "y.txt")]) == 0
-    y = np.loadtxt(tmp_path / "y.txt")
+    text = (tmp_path / "y.txt").read_text()
+    assert text.splitlines()[1] == "y"          # a comment, then a header (no time: one per row)
+    from fohw.io.text import read_table
+
+    y = read_table(tmp_path / "y.txt").data[:, 0]
     np.testing.assert_array_equal(y, fohw.simulate(m, np.loadtxt(tmp_path / "u.txt")))
 
 

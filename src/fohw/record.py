@@ -7,6 +7,7 @@ mean, and splitting it into estimation and validation parts keeps that meaning.
 from __future__ import annotations
 
 import numbers
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -15,7 +16,7 @@ from ._validation import check_array, check_same_length, check_scalar
 from .exceptions import DimensionError, ParameterError
 
 __all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "describe_data",
-           "check_sampling",
+           "check_sampling", "time_column", "time_columns", "first_disorder", "TIME_UNITS",
            "UNIFORM_RTOL"]
 
 
@@ -26,6 +27,45 @@ __all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "d
 UNIFORM_RTOL = 1e-6
 
 INTERSAMPLE = ("zoh", "foh")
+
+#: Time units a time column's name or a ``# dt:`` comment may give, in seconds.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "ns": 1e-9,
+              "min": 60.0, "h": 3600.0}
+
+_TIME_NAME = re.compile(r"^\s*(?:t|time|timestamp|time_stamp|datetime|date_time|date)"
+                        r"(?:\s*\[(?P<a>[^\]]*)\]|\s*\((?P<b>[^)]*)\)|_(?P<c>s|sec|ms|us|ns|min|h))?"
+                        r"\s*$", re.IGNORECASE)
+
+
+def time_column(name):
+    """``(True, unit)`` if a column called ``name`` holds the time, else ``(False, "")``.
+
+    The names a reader takes as the time without being told: ``t``, ``time``, ``timestamp``,
+    ``time_stamp``, ``datetime``, ``date_time`` and ``date``, in any case, alone or with a unit:
+    ``time_s``, ``Time [s]``, ``t (ms)``.
+
+    Examples
+    --------
+    >>> from fohw.record import time_column
+    >>> time_column("time_s"), time_column("Time [ms]"), time_column("t"), time_column("ts")
+    ((True, 's'), (True, 'ms'), (True, ''), (False, ''))
+    """
+    match = _TIME_NAME.match(name) if isinstance(name, str) else None
+    if match is None:
+        return False, ""
+    return True, (match.group("a") or match.group("b") or match.group("c") or "").strip()
+
+
+def time_columns(names):
+    """The positions of the names in ``names`` that :func:`time_column` takes as the time."""
+    return [j for j, n in enumerate(names or []) if time_column(n)[0]]
+
+
+def first_disorder(t):
+    """The first ``k`` with ``t[k + 1] <= t[k]`` (instants not strictly increasing), or None."""
+    steps = np.diff(np.asarray(t, dtype=float))
+    bad = np.flatnonzero(~(steps > 0))
+    return int(bad[0]) if bad.size else None
 
 
 def _names(value, m, what):

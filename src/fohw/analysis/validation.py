@@ -535,7 +535,8 @@ def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelop
     Its one-step prediction is its free run (the noise is on the output), so the free run is
     scored and the residual tests are of its errors; ``initial`` goes to ``model.simulate``.
     """
-    kind = getattr(model, "kind_name", type(model).__name__)
+    kind = getattr(model, "kind_name", None)      # a Model's is a classmethod (a registry name)
+    kind = kind if isinstance(kind, str) else type(model).__name__
     if _is_estimate(initial):
         raise ParameterError(f"initial={initial!r} (the record's initial state fitted to its "
                              f"output) is for the lagged HammersteinWiener kind; a {kind} "
