@@ -27,6 +27,10 @@
 * ``fohw compare --model MODEL.json --data DATA [--columns U,Y] [--initial rest|fitted|estimate]
   [--n-init N] [--json] [--plot FILE]`` — score a saved model or result on a record, as
   :func:`fohw.compare`: free-run and one-step fit % and RMSE, the residual tests.
+* ``fohw fit --model START.json --data DATA [--columns U,Y or I,SOC,V] [--order-grid N]
+  [--n-starts N] [--max-nfev N] [--warmup N] [--json] [--plot FILE] [--save FILE]`` — fit a
+  model of any kind (a fractional transfer function, an equivalent circuit, ...) from a start
+  saved by ``fohw.save_model`` (or a saved fit): :func:`fohw.fit` on the file's record.
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``, ``battery``: the cell's drive cycle as columns t, i, v, soc) or a simulated
   one (``paper_example [--samples N] [--seed S]``) as a file to try the commands on; without
@@ -455,6 +459,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_select_parser(sub)
     _add_simulate_parser(sub)
     _add_compare_parser(sub)
+    _add_fit_parser(sub)
     _add_data_parser(sub)
     _add_reproduce_parser(sub)
     return parser
@@ -616,6 +621,33 @@ def _add_compare_parser(sub):
     cmp.add_argument("--json", action="store_true", help="print the scores as JSON")
     cmp.add_argument("--plot", help="write a figure of the free run and the one-step prediction")
     _add_quiet(cmp)
+
+
+def _add_fit_parser(sub):
+    fit = sub.add_parser("fit", help="fit a model of any kind from a saved start (fohw.fit)",
+                         description="Fit a model of any kind (a fractional transfer function, an "
+                         "equivalent circuit, a Wiener chain, the lagged kind, ...) by simulation "
+                         "error, from a start model saved by fohw.save_model (or a saved fit, "
+                         "whose model is the start): fohw.fit(start, record).")
+    fit.add_argument("--model", required=True, help="the start model's JSON (fohw.save_model), "
+                     "or a saved result (its model is the start)")
+    fit.add_argument("--data", required=True, help="data file with the input(s) and the output")
+    fit.add_argument("--columns", default=None, help="input column(s), then the output: numbers "
+                     "from 0 or header names, e.g. 'i,soc,v' for a circuit (default: u,y, or the "
+                     "file's columns besides the time when it has that many)")
+    fit.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    _add_time(fit)
+    _add_dt(fit)
+    for flag, what in (("--order-grid", "scan points per free order (fohw.fit's order_grid)"),
+                       ("--n-starts", "starts refined by least squares (n_starts)"),
+                       ("--max-nfev", "simulation budget of each refinement (max_nfev)")):
+        fit.add_argument(flag, type=_positive_int, default=None, help=what)
+    fit.add_argument("--warmup", type=int, default=None,
+                     help="samples of the first input held before each record (warmup)")
+    fit.add_argument("--json", action="store_true", help="print the estimates as JSON")
+    fit.add_argument("--plot", help="write a figure of the fitted model's free run on the record")
+    fit.add_argument("--save", help="save the result as JSON (fohw.load_result)")
+    _add_quiet(fit)
 
 
 def _add_data_parser(sub):
@@ -1058,6 +1090,76 @@ def _simulate(args):
     return int(not np.all(np.isfinite(y)))
 
 
+def _fit(args):
+    """``fohw fit``: :func:`fohw.fit` of a saved start model on a data file."""
+    import time
+    import warnings
+
+    from . import fit
+    from .model.base import Model
+    from .results import Status
+
+    _check_file_out(args.save, "--save", [args.data, args.model])
+    _check_plot_out(args.plot, "--plot", [args.data, args.model])
+    kind, loaded = _load_model_or_result(args.model)
+    start = loaded if kind == "model" else getattr(loaded, "model", None)
+    if not isinstance(start, Model):
+        raise UsageError(f"{args.model} holds no model to start from.")
+    table = _read(args, args.data)
+    n_in = start.n_inputs
+    record = _table_record(args, table, _column_indices(table, args.columns, n_in + 1,
+                                                        args.data), args.data)
+    options = {name: getattr(args, name) for name in ("order_grid", "n_starts", "max_nfev",
+                                                      "warmup")
+               if getattr(args, name) is not None}
+    began = time.perf_counter()
+    _stage(args, f"fitting a {type(start).__name__} on {record.n_samples} samples ...")
+    with warnings.catch_warnings(record=True) as caught:
+        for category in _fohw_warnings():
+            warnings.simplefilter("always", category)
+        res = fit(start, record, **options)
+    _stage(args, f"done in {_duration(time.perf_counter() - began)}")
+    _print_warnings(caught)
+    if args.json:
+        se = res.standard_errors() if res.covariance is not None else {}
+        ci = res.confidence_intervals() if res.covariance is not None else {}
+        print(json.dumps({
+            "kind": type(res.model).__name__, "status": res.status.name, "message": res.message,
+            "estimates": {n: res.parameters[n].value for n in res.parameters},
+            "free": list(res.free_names), "standard_errors": se or None,
+            "confidence_intervals_95": {n: list(v) for n, v in ci.items()} or None,
+            "sse": res.sse, "rmse": res.rmse, "n_samples": res.n_samples,
+            "data": dict(res.data)}, indent=1, default=_json_default))
+    else:
+        print(res.summary())
+    if res.status == Status.FAILED:
+        raise UsageError(f"the fit FAILED ({res.message.rstrip('.')}); nothing was saved or "
+                         "plotted.")
+    if args.save:
+        from .io.jsonio import save_result
+
+        save_result(res, args.save)
+    if args.plot:
+        from .analysis.validation import compare
+
+        fig = compare(res, record).plot()
+        fig.suptitle(f"fohw fit: {type(res.model).__name__} on {os.path.basename(args.data)}",
+                     fontsize=10)
+        save_figure(fig, args.plot, dpi=120)
+    return 0
+
+
+def _json_default(obj):
+    """JSON of what ``json`` does not know (numpy scalars and arrays, tuples of a result)."""
+    import numpy as np
+
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
+
+
 def _output_table(args, loaded, y, t, dt, time_unit, table):
     """The simulated output as CSV (:func:`fohw.io.text.format_table`).
 
@@ -1263,7 +1365,7 @@ def _run(argv):
         parser.print_help()
         return 0
     handler = {"identify": _identify, "select": _select, "simulate": _simulate,
-               "compare": _compare, "data": _data, "reproduce": _reproduce}
+               "compare": _compare, "fit": _fit, "data": _data, "reproduce": _reproduce}
     try:
         return handler[args.command](args)
     except (UsageError, FohwError, FileNotFoundError) as exc:
