@@ -139,3 +139,20 @@ def test_compare_names_the_kind_not_a_bound_method(tmp_path, capsys):
     assert main(["compare", "--model", str(tmp_path / "tf.json"), "--data", path, "--json",
                  "-q"]) == 0
     assert json.loads(capsys.readouterr().out)["n_samples"] == 300
+
+
+def test_messages_point_to_fohws_own_tools(tmp_path):
+    """Issue 42, item 6: an irregular record is resampled with fohw's resample (not
+    numpy.interp), and the reproduce note names no source path a pip user lacks."""
+    t = np.cumsum(np.r_[0.0, RNG.uniform(0.5, 1.5, 199)])
+    rec = fohw.read_record(_csv(tmp_path / "irr.csv", "t,u,y", t, U, Y))
+    with pytest.raises(fohw.ParameterError, match=r"resample it with "
+                       r"fohw\.model\.irregular\.resample\(rec\.t, rec\.u, rec\.y, dt=\.\.\.\)"):
+        fohw.identify(rec, na=1, nb=1, f_basis=1, g_basis=1)
+    from fohw.model.irregular import resample
+
+    assert resample(rec.t, rec.u, rec.y, dt=1.0)        # the call the message names works
+    from fohw.paper.table2 import caption, run_paper_example
+
+    note = caption(run_paper_example(n_samples=300, innovation_lengths=(1,), baselines=False))
+    assert "docs/" not in note and ".md" not in note and "method='varpro'" in note
