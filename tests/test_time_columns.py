@@ -156,3 +156,30 @@ def test_messages_point_to_fohws_own_tools(tmp_path):
 
     note = caption(run_paper_example(n_samples=300, innovation_lengths=(1,), baselines=False))
     assert "docs/" not in note and ".md" not in note and "method='varpro'" in note
+
+
+def test_from_dataframe_reads_time_as_read_record_does():
+    """The DataFrame path finds and checks a time column as the file reader does, and names
+    what is wrong (issue 43, N41, N42, N52, N53 and N25 as they meet it)."""
+    pd = pytest.importorskip("pandas")
+    u, y = np.arange(6.0), np.arange(6.0) ** 2
+    frame = pd.DataFrame({"time_s": 0.5 * np.arange(6), "i": u, "v": y})
+    rec = fohw.Record.from_dataframe(frame, "i", "v")
+    assert (rec.dt, rec.time_unit) == (0.5, "s")
+    stamps = pd.to_datetime([f"2024-01-01 00:00:0{k}" for k in (0, 1, 3, 2, 4, 5)])
+    with pytest.raises(fohw.ParameterError, match=r"frame\['stamp'\] must increase strictly: "
+                       r"row 3 goes back from row 2 \(3.0 -> 2.0\)"):
+        fohw.Record.from_dataframe(pd.DataFrame({"stamp": stamps, "i": u, "v": y}), "i", "v",
+                                   time="stamp")
+    gap = pd.DatetimeIndex(list(stamps[:2]) + [pd.NaT] + list(stamps[4:]) + [stamps[4]])
+    with pytest.raises(fohw.ParameterError, match=r"the index holds no time \(NaT\) at position 2"):
+        fohw.Record.from_dataframe(pd.DataFrame({"i": u, "v": y}, index=gap), "i", "v")
+    with pytest.raises(fohw.ParameterError, match="`frame` must be a pandas DataFrame; got dict"):
+        fohw.Record.from_dataframe({"i": u, "v": y}, "i", "v", dt=0.1)
+    with pytest.raises(fohw.ParameterError, match="`units` must map each column to its unit"):
+        fohw.Record.from_dataframe(frame, "i", "v", units=["A", "V"])
+    with pytest.raises(fohw.ParameterError, match="2 columns named 'v'"):
+        fohw.Record.from_dataframe(pd.DataFrame(np.c_[u, y, y], columns=["i", "v", "v"]), "i",
+                                   "v", dt=0.1)
+    with pytest.raises(fohw.ParameterError, match="`u` and `y` name the same column"):
+        fohw.Record.from_dataframe(frame, "v", "v")

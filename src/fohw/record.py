@@ -308,9 +308,13 @@ class Record:
         y : str
             The output column.
         time : str, optional
-            A column of sampling instants (numbers). Default: the index if it is a
-            :class:`~pandas.DatetimeIndex` or :class:`~pandas.TimedeltaIndex` (instants in
-            seconds from the first, ``time_unit`` "s"), else none (give ``dt``).
+            A column of sampling instants: numbers (in the unit its name gives, ``time_s`` or
+            ``Time [ms]``), or date/times or time deltas (seconds from the first, ``time_unit``
+            "s"). Default: the index if it is a :class:`~pandas.DatetimeIndex` or
+            :class:`~pandas.TimedeltaIndex` (the same), else, without ``dt``, the one column
+            named as time (``t``, ``time``, ``time_s``, ... as :func:`fohw.read_record` finds
+            it) that is not ``u`` or ``y``, else none. Instants must increase strictly (the
+            error names the rows).
         dt : float, optional
             The sampling time, where no time column or time index gives the instants.
         units : mapping, optional
@@ -318,23 +322,42 @@ class Record:
         **kwargs
             Further :class:`Record` fields (``name``, ``time_unit``, ``source``, ``intersample``).
         """
+        if not (hasattr(frame, "columns") and hasattr(frame, "index")):
+            raise ParameterError(f"`frame` must be a pandas DataFrame; got "
+                                 f"{type(frame).__name__} (pandas.DataFrame(frame) makes one; "
+                                 "fohw.Record(u=..., y=...) takes arrays).")
+        if units is not None and not hasattr(units, "items"):
+            raise ParameterError("`units` must map each column to its unit, e.g. "
+                                 f"{{'i': 'A', 'v': 'V'}}; got {type(units).__name__}.")
         columns = [u] if isinstance(u, str) else list(u)
         for col in columns + [y] + ([] if time is None else [time]):
             if col not in frame.columns:
                 raise ParameterError(f"{col!r} is not a column of the DataFrame (columns: "
                                      f"{', '.join(map(str, frame.columns))}).")
+            if list(frame.columns).count(col) > 1:
+                raise ParameterError(f"the DataFrame has {list(frame.columns).count(col)} "
+                                     f"columns named {col!r}; a name must say which column it "
+                                     "is: rename one.")
+        if y in columns:
+            raise ParameterError(f"`u` and `y` name the same column ({y!r}): the input and the "
+                                 "output are different columns.")
         units = dict(units or {})
+        index = frame.index
+        kind = getattr(index, "inferred_type", "")
+        dated = kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
+            str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64"))
+        if time is None and dt is None and not dated:
+            found = [c for c in frame.columns if isinstance(c, str) and time_column(c)[0]
+                     and c not in columns + [y]]
+            time = found[0] if len(found) == 1 else None
         t = None
         if time is not None:
-            t = check_array(frame[time].to_numpy(), f"frame[{time!r}]")
-        else:
-            index = frame.index
-            kind = getattr(index, "inferred_type", "")
-            if kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
-                    str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64")):
-                delta = np.asarray(index - index[0]).astype("timedelta64[ns]").astype(np.int64)
-                t = delta / 1e9
-                kwargs.setdefault("time_unit", "s")
+            t = _instants(frame[time], f"frame[{time!r}]", frame.index, kwargs)
+            unit = time_column(time)[1] if isinstance(time, str) else ""
+            if unit or time in units:
+                kwargs.setdefault("time_unit", unit or units[time])
+        elif dated:
+            t = _instants(index, "the index", index, kwargs)
         if t is not None and dt is not None:
             raise ParameterError("give `dt` or a time column/index, not both.")
         uu = frame[columns].to_numpy(dtype=float)
@@ -383,6 +406,40 @@ class Record:
             dt = "unknown" if self.dt is None else f"{self.dt:g}{unit}"
         return (f"Record({self.name!r}, n_samples={self.n_samples}, dt={dt}, "
                 f"{self._signal('u')}, {self._signal('y')})")
+
+
+def _instants(values, what, labels, kwargs):
+    """Instants of a time column or index, strictly increasing; a gap (NaT, NaN) named by its row.
+
+    Numbers as they are; date/times or time deltas in seconds from the first (``time_unit`` "s").
+    """
+    dtype = str(getattr(values, "dtype", ""))
+    if dtype.startswith(("datetime64", "timedelta64")):
+        raw = np.asarray(values)
+        missing = np.flatnonzero(np.isnat(raw))
+        if missing.size:
+            k = int(missing[0])
+            row = "" if labels is values else f" (row {labels[k]!r})"
+            raise ParameterError(f"{what} holds no time (NaT) at position {k}{row}; fohw fills "
+                                 "no gaps: drop the row or give its time.")
+        t = (raw - raw[0]).astype("timedelta64[ns]").astype(np.int64) / 1e9
+        kwargs.setdefault("time_unit", "s")
+    else:
+        try:
+            t = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{what} must hold numbers, date/times or time deltas; got "
+                                 f"dtype {dtype}.") from None
+        bad = np.flatnonzero(~np.isfinite(t))
+        if bad.size:
+            raise ParameterError(f"{what} holds {t[bad[0]]!r} at row {labels[bad[0]]!r}; fohw "
+                                 "fills no gaps: drop the row or give its time.")
+    k = first_disorder(t)
+    if k is not None:
+        how = "repeats the instant of" if t[k + 1] == t[k] else "goes back from"
+        raise ParameterError(f"{what} must increase strictly: row {labels[k + 1]!r} {how} row "
+                             f"{labels[k]!r} ({float(t[k])!r} -> {float(t[k + 1])!r}).")
+    return t
 
 
 def as_records(data, y=None, *, what="data"):
