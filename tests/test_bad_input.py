@@ -1321,7 +1321,7 @@ API = [
      fohw.ParameterError, "parameter 'b' is tied to 'a' (5 times it, 5.0), but its value is 2.0"),
     ("Record.from_dataframe", "the output column also the input (N25: accepted)",
      lambda t: fohw.Record.from_dataframe(_frame43(), "v", "v", dt=0.1), fohw.ParameterError,
-     "`y` = 'v' is also an input column (in `u`)"),
+     "`u` and `y` name the same column ('v'): the input and the output are different columns"),
     ("resample", "dt longer than the record (N29: one sample returned)",
      lambda t: fohw.model.irregular.resample(np.linspace(0.0, 30.0, 301), np.ones(301), dt=1e6),
      fohw.ParameterError, "`dt` = 1000000.0 is longer than the record (its instants span 30, "
@@ -1343,14 +1343,14 @@ API = [
      fohw.ParameterError, "`frame` must be a pandas DataFrame; got dict"),
     ("Record.from_dataframe", "units as a list (N42: dict's ValueError)",
      lambda t: fohw.Record.from_dataframe(_frame43(), "i", "v", dt=0.1, units=["A", "V"]),
-     fohw.ParameterError, "`units` must be a mapping column -> unit (e.g. {'i': 'A', 'v': 'V'}); "
-     "got ['A', 'V']"),
+     fohw.ParameterError, "`units` must map each column to its unit, e.g. {'i': 'A', 'v': 'V'}; "
+     "got list"),
     ("load_result", "a fit's file without its model field (N47: 'missing field method')",
      lambda t: fohw.load_result(_fit43_file(t, drop=("model",))), fohw.DataFileError,
      "fit43.json: missing field 'model'"),
     ("Record.from_dataframe", "a NaT in the DatetimeIndex (N52: 't must be strictly increasing')",
      lambda t: fohw.Record.from_dataframe(_frame43(index=_nat_index43()), "i", "v"),
-     fohw.ParameterError, "the DataFrame's time index holds a missing instant (NaT) at row 3 of 300"),
+     fohw.ParameterError, "the index holds no time (NaT) at position 3; fohw fills no gaps"),
     ("Record.from_dataframe", "two columns named v (N53: '`y` must be 1-D')",
      lambda t: fohw.Record.from_dataframe(_frame43(("i", "v", "v")), "i", "v", dt=0.1),
      fohw.ParameterError, "the DataFrame has 2 columns named 'v'"),
@@ -1504,7 +1504,38 @@ CLI = [
     ("fohw identify", "the data file a FIFO (the read never ended)",
      lambda t: ["identify", os.mkfifo(t / "f.dat") or str(t / "f.dat"), "--na", "1", "--nb", "1"],
      "is a FIFO, not a regular file"),
+    # issue 43 (cli) and issue 42: the time column is read, and checked
+    ("fohw data", "paper_example --samples 1000000000 (ran > 60 s: no upper bound)",
+     lambda t: ["data", "paper_example", "--samples", "1000000000", "--out", str(t / "x.csv")],
+     "argument --samples: expected at most 1_000_000 samples"),
+    ("fohw identify", "t steps 0.5 under '# dt: 4 s' (the t column was never read)",
+     lambda t: ["identify", _bad_file(t, "# dt: 4 s\nt,u,y\n" + _rows(0.5 * np.arange(50)),
+                                      "f.csv"), "--columns", "u,y", "--na", "1", "--nb", "1"],
+     "f.csv: line 4: the time column 't' steps 0.5 s from line 3, but `# dt: 4 s` (line 1) "
+     "says 4 s"),
+    ("fohw identify", "'# units: q=V' naming no column (the unit was dropped)",
+     lambda t: ["identify", _bad_file(t, "# units: q=V\nu,y\n" + "1,2\n" * 5, "f.csv"),
+                "--na", "1", "--nb", "1"],
+     "f.csv: line 1: `# units:` names 'q', which is not a column (u, y)"),
+    ("fohw identify", "rows 10 and 11 of t swapped (output as for the clean file)",
+     lambda t: ["identify", _bad_file(t, "t,u,y\n" + _rows(np.r_[0:10, 11, 10, 12:50] * 0.5),
+                                      "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 13: the time column 't' goes back from 5.5 (line 12) to 5.0"),
+    ("fohw identify", "an instant repeated (output as for the clean file)",
+     lambda t: ["identify", _bad_file(t, "t,u,y\n" + _rows(np.r_[0:11, 10, 12:50] * 0.5),
+                                      "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 13 repeats the instant 5.0 of line 12 (time column 't')"),
+    ("fohw identify", "ISO stamps out of order",
+     lambda t: ["identify", _bad_file(t, "time,u,y\n2024-01-01T00:00:01,1,2\n"
+                                      "2024-01-01T00:00:00,2,3\n", "f.csv"), "--na", "1", "--nb", "1"],
+     "f.csv: line 3: the time column 'time' goes back from 0.0 (line 2) to -1.0"),
 ]
+
+
+def _rows(t):
+    """CSV rows ``t,u,y`` of the instants ``t`` (u, y made up)."""
+    return "".join(f"{v!r},{float(np.sin(k))!r},{float(np.cos(k))!r}\n"
+                   for k, v in enumerate(map(float, t)))
 
 
 def _lr_fit(orders, n=50, method="varpro", **kw):

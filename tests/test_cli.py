@@ -91,7 +91,11 @@ def test_simulate_command(tmp_path, capsys):
     np.savetxt(tmp_path / "u.txt", u)
     assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
                  str(tmp_path / "u.txt"), "--output", str(tmp_path / "y.txt")]) == 0
-    y = np.loadtxt(tmp_path / "y.txt")
+    text = (tmp_path / "y.txt").read_text()
+    assert text.splitlines()[1] == "y"          # a comment, then a header (no time: one per row)
+    from fohw.io.text import read_table
+
+    y = read_table(tmp_path / "y.txt").data[:, 0]
     np.testing.assert_array_equal(y, fohw.simulate(m, np.loadtxt(tmp_path / "u.txt")))
 
 
@@ -384,12 +388,17 @@ def test_fohw_data_writes_the_shipped_records(tmp_path, capsys):
     assert "use one of @cascaded_tanks, @robot_arm" in capsys.readouterr().err
 
 
+#: The section of docs/getting_started.md whose blocks run in order, one after the other.
+FIRST_TASKS = "## Your first two tasks"
+
+
 def _getting_started_commands():
     """The shell commands of docs/getting_started.md, in order (``fohw ...`` lines of its
-    code blocks; `fohw reproduce` takes --fast here)."""
+    code blocks; `fohw reproduce` takes --fast here), up to :data:`FIRST_TASKS`."""
     from pathlib import Path
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "getting_started.md").read_text()
+    text = text.split(FIRST_TASKS)[0]
     commands, python = [], []
     block = None
     for line in text.splitlines():
@@ -419,6 +428,49 @@ def test_getting_started_runs_as_written(tmp_path, monkeypatch):
     proc = subprocess.run([sys.executable, "-c", python], cwd=tmp_path, capture_output=True,
                           text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def _first_tasks_steps():
+    """The blocks of the newcomer's tasks: ``("python", code)`` or ``("shell", argv)``, in order."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "getting_started.md").read_text()
+    steps, block, lines = [], None, []
+    for line in text.split(FIRST_TASKS, 1)[1].splitlines():
+        if line.startswith("```"):
+            if block is None:
+                block, lines = line[3:].strip(), []
+                continue
+            if block == "python":
+                steps.append(("python", "\n".join(lines)))
+            else:
+                steps += [("shell", c.split("  #")[0].split()) for c in lines if c.startswith("fohw ")]
+            block = None
+        elif block is not None:
+            lines.append(line)
+    return steps
+
+
+def test_the_newcomers_two_tasks_run_as_written(tmp_path):
+    """Issue 42, item 7: a battery pulse CSV to a fitted fractional circuit and the answer to
+    "is the fractional element worth it?", and an irregular plant CSV to a fitted transfer
+    function with its order test; every block of the section runs, in order, warnings as
+    errors."""
+    steps = _first_tasks_steps()
+    assert [k for k, _ in steps].count("shell") == 3 and len(steps) == 7
+    outputs = []
+    for kind, step in steps:
+        argv = ["-W", "error", "-c", step] if kind == "python" else ["-m", "fohw", *step[1:]]
+        proc = subprocess.run([sys.executable, *argv], cwd=tmp_path, capture_output=True,
+                              text=True)
+        assert proc.returncode == 0, (step, proc.stderr)
+        outputs.append(proc.stdout)
+    # what the page says the blocks print (the stand-ins' numbers, rounded as written there)
+    assert "| ZARC | ok | 99.06 |" in outputs[3] and "| RC | ok | 96.09 |" in outputs[3]
+    assert outputs[3].rstrip().endswith("ZARC")
+    assert "alpha1              0.3952" in outputs[5]
+    assert outputs[6].startswith("significant") and "p = 0" in outputs[6]
+    assert (tmp_path / "rc_fit.png").stat().st_size > 0
 
 
 def test_readme_lists_every_example_and_no_tracker_reference():

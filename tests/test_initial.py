@@ -195,6 +195,15 @@ def test_selection_scores_a_separate_record_from_rest_and_held_back_data_as_fitt
     assert held.rows[0]["fit"] == fohw.analysis.metrics.fit_percent(d.y[500:], ysim[500:])
 
 
+def simulated(text):
+    """The output column of ``fohw simulate`` (CSV: comments, a header, the time if any, y)."""
+    import io
+
+    from fohw.io.text import read_table
+
+    return read_table(io.StringIO(text)).data[:, -1]
+
+
 def test_cli_simulate_takes_the_initial_state(tmp_path, capsys):
     d = fohw.datasets.paper_example(200, random_state=0)
     est = fohw.identify(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3, past="estimate")
@@ -203,12 +212,12 @@ def test_cli_simulate_takes_the_initial_state(tmp_path, capsys):
     for initial in ("fitted", "rest"):
         assert cli(["simulate", "--model", str(tmp_path / "r.json"), "--input",
                     str(tmp_path / "u.txt"), "--initial", initial, "-q"]) == 0
-        y = np.array(capsys.readouterr().out.split(), dtype=float)
+        y = simulated(capsys.readouterr().out)
         np.testing.assert_array_equal(y, est.simulate(d.u, initial=initial))
     fohw.save_model(est.model, tmp_path / "m.json")
     assert cli(["simulate", "--model", str(tmp_path / "m.json"), "--input",
                 str(tmp_path / "u.txt"), "--initial", "rest", "-q"]) == 0
-    y = np.array(capsys.readouterr().out.split(), dtype=float)
+    y = simulated(capsys.readouterr().out)
     assert est.model.past != (0.0, 0.0)         # the levels exist, so "rest" is a choice
     np.testing.assert_allclose(y, fohw.compare(est.model, d.u, d.y, initial="rest").simulated)
 

@@ -484,6 +484,15 @@ def test_identify_many_and_monte_carlo_with_a_model(case):
     assert row["status"] == "CONVERGED" and row["error"] == ""
 
 
+def simulated(text):
+    """The output column of ``fohw simulate`` (CSV: comments, a header, the time if any, y)."""
+    import io
+
+    from fohw.io.text import read_table
+
+    return read_table(io.StringIO(text)).data[:, -1]
+
+
 def test_the_command_line_simulates_a_model_of_any_kind(case, tmp_path, capsys):
     fohw.save_result(case.fit, tmp_path / "r.json")
     u = np.asarray(case.u, dtype=float).reshape(case.y.size, -1)
@@ -492,7 +501,7 @@ def test_the_command_line_simulates_a_model_of_any_kind(case, tmp_path, capsys):
     assert main(["simulate", "--model", str(tmp_path / "r.json"), "--input",
                  str(tmp_path / "u.txt"), "--column", columns, "--output",
                  str(tmp_path / "y.txt"), "--quiet"]) == 0
-    np.testing.assert_array_equal(np.loadtxt(tmp_path / "y.txt"),
+    np.testing.assert_array_equal(simulated((tmp_path / "y.txt").read_text()),
                                   case.fit.model.simulate(case.u))
     assert main(["simulate", "--model", str(tmp_path / "r.json"), "--input",
                  str(tmp_path / "u.txt"), "--column", columns, "--initial", "rest"]) == 2
@@ -524,14 +533,15 @@ def test_the_command_line_takes_one_column_per_input(tmp_path, capsys):
     model = TwoGains(0.5, -2.0)
     fohw.save_model(model, tmp_path / "m.json")
     u = np.random.default_rng(0).standard_normal((20, 3))
-    np.savetxt(tmp_path / "u.txt", u, fmt="%.17g", header="t i soc", comments="")
+    np.savetxt(tmp_path / "u.txt", u, fmt="%.17g", header="x i soc", comments="")
     assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
                  str(tmp_path / "u.txt"), "--column", "i,soc", "--output",
                  str(tmp_path / "y.txt"), "--quiet"]) == 0
-    np.testing.assert_array_equal(np.loadtxt(tmp_path / "y.txt"), model.simulate(u[:, 1:]))
+    np.testing.assert_array_equal(simulated((tmp_path / "y.txt").read_text()),
+                                  model.simulate(u[:, 1:]))
     assert main(["simulate", "--model", str(tmp_path / "m.json"), "--input",
-                 str(tmp_path / "u.txt")]) == 2                 # the default: one column
-    assert "--column needs 2 entries" in capsys.readouterr().err
+                 str(tmp_path / "u.txt")]) == 2         # 3 columns for 2 inputs: no guess
+    assert "has 3 columns (x, i, soc): say which to use with --column" in capsys.readouterr().err
 
 
 def test_the_command_line_compares_a_model_of_two_inputs(tmp_path, capsys):

@@ -316,14 +316,25 @@ def test_identify_save_then_simulate_the_result_file(paper, tmp_path):
     assert status == 0, err
     assert "free-run simulation fit" in out and "stayed bounded" in out
     status, out, err = run_cli(["simulate", "--model", saved, "--input", data])
+    assert status == 2 and "has 2 columns: say which to use with --column" in err   # no guess
+    status, out, err = run_cli(["simulate", "--model", saved, "--input", data, "--column", 0])
     assert status == 0, err
-    simulated = np.array([float(v) for v in out.split()])
+    simulated = _simulated(out)
     np.testing.assert_array_equal(simulated, fohw.load_result(saved).simulate(d.u))
-    status, out, err = run_cli(["simulate", "--model", saved, "--input", data, "--noise-std", 0.1,
-                                "--seed", 3])
-    noisy = np.array([float(v) for v in out.split()])
+    status, out, err = run_cli(["simulate", "--model", saved, "--input", data, "--column", 0,
+                                "--noise-std", 0.1, "--seed", 3])
+    noisy = _simulated(out)
     v = 0.1 * np.random.default_rng(3).standard_normal(d.u.shape[0])
     np.testing.assert_array_equal(noisy, fohw.load_result(saved).simulate(d.u, noise=v))
+
+
+def _simulated(text):
+    """The output column of ``fohw simulate`` (CSV: comments, a header, the time if any, y)."""
+    import io
+
+    from fohw.io.text import read_table
+
+    return read_table(io.StringIO(text)).data[:, -1]
 
 
 def test_the_json_output_has_the_free_run(paper):
@@ -628,7 +639,7 @@ def test_a_two_input_result_from_the_command_line_is_simulated_by_it(tmp_path):
         status, out, err = run_cli(["simulate", "--model", tmp_path / "two.json", "--input", inp,
                                     *column, "-q"])
         assert status == 0 and err == "", (column, err)
-        np.testing.assert_array_equal(np.array(out.split(), dtype=float), expected)
+        np.testing.assert_array_equal(_simulated(out), expected)
 
 
 def _proc_stat(pid):

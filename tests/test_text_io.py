@@ -54,7 +54,8 @@ def test_header_with_u_and_y_is_used_by_default(tmp_path):
     rec = fohw.read_record(path)
     np.testing.assert_array_equal(rec.u, [1.0, 2.0, 3.0])
     np.testing.assert_array_equal(rec.y, [5.0, 6.0, 7.0])
-    assert rec.dt is None
+    assert rec.dt == 1.0 and rec.t0 == 0.0          # the column t is the time (issue 42)
+    assert fohw.read_record(path, t=False).dt is None      # read without it: no sampling time
 
 
 def test_more_than_two_columns_without_names_is_refused(tmp_path):
@@ -168,8 +169,8 @@ def test_a_file_that_changes_while_it_is_read_is_refused(tmp_path, monkeypatch):
     path = write(tmp_path, "u,y\n" + "".join(f"{k},{k + 1}\n" for k in range(100)))
     real = text_io._read_lines
 
-    def truncate_midway(src, decimal):
-        table = real(src, decimal)
+    def truncate_midway(src, decimal, *time):
+        table = real(src, decimal, *time)
         with open(path, "r+") as fh:              # someone cuts the file while fohw reads it
             fh.truncate(200)
         return table
@@ -203,8 +204,11 @@ def test_bytes_paths_and_file_objects_are_read(tmp_path):
         assert fohw.read_record(fh).name == "d.csv"
     with open(path, "rb") as fh:
         np.testing.assert_array_equal(fohw.read_record(fh, dt=2.0).y, expected.y)
-    rec = fohw.read_record(io.StringIO("t,u,y,Ts\n0,1,2,0.5\n1,3,4,\n"))
+    rec = fohw.read_record(io.StringIO("t,u,y,Ts\n0,1,2,0.5\n0.5,3,4,\n"))
     assert rec.dt == 0.5 and rec.input_name == "u"
+    with pytest.raises(fohw.DataFileError, match=r"<StringIO>: line 3: the time column 't' steps "
+                       r"1 from line 2, but the column 'Ts' says 0.5"):
+        fohw.read_record(io.StringIO("t,u,y,Ts\n0,1,2,0.5\n1,3,4,\n"))
     with pytest.raises(fohw.ParameterError, match="`path` must be a file path .* got int"):
         fohw.read_record(3)
 

@@ -20,9 +20,17 @@
   ``--column`` per input (``--column u1,u2``, matched by the names it keeps; by default the
   columns of those names); a model or fit of any other kind (``fohw.save_model``,
   ``fohw.save_result``) is simulated by its own ``simulate``, with one ``--column`` per input.
+  Without ``--column``: the columns named as the model's inputs (or ``u``), else the file's
+  columns other than the time column when there are exactly as many as inputs; never a guess.
+  The output is CSV (:func:`fohw.io.text.format_table`): ``#`` comments, the sampling time and
+  units, a header, the input's time column (when it gives the time) and the output.
 * ``fohw compare --model MODEL.json --data DATA [--columns U,Y] [--initial rest|fitted|estimate]
   [--n-init N] [--json] [--plot FILE]`` — score a saved model or result on a record, as
   :func:`fohw.compare`: free-run and one-step fit % and RMSE, the residual tests.
+* ``fohw fit --model START.json --data DATA [--columns U,Y or I,SOC,V] [--order-grid N]
+  [--n-starts N] [--max-nfev N] [--warmup N] [--json] [--plot FILE] [--save FILE]`` — fit a
+  model of any kind (a fractional transfer function, an equivalent circuit, ...) from a start
+  saved by ``fohw.save_model`` (or a saved fit): :func:`fohw.fit` on the file's record.
 * ``fohw data [NAME] [--out FILE]`` — write a record shipped with fohw (``cascaded_tanks``,
   ``robot_arm``, ``battery``: the cell's drive cycle as columns t, i, v, soc) or a simulated
   one (``paper_example [--samples N] [--seed S]``) as a file to try the commands on; without
@@ -34,6 +42,14 @@
 * ``fohw reproduce {table2,figures,forgetting,robot-arm,accuracy} --outdir DIR [--fast]``;
   ``table2`` and ``figures`` also take ``--seed N`` and ``--forgetting LAMBDA`` (a forgetting
   factor on r that is not in the paper; default 1, the paper as printed).
+
+Every verb reads its data file as :func:`fohw.read_record` does (one reader,
+:func:`fohw.io.text.record_from_table`): a time column (``t``, ``time``, ``time_s``,
+``Time [s]``, ``timestamp``, ...; or ``--time NAME``, ``--time none``) in seconds or ISO 8601
+date/times gives the sampling time or the instants, checked (strictly increasing, agreeing with a
+``# dt:`` comment or a ``Ts`` column, else an error naming the lines); ``# units:`` gives the
+units the summaries and figures show; with more columns than the verb needs, ``--columns``
+must say which (the time column is never a signal).
 
 Usage errors, bad input and operating-system errors (permissions, a folder given as a file)
 print one line ``fohw: error: …`` and exit with status 2, and so does a command that fitted or
@@ -122,19 +138,49 @@ def read_table(path, decimal="."):
         The sampling time the file gives once (a ``Ts`` column, as the cascaded-tanks file), or
         None.
     """
-    import time
-
-    from .io.text import read_table as parse
     from .io.text import sampling_time
 
-    path = _data_path(path)
-    start = time.perf_counter()
-    _progress(f"reading {path} ...")
-    table = parse(path, decimal=decimal)
-    _progress(f"read {table.data.shape[0]} rows x {table.data.shape[1]} columns in "
-              f"{time.perf_counter() - start:.1f} s" + (f" ({'; '.join(table.skipped)})"
-                                                         if table.skipped else ""))
+    table = _load_table(path, decimal)
     return table.data, table.names, sampling_time(table)
+
+
+def _load_table(path, decimal=".", time=None):
+    """The :class:`fohw.io.text.Table` of a data file, the time column found (every verb's reader).
+
+    ``time``: ``--time`` (a column name or number, ``"none"``, or None: the column the header
+    names as time).
+    """
+    import time as clock
+
+    from .io.text import read_table as parse
+
+    path = _data_path(path)
+    start = clock.perf_counter()
+    _progress(f"reading {path} ...")
+    if time is not None:
+        time = False if time.lower() == "none" else int(time) if time.isdigit() else time
+    table = parse(path, decimal=decimal, time=time)
+    _progress(f"read {table.data.shape[0]} rows x {table.data.shape[1]} columns in "
+              f"{clock.perf_counter() - start:.1f} s" + (f" ({'; '.join(table.skipped)})"
+                                                         if table.skipped else ""))
+    return table
+
+
+def _read(args, path):
+    """The data file of a verb as a :class:`fohw.io.text.Table` (``--decimal-comma``, ``--time``)."""
+    return _load_table(path, _decimal(args), getattr(args, "time", None))
+
+
+def _table_record(args, table, idx, path):
+    """Columns ``idx`` (inputs, then the output) of ``table`` as a :class:`fohw.Record`.
+
+    The one reader of :func:`fohw.read_record`: a time column checked, the sampling time,
+    the names and the units of the file (``# units:``) reach the result and the figures.
+    """
+    from .io.text import record_from_table
+
+    return record_from_table(table, idx[:-1], idx[-1], dt=getattr(args, "dt", None),
+                             name=os.path.basename(str(path)))
 
 
 def _data_path(path):
@@ -149,30 +195,36 @@ def _data_path(path):
     return path
 
 
-def _pick_columns(data, names, spec, count, path, flag="--columns", what="input and output"):
-    """The columns ``--columns`` picks ("0,1" or header names), ``count`` of them."""
-    return [data[:, i] for i in _column_indices(data.shape[1], names, spec, count, path, flag,
-                                                what)]
+def _column_indices(table, spec, count, path, flag="--columns", what="input and output"):
+    """Column indices from ``--columns`` ("0,1" or header names) of the table's columns.
 
-
-def _column_indices(width, names, spec, count, path, flag="--columns", what="input and output"):
-    """Column indices from ``--columns`` ("0,1" or header names) of ``width`` columns."""
-    if width < count:
+    Without ``spec``: the columns named u and y, else the columns other than the time column
+    when there are exactly ``count`` of them; never a guess, and never the time column.
+    """
+    width, names, time = table.data.shape[1], table.names, table.time_column
+    others = [j for j in range(width) if j != time]
+    if len(others) < count and (spec is None or width < count):
         needs = ("the input and the output" if count == 2 and what == "input and output" else
                  "the inputs and the output" if what == "input and output" else
                  "one per input" if count > 1 else "the input")
-        raise UsageError(f"{path} has {width} signal column(s); this command needs "
-                         f"{count} ({needs}).")
+        besides = f" besides the time column {names[time]!r}" if names and time is not None else ""
+        raise UsageError(f"{path} has {len(others)} signal column(s){besides}; this command "
+                         f"needs {count} ({needs}).")
     if spec is None:
         lower = [n.lower() for n in names] if names else []
         if count == 2 and what == "input and output" and "u" in lower and "y" in lower:
             idx = [lower.index("u"), lower.index("y")]
-        elif width == count:
-            idx = list(range(count))
+        elif count == 1 and what == "input" and "u" in lower:
+            idx = [lower.index("u")]
+        elif len(others) == count:
+            idx = others
         else:
-            have = f" ({', '.join(names)})" if names else ""
-            raise UsageError(f"{path} has {width} columns{have}: say which to use with "
-                             f"{flag} (numbers from 0 or header names).")
+            have = f" ({', '.join(names[j] for j in others)})" if names else ""
+            besides = f" besides the time column {names[time]!r}" if names and time is not None \
+                else ""
+            raise UsageError(f"{path} has {len(others)} columns{have}{besides}: say which to use "
+                             f"with {flag} (numbers from 0 or header names); fohw does not "
+                             "guess.")
     else:
         parts = [p.strip() for p in spec.split(",")]
         if len(parts) != count:
@@ -194,6 +246,10 @@ def _column_indices(width, names, spec, count, path, flag="--columns", what="inp
         if not 0 <= i < width:
             raise UsageError(f"{flag}: column {i} does not exist; {path} has "
                              f"{width} column(s) (numbered from 0).")
+        if i == time:
+            raise UsageError(f"{flag}: column {names[i] if names else i!r} is the time column of "
+                             f"{path}; to read it as a signal, say --time none (or --time NAME "
+                             "for another time column).")
     return idx
 
 
@@ -348,6 +404,19 @@ def _positive_int(text):
     return value
 
 
+#: The largest record ``fohw data paper_example --samples`` writes (about 40 MB of text).
+MAX_DATA_SAMPLES = 1_000_000
+
+
+def _samples_arg(text):
+    value = _positive_int(text)
+    if value > MAX_DATA_SAMPLES:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_DATA_SAMPLES:_} samples (a "
+                                         f"larger record is simulated in Python: "
+                                         f"fohw.datasets.paper_example(n)); got {value:_}")
+    return value
+
+
 def _orders_list(text):
     """Classes of orders: the presets by name, a number as a fixed order (0, 0.5, 1, 2.5)."""
     from .model.orders import PRESETS
@@ -390,21 +459,32 @@ def build_parser() -> argparse.ArgumentParser:
     _add_select_parser(sub)
     _add_simulate_parser(sub)
     _add_compare_parser(sub)
+    _add_fit_parser(sub)
     _add_data_parser(sub)
     _add_reproduce_parser(sub)
     return parser
 
 
 def _add_data_file(cmd, columns_help, decimal_help):
-    """The data file, ``--columns`` and ``--decimal-comma`` (identify, select)."""
+    """The data file, ``--columns``, ``--decimal-comma`` and ``--time`` (identify, select)."""
     cmd.add_argument("data", help="whitespace- or comma-separated columns (optional header)")
     cmd.add_argument("--columns", help=columns_help)
     cmd.add_argument("--decimal-comma", action="store_true", help=decimal_help)
+    _add_time(cmd)
+
+
+def _add_time(cmd):
+    cmd.add_argument("--time", default=None, metavar="COLUMN",
+                     help="the time column (name or number; seconds or ISO 8601 date/times), "
+                     "or 'none'; default: the column named t, time, time_s, 'Time [s]', ... "
+                     "(checked: increasing, and agreeing with a '# dt:' comment or Ts column)")
 
 
 def _add_dt(cmd):
     cmd.add_argument("--dt", type=float, default=None,
-                     help="sampling time (default: the file's Ts, else 1)")
+                     help="sampling time (default: the file's time column, Ts column or '# dt:' "
+                     "comment, else none: one sample is the time unit); checked against a time "
+                     "column")
 
 
 def _add_quiet(cmd, text="no stage messages on stderr"):
@@ -500,11 +580,12 @@ def _add_simulate_parser(sub):
                      "kind")
     sim.add_argument("--input", required=True, help="data file with the input column(s)")
     sim.add_argument("--column", default=None,
-                     help="input column number or name (default 0); a result or model with "
-                     "several inputs takes one per input, e.g. 'u1,u2', or 'i,soc' for a circuit "
-                     "(default: the columns named as its inputs, or the file's columns if it "
-                     "has one per input)")
+                     help="input column number or name; a result or model with several inputs "
+                     "takes one per input, e.g. 'u1,u2', or 'i,soc' for a circuit (default: the "
+                     "columns named as its inputs, or u, or the file's columns besides the time "
+                     "when it has one per input; never a guess)")
     sim.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    _add_time(sim)
     sim.add_argument("--noise-std", type=float, default=0.0,
                      help="white Gaussian noise: in the equation for the lagged kind, on the "
                      "output for any other kind")
@@ -514,7 +595,8 @@ def _add_simulate_parser(sub):
                      "(the levels a past='estimate' fit estimated before its estimation record, "
                      "right for that record). Default: rest, and a saved model's own levels; "
                      "a result fitted with past='estimate' needs it")
-    sim.add_argument("--output", help="write y here (one value per line); default stdout")
+    sim.add_argument("--output", help="write the output here as CSV (comments, a header, the "
+                     "time column if the input has one, y); default stdout")
     _add_quiet(sim)
 
 
@@ -529,6 +611,7 @@ def _add_compare_parser(sub):
                      "or header names: one per input, then the output, e.g. i,soc,v for a "
                      "circuit (default: u,y, or the file's columns when it has that many)")
     cmp.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    _add_time(cmp)
     cmp.add_argument("--initial", choices=("rest", "fitted", "estimate"), default=None,
                      help="the state the free run starts from (fohw.compare's initial=): rest, "
                      "fitted (a past='estimate' fit's levels) or estimate (levels fitted to "
@@ -540,13 +623,41 @@ def _add_compare_parser(sub):
     _add_quiet(cmp)
 
 
+def _add_fit_parser(sub):
+    fit = sub.add_parser("fit", help="fit a model of any kind from a saved start (fohw.fit)",
+                         description="Fit a model of any kind (a fractional transfer function, an "
+                         "equivalent circuit, a Wiener chain, the lagged kind, ...) by simulation "
+                         "error, from a start model saved by fohw.save_model (or a saved fit, "
+                         "whose model is the start): fohw.fit(start, record).")
+    fit.add_argument("--model", required=True, help="the start model's JSON (fohw.save_model), "
+                     "or a saved result (its model is the start)")
+    fit.add_argument("--data", required=True, help="data file with the input(s) and the output")
+    fit.add_argument("--columns", default=None, help="input column(s), then the output: numbers "
+                     "from 0 or header names, e.g. 'i,soc,v' for a circuit (default: u,y, or the "
+                     "file's columns besides the time when it has that many)")
+    fit.add_argument("--decimal-comma", action="store_true", help="as for identify")
+    _add_time(fit)
+    _add_dt(fit)
+    for flag, what in (("--order-grid", "scan points per free order (fohw.fit's order_grid)"),
+                       ("--n-starts", "starts refined by least squares (n_starts)"),
+                       ("--max-nfev", "simulation budget of each refinement (max_nfev)")):
+        fit.add_argument(flag, type=_positive_int, default=None, help=what)
+    fit.add_argument("--warmup", type=int, default=None,
+                     help="samples of the first input held before each record (warmup)")
+    fit.add_argument("--json", action="store_true", help="print the estimates as JSON")
+    fit.add_argument("--plot", help="write a figure of the fitted model's free run on the record")
+    fit.add_argument("--save", help="save the result as JSON (fohw.load_result)")
+    _add_quiet(fit)
+
+
 def _add_data_parser(sub):
     dat = sub.add_parser("data", help="write a record shipped with fohw (or a simulated one) "
                          "to a file, to try the commands on; without NAME, list them")
     dat.add_argument("name", nargs="?", choices=_DATA_NAMES, help="the record")
     dat.add_argument("--out", help="the file to write (default: stdout)")
-    dat.add_argument("--samples", type=_positive_int, default=2000,
-                     help="paper_example: number of samples (default 2000)")
+    dat.add_argument("--samples", type=_samples_arg, default=2000,
+                     help=f"paper_example: number of samples (default 2000, at most "
+                     f"{MAX_DATA_SAMPLES:_})")
     dat.add_argument("--seed", type=int, default=0, help="paper_example: seed (default 0)")
 
 
@@ -574,73 +685,29 @@ def _fohw_warnings():
                  if name.endswith("Warning"))
 
 
-def _dt(given, from_file):
-    """``--dt`` if given, else the sampling time the file gives, else 1."""
-    if given is not None:
-        return given
-    return 1.0 if from_file is None else from_file
-
-
 def _decimal(args):
     return "," if args.decimal_comma else "."
 
 
-def _input_output(args, data, names):
-    """``(u, y)`` from ``--columns`` (several inputs, then the output); ``args.inputs`` names them."""
+def _input_output(args, table):
+    """The record of ``--columns`` (several inputs, then the output); ``args.inputs`` names them."""
     count = max(2, len(args.columns.split(","))) if args.columns else 2
-    *inputs, y = _pick_columns(data, names, args.columns, count, args.data)
-    u, args.inputs = inputs[0], None
-    if count > 2:                       # several inputs, then the output
-        import numpy as np
-
-        u = np.column_stack(inputs)
-        given = [p.strip() for p in args.columns.split(",")][:-1]
-        if names is not None and all(p in names for p in given):
-            args.inputs = tuple(given)
-    return u, y
-
-
-def _record(args, u, y, dt, columns=None):
-    """The columns read as a :class:`fohw.Record`, the data every verb takes.
-
-    The same path as the library's: the sampling time and the channel names reach the result
-    and the figures. ``columns`` are the picked columns' header names (inputs, then the output), if any.
-    """
-    from .record import Record
-
-    n_in = 1 if u.ndim == 1 else u.shape[1]
-    picked = columns if columns is not None else [None] * (n_in + 1)
-    in_names = [c or (("u" if n_in == 1 else f"u{j + 1}")) for j, c in enumerate(picked[:-1])]
-    if getattr(args, "inputs", None):
-        in_names = list(args.inputs)
-    return Record(u=u, y=y, dt=dt, name=os.path.basename(str(args.data)),
-                  input_name=in_names[0] if n_in == 1 else tuple(in_names),
-                  output_name=picked[-1] or "y", path=str(args.data))
-
-
-def _column_names(args, names, count, spec=None):
-    """The header names of the columns ``--columns`` picks (None without a header).
-
-    The indices :func:`_pick_columns` took (it has checked them; a header names every column).
-    """
-    if names is None:
-        return None
-    spec = args.columns if spec is None else spec
-    return [names[i] for i in _column_indices(len(names), names, spec, count, args.data)]
+    idx = _column_indices(table, args.columns, count, args.data)
+    args.inputs = None
+    if count > 2 and table.names is not None:       # several inputs, then the output
+        args.inputs = tuple(table.names[j] for j in idx[:-1])
+    return _table_record(args, table, idx, args.data)
 
 
 def _identify(args):
     _check_file_out(args.save, "--save", [args.data])
     _check_plot_out(args.plot, "--plot", [args.data])
-    data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _input_output(args, data, names)
+    record = _input_output(args, _read(args, args.data))
     options = _method_options(args)
-    record = _record(args, u, y, _dt(args.dt, file_dt),
-                     _column_names(args, names, 1 + (1 if u.ndim == 1 else u.shape[1])))
     res, check, caught = _fit_and_check(args, record, options)
     _print_warnings(caught)
     _print_identified(args, res, check)
-    _print_order_test(args, res, u, y)
+    _print_order_test(args, res, record.u, record.y)
     _save_identified(args, res, check)
     return 0
 
@@ -801,11 +868,8 @@ def _fit_text(check):
 
 def _select(args):
     _check_select_args(args)
-    data, names, file_dt = read_table(args.data, _decimal(args))
-    u, y = _input_output(args, data, names)
+    record = _input_output(args, _read(args, args.data))
     candidates = _candidates(args)
-    record = _record(args, u, y, _dt(args.dt, file_dt),
-                     _column_names(args, names, 1 + (1 if u.ndim == 1 else u.shape[1])))
     sel, caught = _run_selection(args, record, candidates)
     from .exceptions import NothingSelectedWarning
 
@@ -922,7 +986,7 @@ def _load_model_or_result(path):
     return "model", model_from_dict(d, path=os.fspath(path))
 
 
-def _model_input(args, loaded, data, names):
+def _model_input(args, loaded, table):
     """The input columns of ``--column`` for the loaded model: one, or one per input.
 
     A result with several inputs takes as many columns, matched by the names it keeps when
@@ -939,10 +1003,10 @@ def _model_input(args, loaded, data, names):
     else:
         inputs = loaded.structure.inputs if hasattr(loaded, "structure") else ()
         n = max(1, len(inputs))
+    names = table.names
     spec = args.column
-    if spec is None:
-        spec = "0" if n == 1 else (",".join(inputs) if names and all(i in names for i in inputs)
-                                   else None)
+    if spec is None and inputs and names and all(i in names for i in inputs):
+        spec = ",".join(inputs)
     given = [p.strip() for p in spec.split(",")] if spec is not None else None
     if given is not None and len(given) != n and n > 1:
         example = ",".join(inputs) if inputs else ",".join(str(k) for k in range(n))
@@ -954,8 +1018,8 @@ def _model_input(args, loaded, data, names):
                          f"input(s): give {'one column' if n == 1 else 'one column per input'}.")
     if given is not None and n > 1 and sorted(given) == sorted(inputs):
         spec = ",".join(inputs)         # by the result's names, whatever the order given
-    columns = _pick_columns(data, names, spec, n, args.input, flag="--column", what="input")
-    return columns[0] if n == 1 else np.column_stack(columns)
+    idx = _column_indices(table, spec, n, args.input, flag="--column", what="input")
+    return table.data[:, idx[0]] if n == 1 else np.column_stack([table.data[:, j] for j in idx])
 
 
 def _simulate(args):
@@ -964,12 +1028,24 @@ def _simulate(args):
 
     import numpy as np
 
+    from .io.text import table_time
     from .model.initial import initial_state, simulate_from
     from .model.simulation import equation_noise, generic_model, own_dt, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
-    data, names, file_dt = read_table(args.input, _decimal(args))
+    table = _read(args, args.input)
+    t, file_dt, time_unit = table_time(table)
+    if t is not None:                   # instants: uniform ones say the sampling time
+        from .record import Record
+
+        grid = Record(u=t, y=t, t=t)
+        if not grid.uniform:
+            raise UsageError(f"{args.input}: the instants of its time column are not uniform; "
+                             "fohw simulate runs on a uniform grid: resample the input "
+                             "(fohw.model.irregular.resample), or simulate a fohw.Record with "
+                             "its instants in Python (fohw.simulate).")
+        file_dt = grid.dt
     other = generic_model(loaded)
     step = own_dt(loaded)
     if file_dt is not None and step is not None and abs(file_dt - step) > 1e-12 * file_dt:
@@ -978,7 +1054,7 @@ def _simulate(args):
     if other is not None and args.initial is not None:   # a model (or fit) of another kind
         raise UsageError(f"--initial is for the lagged HammersteinWiener kind; {args.model} "
                          f"holds a {type(other).__name__}, simulated from its own initial state.")
-    u = _model_input(args, loaded, data, names)
+    u = _model_input(args, loaded, table)
     if other is None and kind == "result" and args.initial is None \
             and loaded.structure.past == "estimate":
         raise UsageError(f"{args.model} was fitted with past='estimate': its levels (u_past, "
@@ -1004,7 +1080,7 @@ def _simulate(args):
     _stage(args, f"done in {_duration(time.perf_counter() - start)}")
     for w in caught:
         print(f"fohw: warning: {w.message}", file=sys.stderr)
-    text = "\n".join(repr(float(v)) for v in y) + "\n"
+    text = _output_table(args, loaded, y, t, file_dt, time_unit, table)
     if args.output:
         from .io.files import write_text
 
@@ -1014,18 +1090,122 @@ def _simulate(args):
     return int(not np.all(np.isfinite(y)))
 
 
+def _fit(args):
+    """``fohw fit``: :func:`fohw.fit` of a saved start model on a data file."""
+    import time
+    import warnings
+
+    from . import fit
+    from .model.base import Model
+    from .results import Status
+
+    _check_file_out(args.save, "--save", [args.data, args.model])
+    _check_plot_out(args.plot, "--plot", [args.data, args.model])
+    kind, loaded = _load_model_or_result(args.model)
+    start = loaded if kind == "model" else getattr(loaded, "model", None)
+    if not isinstance(start, Model):
+        raise UsageError(f"{args.model} holds no model to start from.")
+    table = _read(args, args.data)
+    n_in = start.n_inputs
+    record = _table_record(args, table, _column_indices(table, args.columns, n_in + 1,
+                                                        args.data), args.data)
+    options = {name: getattr(args, name) for name in ("order_grid", "n_starts", "max_nfev",
+                                                      "warmup")
+               if getattr(args, name) is not None}
+    began = time.perf_counter()
+    _stage(args, f"fitting a {type(start).__name__} on {record.n_samples} samples ...")
+    with warnings.catch_warnings(record=True) as caught:
+        for category in _fohw_warnings():
+            warnings.simplefilter("always", category)
+        res = fit(start, record, **options)
+    _stage(args, f"done in {_duration(time.perf_counter() - began)}")
+    _print_warnings(caught)
+    if args.json:
+        se = res.standard_errors() if res.covariance is not None else {}
+        ci = res.confidence_intervals() if res.covariance is not None else {}
+        print(json.dumps({
+            "kind": type(res.model).__name__, "status": res.status.name, "message": res.message,
+            "estimates": {n: res.parameters[n].value for n in res.parameters},
+            "free": list(res.free_names), "standard_errors": se or None,
+            "confidence_intervals_95": {n: list(v) for n, v in ci.items()} or None,
+            "sse": res.sse, "rmse": res.rmse, "n_samples": res.n_samples,
+            "data": dict(res.data)}, indent=1, default=_json_default))
+    else:
+        print(res.summary())
+    if res.status == Status.FAILED:
+        raise UsageError(f"the fit FAILED ({res.message.rstrip('.')}); nothing was saved or "
+                         "plotted.")
+    if args.save:
+        from .io.jsonio import save_result
+
+        save_result(res, args.save)
+    if args.plot:
+        from .analysis.validation import compare
+
+        fig = compare(res, record).plot()
+        fig.suptitle(f"fohw fit: {type(res.model).__name__} on {os.path.basename(args.data)}",
+                     fontsize=10)
+        save_figure(fig, args.plot, dpi=120)
+    return 0
+
+
+def _json_default(obj):
+    """JSON of what ``json`` does not know (numpy scalars and arrays, tuples of a result)."""
+    import numpy as np
+
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return str(obj)
+
+
+def _output_table(args, loaded, y, t, dt, time_unit, table):
+    """The simulated output as CSV (:func:`fohw.io.text.format_table`).
+
+    ``#`` comments, a header, the time column (when the input gives the time) and the output,
+    with units.
+    """
+    import numpy as np
+
+    from .io.text import format_table
+
+    data = getattr(loaded, "data", None)
+    data = data if isinstance(data, dict) else {}
+    out_name = data.get("output_name") or "y"
+    out_unit = data.get("output_unit") or ""
+    names = table.names or []
+    time_name = names[table.time_column] if table.time_column is not None and names else "t"
+    if out_name == time_name or out_name in names:
+        out_name = f"{out_name}_simulated"
+    columns, units = {}, {}
+    if t is not None:                   # the input's own instants
+        columns[time_name] = t
+    elif dt is not None:                # the time of each sample
+        columns[time_name] = np.arange(y.size) * dt
+    if columns and time_unit:
+        units[time_name] = time_unit
+    columns[out_name] = y
+    if out_unit:
+        units[out_name] = out_unit
+    what = "the simulated output" + (f" and the time ({time_name})" if len(columns) > 1 else
+                                     " (the input gives no time: one row per sample)")
+    return format_table(columns, dt=dt, time_unit=time_unit, units=units,
+                        comments=[f"fohw simulate --model {os.path.basename(str(args.model))} "
+                                  f"--input {os.path.basename(str(args.input))}: {what}"])
+
+
 def _compare(args):
     import warnings
 
     from .analysis.validation import compare
 
     _check_plot_out(args.plot, "--plot", [args.data, args.model])
-    import numpy as np
 
     from .model.simulation import generic_model
 
     _, loaded = _load_model_or_result(args.model)
-    data, names, file_dt = read_table(args.data, _decimal(args))
+    table = _read(args, args.data)
     other = generic_model(loaded)
     if other is not None:                   # a model (or fit) of any kind: its inputs, then y
         if args.initial is not None:
@@ -1035,9 +1215,9 @@ def _compare(args):
         n_in = other.n_inputs
     else:
         n_in = loaded.structure.n_inputs if hasattr(loaded, "structure") else 1
-    *inputs, y = _pick_columns(data, names, args.columns, n_in + 1, args.data)
-    u = inputs[0] if n_in == 1 else np.column_stack(inputs)
-    record = _record(args, u, y, file_dt, _column_names(args, names, n_in + 1))
+    record = _table_record(args, table, _column_indices(table, args.columns, n_in + 1,
+                                                        args.data), args.data)
+    u = record.u
     _stage(args, f"scoring on {u.shape[0]} samples ...")
     with warnings.catch_warnings(record=True) as caught:
         for category in _fohw_warnings():
@@ -1185,7 +1365,7 @@ def _run(argv):
         parser.print_help()
         return 0
     handler = {"identify": _identify, "select": _select, "simulate": _simulate,
-               "compare": _compare, "data": _data, "reproduce": _reproduce}
+               "compare": _compare, "fit": _fit, "data": _data, "reproduce": _reproduce}
     try:
         return handler[args.command](args)
     except (UsageError, FohwError, FileNotFoundError) as exc:

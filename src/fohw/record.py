@@ -7,7 +7,7 @@ mean, and splitting it into estimation and validation parts keeps that meaning.
 from __future__ import annotations
 
 import numbers
-from collections.abc import Mapping
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -16,7 +16,7 @@ from ._validation import check_array, check_same_length, check_scalar
 from .exceptions import DimensionError, ParameterError
 
 __all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "describe_data",
-           "check_sampling",
+           "check_sampling", "time_column", "time_columns", "first_disorder", "TIME_UNITS",
            "UNIFORM_RTOL"]
 
 
@@ -27,6 +27,45 @@ __all__ = ["Record", "Benchmark", "as_records", "record_data", "record_info", "d
 UNIFORM_RTOL = 1e-6
 
 INTERSAMPLE = ("zoh", "foh")
+
+#: Time units a time column's name or a ``# dt:`` comment may give, in seconds.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "ns": 1e-9,
+              "min": 60.0, "h": 3600.0}
+
+_TIME_NAME = re.compile(r"^\s*(?:t|time|timestamp|time_stamp|datetime|date_time|date)"
+                        r"(?:\s*\[(?P<a>[^\]]*)\]|\s*\((?P<b>[^)]*)\)|_(?P<c>s|sec|ms|us|ns|min|h))?"
+                        r"\s*$", re.IGNORECASE)
+
+
+def time_column(name):
+    """``(True, unit)`` if a column called ``name`` holds the time, else ``(False, "")``.
+
+    The names a reader takes as the time without being told: ``t``, ``time``, ``timestamp``,
+    ``time_stamp``, ``datetime``, ``date_time`` and ``date``, in any case, alone or with a unit:
+    ``time_s``, ``Time [s]``, ``t (ms)``.
+
+    Examples
+    --------
+    >>> from fohw.record import time_column
+    >>> time_column("time_s"), time_column("Time [ms]"), time_column("t"), time_column("ts")
+    ((True, 's'), (True, 'ms'), (True, ''), (False, ''))
+    """
+    match = _TIME_NAME.match(name) if isinstance(name, str) else None
+    if match is None:
+        return False, ""
+    return True, (match.group("a") or match.group("b") or match.group("c") or "").strip()
+
+
+def time_columns(names):
+    """The positions of the names in ``names`` that :func:`time_column` takes as the time."""
+    return [j for j, n in enumerate(names or []) if time_column(n)[0]]
+
+
+def first_disorder(t):
+    """The first ``k`` with ``t[k + 1] <= t[k]`` (instants not strictly increasing), or None."""
+    steps = np.diff(np.asarray(t, dtype=float))
+    bad = np.flatnonzero(~(steps > 0))
+    return int(bad[0]) if bad.size else None
 
 
 def _names(value, m, what):
@@ -269,9 +308,13 @@ class Record:
         y : str
             The output column.
         time : str, optional
-            A column of sampling instants (numbers). Default: the index if it is a
-            :class:`~pandas.DatetimeIndex` or :class:`~pandas.TimedeltaIndex` (instants in
-            seconds from the first, ``time_unit`` "s"), else none (give ``dt``).
+            A column of sampling instants: numbers (in the unit its name gives, ``time_s`` or
+            ``Time [ms]``), or date/times or time deltas (seconds from the first, ``time_unit``
+            "s"). Default: the index if it is a :class:`~pandas.DatetimeIndex` or
+            :class:`~pandas.TimedeltaIndex` (the same), else, without ``dt``, the one column
+            named as time (``t``, ``time``, ``time_s``, ... as :func:`fohw.read_record` finds
+            it) that is not ``u`` or ``y``, else none. Instants must increase strictly (the
+            error names the rows).
         dt : float, optional
             The sampling time, where no time column or time index gives the instants.
         units : mapping, optional
@@ -286,10 +329,13 @@ class Record:
             named twice in the frame or given twice (the output also an input); ``units`` is not
             a mapping; the time index holds a missing instant (``NaT``).
         """
-        if not all(hasattr(frame, a) for a in ("columns", "index", "to_numpy")):
-            raise ParameterError(f"`frame` must be a pandas DataFrame; got {type(frame).__name__} "
-                                 "(a dict of columns: pass pandas.DataFrame(frame), or build "
-                                 "fohw.Record(u=..., y=..., dt=...) from the arrays).")
+        if not (hasattr(frame, "columns") and hasattr(frame, "index")):
+            raise ParameterError(f"`frame` must be a pandas DataFrame; got "
+                                 f"{type(frame).__name__} (pandas.DataFrame(frame) makes one; "
+                                 "fohw.Record(u=..., y=...) takes arrays).")
+        if units is not None and not hasattr(units, "items"):
+            raise ParameterError("`units` must map each column to its unit, e.g. "
+                                 f"{{'i': 'A', 'v': 'V'}}; got {type(units).__name__}.")
         columns = [u] if isinstance(u, str) else list(u)
         named = columns + [y] + ([] if time is None else [time])
         for col in named:
@@ -297,35 +343,34 @@ class Record:
                 raise ParameterError(f"{col!r} is not a column of the DataFrame (columns: "
                                      f"{', '.join(map(str, frame.columns))}).")
             if list(frame.columns).count(col) > 1:
-                raise ParameterError(f"the DataFrame has {list(frame.columns).count(col)} columns "
-                                     f"named {col!r}; name its columns uniquely (the record's "
-                                     "channels are taken by name).")
+                raise ParameterError(f"the DataFrame has {list(frame.columns).count(col)} "
+                                     f"columns named {col!r}; a name must say which column it "
+                                     "is: rename one.")
+        if y in columns:
+            raise ParameterError(f"`u` and `y` name the same column ({y!r}): the input and the "
+                                 "output are different columns.")
         for col in named:
             if named.count(col) > 1:
-                what = (f"`y` = {y!r} is also an input column (in `u`)" if col == y and col in columns
-                        else f"the column {col!r} is given twice among `u`, `y` and `time`")
-                raise ParameterError(f"{what}: the inputs, the output and the time are distinct "
+                raise ParameterError(f"the column {col!r} is given twice among `u`, `y` and "
+                                     "`time`: the inputs, the output and the time are distinct "
                                      "columns.")
-        if units is not None and not isinstance(units, Mapping):
-            raise ParameterError(f"`units` must be a mapping column -> unit (e.g. "
-                                 f"{{{columns[0]!r}: 'A', {y!r}: 'V'}}); got {units!r}.")
         units = dict(units or {})
+        index = frame.index
+        kind = getattr(index, "inferred_type", "")
+        dated = kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
+            str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64"))
+        if time is None and dt is None and not dated:
+            found = [c for c in frame.columns if isinstance(c, str) and time_column(c)[0]
+                     and c not in columns + [y]]
+            time = found[0] if len(found) == 1 else None
         t = None
         if time is not None:
-            t = check_array(frame[time].to_numpy(), f"frame[{time!r}]")
-        else:
-            index = frame.index
-            kind = getattr(index, "inferred_type", "")
-            if kind in ("datetime64", "timedelta64", "datetime", "timedelta") or \
-                    str(getattr(index, "dtype", "")).startswith(("datetime64", "timedelta64")):
-                missing = np.flatnonzero(np.asarray(index.isna()))
-                if missing.size:
-                    raise ParameterError(f"the DataFrame's time index holds a missing instant "
-                                         f"(NaT) at row {int(missing[0])} of {len(index)}; drop "
-                                         "or fill those rows (or give `dt`).")
-                delta = np.asarray(index - index[0]).astype("timedelta64[ns]").astype(np.int64)
-                t = delta / 1e9
-                kwargs.setdefault("time_unit", "s")
+            t = _instants(frame[time], f"frame[{time!r}]", frame.index, kwargs)
+            unit = time_column(time)[1] if isinstance(time, str) else ""
+            if unit or time in units:
+                kwargs.setdefault("time_unit", unit or units[time])
+        elif dated:
+            t = _instants(index, "the index", index, kwargs)
         if t is not None and dt is not None:
             raise ParameterError("give `dt` or a time column/index, not both.")
         uu = frame[columns].to_numpy(dtype=float)
@@ -374,6 +419,40 @@ class Record:
             dt = "unknown" if self.dt is None else f"{self.dt:g}{unit}"
         return (f"Record({self.name!r}, n_samples={self.n_samples}, dt={dt}, "
                 f"{self._signal('u')}, {self._signal('y')})")
+
+
+def _instants(values, what, labels, kwargs):
+    """Instants of a time column or index, strictly increasing; a gap (NaT, NaN) named by its row.
+
+    Numbers as they are; date/times or time deltas in seconds from the first (``time_unit`` "s").
+    """
+    dtype = str(getattr(values, "dtype", ""))
+    if dtype.startswith(("datetime64", "timedelta64")):
+        raw = np.asarray(values)
+        missing = np.flatnonzero(np.isnat(raw))
+        if missing.size:
+            k = int(missing[0])
+            row = "" if labels is values else f" (row {labels[k]!r})"
+            raise ParameterError(f"{what} holds no time (NaT) at position {k}{row}; fohw fills "
+                                 "no gaps: drop the row or give its time.")
+        t = (raw - raw[0]).astype("timedelta64[ns]").astype(np.int64) / 1e9
+        kwargs.setdefault("time_unit", "s")
+    else:
+        try:
+            t = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{what} must hold numbers, date/times or time deltas; got "
+                                 f"dtype {dtype}.") from None
+        bad = np.flatnonzero(~np.isfinite(t))
+        if bad.size:
+            raise ParameterError(f"{what} holds {t[bad[0]]!r} at row {labels[bad[0]]!r}; fohw "
+                                 "fills no gaps: drop the row or give its time.")
+    k = first_disorder(t)
+    if k is not None:
+        how = "repeats the instant of" if t[k + 1] == t[k] else "goes back from"
+        raise ParameterError(f"{what} must increase strictly: row {labels[k + 1]!r} {how} row "
+                             f"{labels[k]!r} ({float(t[k])!r} -> {float(t[k + 1])!r}).")
+    return t
 
 
 def as_records(data, y=None, *, what="data"):

@@ -131,19 +131,20 @@ class Validation:
     def __repr__(self):
         free = (f"fit {self.fit_simulation:.1f} %, RMSE {self.rmse_simulation:.4g}"
                 if self.simulated is not None else self.status)
-        return (f"Validation(N={self.y.size}, free run: {free}; one step: fit "
-                f"{self.fit_prediction:.1f} %, RMSE {self.rmse_prediction:.4g}; "
-                f"status={self.status!r})")
+        one = (f"; one step: fit {self.fit_prediction:.1f} %, RMSE {self.rmse_prediction:.4g}"
+               if self.predicted is not None else "")     # an output-error kind: none
+        return f"Validation(N={self.y.size}, free run: {free}{one}; status={self.status!r})"
 
     def _repr_html_(self):
         from .._repr import html_table
 
         ok = self.simulated is not None
         rows = [("free-run simulation", f"{self.fit_simulation:.1f}" if ok else self.status,
-                 f"{self.rmse_simulation:.4g}" if ok else self.status),
-                ("one-step prediction", f"{self.fit_prediction:.1f}",
-                 f"{self.rmse_prediction:.4g}")]                # as to_markdown() writes them
-        notes = [line for line in self.to_markdown().splitlines()[5:] if line]
+                 f"{self.rmse_simulation:.4g}" if ok else self.status)]
+        if self.predicted is not None:          # as to_markdown() writes them: no NaN row
+            rows.append(("one-step prediction", f"{self.fit_prediction:.1f}",
+                         f"{self.rmse_prediction:.4g}"))
+        notes = [line for line in self.to_markdown().split("\n\n", 1)[1].splitlines() if line]
         return html_table(f"Validation on {self.y.size} samples"
                           + (f" ({self.n_init} start-up samples left out)" if self.n_init else ""),
                           ["", "fit %", "RMSE"], rows, notes=notes)
@@ -170,7 +171,8 @@ class Validation:
         for name, t in (("whiteness", self.whiteness), ("input cross-correlation",
                                                          self.cross_correlation)):
             if t is not None:
-                out.append(f"One-step residual {name}: p = {t.p_value:.3g} "
+                out.append(f"{'One-step' if self.predicted is not None else 'Free-run'} "
+                           f"residual {name}: p = {t.p_value:.3g} "
                            f"({'passed' if t.passed else 'rejected'} at {t.dof} lags).")
         out.extend(f"Note: {n}" for n in self.notes)
         return "\n".join(out) + "\n"
@@ -546,7 +548,8 @@ def _compare_model(model, u, y, *, initial, n_init, max_lag, confidence, envelop
     Its one-step prediction is its free run (the noise is on the output), so the free run is
     scored and the residual tests are of its errors; ``initial`` goes to ``model.simulate``.
     """
-    kind = getattr(model, "kind_name", type(model).__name__)
+    kind = getattr(model, "kind_name", None)      # a Model's is a classmethod (a registry name)
+    kind = kind if isinstance(kind, str) else type(model).__name__
     if _is_estimate(initial):
         raise ParameterError(f"initial={initial!r} (the record's initial state fitted to its "
                              f"output) is for the lagged HammersteinWiener kind; a {kind} "

@@ -234,8 +234,9 @@ def _run(u, y, *, method, options, executor, progress, dt, inputs, **model):
         if not rec.uniform:
             raise ParameterError(
                 f"the record{f' {rec.name!r}' if rec.name else ''} has non-uniform time stamps; "
-                "the lagged kind runs on a uniform grid: resample it (e.g. numpy.interp at "
-                "t[0] + k*dt), or fit a kind that simulates on time stamps with fohw.fit.")
+                "the lagged kind runs on a uniform grid: resample it with "
+                "fohw.model.irregular.resample(rec.t, rec.u, rec.y, dt=...), or fit a kind that "
+                "simulates on time stamps with fohw.fit.")
         if rec.dt is not None:
             if dt is not None:
                 check_sampling(records, float(dt), what="`dt`")

@@ -39,15 +39,17 @@ import io
 import os
 from array import array
 from dataclasses import dataclass, field
+from datetime import datetime
 from typing import BinaryIO, TextIO
 
 import numpy as np
 
 from ..exceptions import DataFileError, ParameterError
-from ..record import Record
+from ..record import TIME_UNITS, UNIFORM_RTOL, Record, first_disorder, time_column, time_columns
 from .files import check_input_file
 
-__all__ = ["Table", "read_table", "read_record", "format_table"]
+__all__ = ["Table", "read_table", "read_record", "format_table", "record_from_table",
+           "table_time", "signal_columns"]
 
 #: Names of a column given once that :func:`read_record` takes as the sampling time.
 SAMPLING_TIME_NAMES = ("ts", "dt", "sampling_time", "sample_time")
@@ -71,7 +73,16 @@ class Table:
         separator.
     meta : dict
         What the header comments above the data say: ``dt`` and ``time_unit`` (from
-        ``# dt: 4 s``), ``units`` (``{column name: unit}``, from ``# units: u=V, y=A``).
+        ``# dt: 4 s``, on line ``dt_line``), ``units`` (``{column name: unit}``, from
+        ``# units: u=V, y=A`` on line ``units_line``); ``time_origin``, the first date/time of
+        a time column that holds them (its values are seconds from it).
+    header_line : int
+        The line of the header (0: none).
+    time_column : int or None
+        The column (of ``data``) that holds the time: the one given, else the one the header
+        names as time (:func:`fohw.record.time_column`); None without one.
+    time_unit : str
+        Its unit (from its name, ``# units:``, or ``"s"`` for date/times).
     """
 
     data: np.ndarray
@@ -80,6 +91,27 @@ class Table:
     path: str = ""
     skipped: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
+    header_line: int = 0
+    time_column: int | None = None
+    time_unit: str = ""
+    source: object = field(default=None, repr=False, compare=False)
+
+    def line_of(self, row):
+        """The line number (from 1) of data row ``row`` (from 0) in the file, for messages."""
+        if self.source is None:
+            return None
+        k = -1
+        with self.source.open() as fh:
+            for lineno, raw in _lines(fh):
+                if lineno <= self.header_line:
+                    continue
+                text = raw.decode("utf-8", "replace").strip()
+                if not text or text[0] in "#%":
+                    continue
+                k += 1
+                if k == row:
+                    return lineno
+        return None
 
 
 #: Header comments ``# key: value`` that :func:`read_table` reads into ``Table.meta``.
@@ -100,6 +132,7 @@ def _header_comments(src):
             key, value = key.strip().lower(), value.strip()
             if not colon or key not in HEADER_KEYS:
                 continue
+            meta[f"{key}_line"] = lineno
             if key == "dt":
                 number, _, unit = value.partition(" ")
                 try:
@@ -253,7 +286,7 @@ class _Source:
             return fh.read(1)
 
 
-def read_table(path, *, decimal=".") -> Table:
+def read_table(path, *, decimal=".", time=None) -> Table:
     """Parse a numeric text table (see the module notes for what is accepted).
 
     Parameters
@@ -264,6 +297,11 @@ def read_table(path, *, decimal=".") -> Table:
     decimal : {".", ","}
         The decimal mark. With ``","`` (``0,5`` for one half) the columns must be separated by
         ``;`` or whitespace.
+    time : str, int or False, optional
+        The column that holds the time (header name or number); it may hold numbers or ISO
+        8601 date/times (``2024-01-01T00:00:00.5``, read as seconds from the first). Default:
+        the column the header names as time (``t``, ``time``, ``time_s``, ``Time [s]``, ...:
+        :func:`fohw.record.time_column`), if exactly one does; ``False``: none.
 
     Returns
     -------
@@ -283,7 +321,9 @@ def read_table(path, *, decimal=".") -> Table:
         named by line and column, a row with more or fewer fields than the others, a second
         header line, a header naming a column twice, a header separated by commas while
         ``decimal=","``, a non-finite value, no data, or a file that changed while it was read
-        or whose last line has no line end (it may have been cut).
+        or whose last line has no line end (it may have been cut); a ``# units:`` comment
+        naming a column the file does not have; two columns named as time with ``time`` not
+        given; date/times mixed with numbers, or with and without a time zone.
 
     Notes
     -----
@@ -295,6 +335,10 @@ def read_table(path, *, decimal=".") -> Table:
     """
     if decimal not in (".", ","):
         raise ParameterError(f"`decimal` must be '.' or ','; got {decimal!r}.")
+    if not (time is None or time is False or isinstance(time, str) or
+            (isinstance(time, (int, np.integer)) and not isinstance(time, bool))):
+        raise ParameterError(f"`t` must be a column name or number, or False (no time column); "
+                             f"got {time!r}.")
     src = _Source(path)
     if src.path is not None:
         check_input_file(src.path, "a data file")
@@ -308,8 +352,8 @@ def read_table(path, *, decimal=".") -> Table:
                                 "its last line with a newline.")
         table = _read_fast(src, decimal)
         if table is None:
-            table = _read_lines(src, decimal)
-        table.meta = _header_comments(src)
+            table = _read_lines(src, decimal, time)
+        table.meta.update(_header_comments(src))
         after = src.snapshot()
     except OSError as exc:
         raise DataFileError(f"{src.name}: cannot be read ({exc.strerror or exc}).") from None
@@ -319,7 +363,55 @@ def read_table(path, *, decimal=".") -> Table:
                             f"{'changed' if before[1] != after[1] else 'unchanged'}); fohw does "
                             "not use a record that may be incomplete: read it again once it is "
                             "complete.")
+    table.source = src
+    _check_units(table)
+    _resolve_time(table, time)
     return table
+
+
+def _check_units(table):
+    """A ``# units:`` comment names columns of the file only (never dropped silently)."""
+    units = table.meta.get("units", {})
+    known = set(table.names or []) | {k for k in table.scalars if isinstance(k, str)}
+    unknown = [k for k in units if k not in known]
+    if unknown:
+        have = ", ".join(n for n in (table.names or []) if n) or \
+            "the file has no header naming its columns"
+        raise DataFileError(f"{table.path}: line {table.meta.get('units_line')}: `# units:` "
+                            f"names {', '.join(map(repr, unknown))}, which "
+                            f"{'is' if len(unknown) == 1 else 'are'} not a column ({have}); a "
+                            "unit must belong to a column: correct the name or remove it.")
+
+
+def _resolve_time(table, spec):
+    """``table.time_column`` and ``table.time_unit`` from ``spec`` or the header's names."""
+    names = table.names or []
+    if spec is False:
+        return
+    if spec is None:
+        found = time_columns(names)
+        if not found:
+            return
+        if len(found) > 1:
+            raise DataFileError(f"{table.path}: {len(found)} columns could be the time "
+                                f"({', '.join(names[j] for j in found)}): say which with t=... "
+                                "(fohw: --time NAME), or t=False (--time none) for none.")
+        j = found[0]
+    else:
+        j = _column(table, spec, "t")
+    name = names[j] if names else None
+    unit = time_column(name)[1] if name is not None else ""
+    listed = table.meta.get("units", {}).get(name, "") if name is not None else ""
+    if unit and listed and unit != listed:
+        raise DataFileError(f"{table.path}: the time column {name!r} says its unit is {unit!r} "
+                            f"but `# units:` (line {table.meta.get('units_line')}) says "
+                            f"{listed!r}; which one holds? Correct the file.")
+    if "time_origin" in table.meta:
+        if (unit or listed) not in ("", "s"):
+            raise DataFileError(f"{table.path}: the time column {name!r} holds date/times, read "
+                                f"as seconds, but its unit is given as {unit or listed!r}.")
+        unit = "s"
+    table.time_column, table.time_unit = j, unit or listed
 
 
 def _lines(fh):
@@ -413,7 +505,8 @@ def _read_fast(src, decimal):
     skipped = [_header_note(header_line, names)] if names else []
     if header_line > 1:
         skipped.append(f"{header_line - 1} comment or blank line(s)")
-    return Table(data=data, names=names, scalars={}, path=src.name, skipped=skipped)
+    return Table(data=data, names=names, scalars={}, path=src.name, skipped=skipped,
+                 header_line=header_line)
 
 
 def _field_error(path, lineno, value, column, decimal):
@@ -444,14 +537,14 @@ def _count_error(path, lineno, n, width, where, delimiter, decimal):
                          f"{hint}")
 
 
-def _read_lines(src, decimal):
+def _read_lines(src, decimal, time=None):
     """The line-by-line reader: any layout the module notes allow, and every error by line.
 
     It streams the file and keeps the numbers (one array of floats per column), never the
     lines, so a 5-million-row file with one bad line costs the numbers' memory, not the text's.
     """
     src = _Source(src)
-    rows = _Rows(src, decimal)
+    rows = _Rows(src, decimal, time)
     with src.open() as fh:
         for lineno, raw in _lines(fh):
             text = _decode(src, lineno, raw).strip()
@@ -477,8 +570,9 @@ class _Rows:
     error (if any) is the earliest certain one.
     """
 
-    def __init__(self, src, decimal):
-        self.src, self.decimal = src, decimal
+    def __init__(self, src, decimal, time=None):
+        self.src, self.decimal, self.time = src, decimal, time
+        self.time_col, self.origin, self.origin_line = None, None, 0
         self.names, self.header_line, self.delimiter, self.n_comments = None, 0, "unset", 0
         self.width, self.first_line, self.first, self.cols = None, 0, [], []
         self.where = ""
@@ -530,6 +624,7 @@ class _Rows:
         self.width = max(len(fields), len(names) if names is not None else 0)
         self.where = (f"the header on line {self.header_line}" if names is not None
                       and len(names) >= len(fields) else f"line {lineno} (the first data line)")
+        self.time_col = _raw_time_column(names, self.time)
         self.first_line = lineno
         self.cols = [array("d") for _ in range(self.width)]
 
@@ -546,6 +641,8 @@ class _Rows:
             self.cols[j].append(np.nan)
             return
         x = parse_number(_decimal(cell, self.decimal))
+        if j == self.time_col and (x is None or self.origin is not None):
+            x = self.instant(lineno, cell, j, x)
         if x is None or not np.isfinite(x):
             error = self.value_error(lineno, cell, j, x)
             if self.n_rows == 0:
@@ -556,10 +653,44 @@ class _Rows:
             self.later.add(j)
         self.cols[j].append(x)
 
+    def instant(self, lineno, cell, j, x):
+        """A cell of the time column: seconds from its first date/time (ISO 8601), or None.
+
+        A column holds numbers or date/times, not both; and date/times all with a time zone or
+        all without.
+        """
+        label = self.names[j] if self.names is not None and j < len(self.names) else j
+        if x is not None:                       # a number below date/times
+            raise DataFileError(f"{self.src.name}: line {lineno}: the time column {label!r} "
+                                f"holds the number {cell!r}, but date/times from line "
+                                f"{self.origin_line} on; write one or the other.")
+        try:
+            stamp = datetime.fromisoformat(cell)
+        except ValueError:
+            return None
+        if self.origin is None:
+            if self.n_rows > 0:
+                raise DataFileError(f"{self.src.name}: line {lineno}: the time column {label!r} "
+                                    f"holds the date/time {cell!r}, but numbers above it; write "
+                                    "one or the other.")
+            self.origin, self.origin_line = stamp, lineno
+        try:
+            return (stamp - self.origin).total_seconds()
+        except TypeError:
+            raise DataFileError(f"{self.src.name}: line {lineno}: the date/time {cell!r} "
+                                f"{'has a' if stamp.tzinfo else 'has no'} time zone, but the "
+                                f"first (line {self.origin_line}) "
+                                f"{'has none' if stamp.tzinfo else 'has one'}; write all with "
+                                "or all without a time zone.") from None
+
     def value_error(self, lineno, cell, j, x):
         """The error of a cell that is not a number (``x`` None) or not finite."""
         names = self.names
         label = names[j] if names is not None and j < len(names) and names[j] else j
+        if x is None and j == self.time_col and cell.strip().lower() not in MISSING:
+            return DataFileError(f"{self.src.name}: line {lineno}: {cell!r} is neither a number "
+                                 f"nor an ISO 8601 date/time (column {label!r}, the time); write "
+                                 "e.g. 12.5 or 2024-01-01T00:00:12.5.")
         if x is None:
             return _field_error(self.src.name, lineno, cell, label, self.decimal)
         return DataFileError(f"{self.src.name}: line {lineno} holds a non-finite value: "
@@ -588,8 +719,10 @@ class _Rows:
                for j in range(width)):
             skipped.append("a trailing separator")
         data = np.column_stack(columns) if columns else np.empty((n_rows, 0))
+        meta = {"time_origin": self.origin.isoformat()} if self.origin is not None else {}
         return Table(data=data, names=col_names if names is not None else None,
-                     scalars=scalars, path=src.name, skipped=skipped)
+                     scalars=scalars, path=src.name, skipped=skipped, meta=meta,
+                     header_line=self.header_line)
 
     def columns(self, padded):
         """``(signal columns, their names, values given once)``.
@@ -610,6 +743,18 @@ class _Rows:
             columns.append(np.frombuffer(self.cols[j], dtype=np.float64))
             col_names.append(name)
         return columns, col_names, scalars
+
+
+def _raw_time_column(names, spec):
+    """The position on a line of the time column (where date/times are read), or None."""
+    if spec is False:
+        return None
+    if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
+        return int(spec)
+    if isinstance(spec, str):
+        return names.index(spec) if names is not None and spec in names else None
+    found = time_columns(names)
+    return found[0] if len(found) == 1 else None
 
 
 def _first_empty_error(src, names, empty, later, first_line, first, decimal, where, width,
@@ -742,8 +887,208 @@ def _column(table, spec, what):
                          f"{type(spec).__name__}.")
 
 
-def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | int | None = None,
-                y: str | int | None = None, *, dt: float | str | None = None,
+def _file_dt(table):
+    """``(dt, what says it, its unit)`` of the sampling time the file gives, or Nones."""
+    dt = sampling_time(table)
+    if dt is None:
+        return None, None, ""
+    found = [k for k in table.scalars if isinstance(k, str) and k.lower() in SAMPLING_TIME_NAMES]
+    if found:
+        return dt, f"the column {found[0]!r}", ""
+    unit = table.meta.get("time_unit", "")
+    return (dt, f"`# dt: {dt:g}{' ' + unit if unit else ''}` (line {table.meta.get('dt_line')})",
+            unit)
+
+
+def _time_factor(unit, column_unit, what, table):
+    """The factor from ``unit`` to the time column's unit (1 where either is not given)."""
+    if not unit or not column_unit or unit == column_unit:
+        return 1.0
+    if unit in TIME_UNITS and column_unit in TIME_UNITS:
+        return TIME_UNITS[unit] / TIME_UNITS[column_unit]
+    raise DataFileError(f"{table.path}: {what} is in {unit!r} but the time column in "
+                        f"{column_unit!r}; fohw cannot compare them: give both in one unit.")
+
+
+def table_time(table, dt=None):
+    """The sampling of a table: ``(t, dt, time_unit)``, checked.
+
+    With a time column (:attr:`Table.time_column`): its instants ``t`` (``dt`` None), strictly
+    increasing, and on the grid of any sampling time also given (``dt``, a ``Ts`` column, a
+    ``# dt:`` comment). Without one: ``t`` None and the sampling time given or in the file.
+
+    Parameters
+    ----------
+    table : Table
+    dt : float, optional
+        A sampling time given by the caller (in the time column's unit).
+
+    Returns
+    -------
+    t : ndarray or None
+    dt : float or None
+    time_unit : str
+
+    Raises
+    ------
+    DataFileError
+        Instants that go back or repeat (naming both lines), or that do not step as a sampling
+        time also given says (naming it and the first line where they part).
+    """
+    file_dt, what, file_unit = _file_dt(table)
+    j = table.time_column
+    if j is None:
+        if dt is not None:
+            return None, dt, ""
+        return None, file_dt, file_unit
+    t = table.data[:, j]
+    name = table.names[j] if table.names else f"column {j}"
+    unit = table.time_unit or file_unit
+    if t.size < 2:
+        raise DataFileError(f"{table.path}: the time column {name!r} has one row; instants need "
+                            "two rows to say a sampling time.")
+    k = first_disorder(t)
+    if k is not None:
+        a, b = table.line_of(k), table.line_of(k + 1)
+        t = t.tolist()
+        if t[k + 1] == t[k]:
+            raise DataFileError(f"{table.path}: line {b} repeats the instant {t[k]!r} of line {a} "
+                                f"(time column {name!r}); instants must increase strictly: "
+                                "remove the repeated row.")
+        raise DataFileError(f"{table.path}: line {b}: the time column {name!r} goes back from "
+                            f"{t[k]!r} (line {a}) to {t[k + 1]!r}; instants must increase "
+                            "strictly (rows out of order?).")
+    claims = ([(float(dt), f"`dt` = {dt!r}", "")] if dt is not None else []) + \
+        ([(file_dt, what, file_unit)] if file_dt is not None else [])
+    for step, said, step_unit in claims:
+        h = step * _time_factor(step_unit, table.time_unit, said, table)
+        grid = t[0] + h * np.arange(t.size)
+        slack = UNIFORM_RTOL * h + 4 * np.finfo(float).eps * float(np.max(np.abs(t)))
+        off = np.flatnonzero(np.abs(t - grid) > slack)
+        if off.size:
+            k = max(int(off[0]), 1)
+            u = f" {unit}" if unit else ""
+            raise DataFileError(
+                f"{table.path}: line {table.line_of(k)}: the time column {name!r} steps "
+                f"{t[k] - t[k - 1]:g}{u} from line {table.line_of(k - 1)}, but {said} says "
+                f"{h:g}{u}; which one holds? Correct the file, or read it with t=False "
+                "(fohw: --time none) to use the sampling time alone.")
+    return t, None, unit
+
+
+def signal_columns(table, spec, count, what="u and y"):
+    """Column indices of ``table`` for ``spec`` (names or numbers), or by default.
+
+    Parameters
+    ----------
+    table : Table
+    spec : sequence of (int or str), or None
+        The columns, by header name or number (counting signal columns from 0).
+    count : int
+        How many columns are needed (inputs, then the output).
+    what : str
+        How the messages call the argument.
+
+    Returns
+    -------
+    list of int
+
+    Notes
+    -----
+    Without ``spec``: the columns named ``u`` and ``y`` (one input and the output), else the
+    signal columns other than the time column when there are exactly ``count`` of them; with
+    more, fohw does not guess. The time column is never a signal.
+    """
+    names = table.names or []
+    others = [j for j in range(table.data.shape[1]) if j != table.time_column]
+    if spec is None:
+        lower = [n.lower() for n in names]
+        if count == 2 and "u" in lower and "y" in lower:
+            return [lower.index("u"), lower.index("y")]
+        if len(others) == count:
+            return others
+        have = ", ".join(names[j] if names else str(j) for j in others) or "none"
+        time = (f", besides the time column {names[table.time_column]!r}" if names and
+                table.time_column is not None else "")
+        raise ParameterError(f"{table.path} has {len(others)} signal column"
+                             f"{'' if len(others) == 1 else 's'} ({have}{time}) "
+                             f"and {count} are needed: say which is the input and which the "
+                             f"output with {what} (numbers from 0 or header names); fohw does "
+                             "not guess.")
+    idx = [_column(table, s, what) for s in spec]
+    if len(idx) != count:
+        raise ParameterError(f"{what}: {count} column(s) are needed; got {len(idx)}.")
+    for s, j in zip(spec, idx):
+        if j == table.time_column:
+            raise ParameterError(f"{what}: {s!r} is the time column of {table.path}; read it as "
+                                 "a signal with t=False (fohw: --time none).")
+    if len(set(idx)) != len(idx):
+        raise ParameterError(f"{what} names the same column twice ({', '.join(map(repr, spec))})"
+                             ": the inputs and the output are different columns.")
+    return idx
+
+
+def record_from_table(table, inputs, output, *, dt=None, name=None, input_unit="",
+                      output_unit="", time_unit="", source="") -> Record:
+    """A :class:`~fohw.Record` of columns of a :class:`Table`: the reader behind every loader.
+
+    The sampling comes from :func:`table_time` (a time column, checked; a sampling time given
+    or in the file), names from the header, units from ``# units:`` where not given.
+
+    Parameters
+    ----------
+    table : Table
+    inputs : list of int
+        The input columns (one or several).
+    output : int
+        The output column.
+    dt : float, optional
+        A sampling time (checked against a time column).
+    name, input_unit, output_unit, time_unit, source : str, optional
+        As :func:`read_record`.
+
+    Returns
+    -------
+    Record
+    """
+    t, step, unit = table_time(table, dt)
+    names = table.names or []
+    units = table.meta.get("units", {})
+    in_names = [names[j] if names else ("u" if len(inputs) == 1 else f"u{k + 1}")
+                for k, j in enumerate(inputs)]
+    if isinstance(input_unit, str) and input_unit:
+        in_units = [input_unit] * len(inputs)
+    elif isinstance(input_unit, str):
+        in_units = [units.get(n, "") for n in in_names] if names else [""] * len(inputs)
+    else:
+        in_units = list(input_unit)
+    if names and not output_unit:
+        output_unit = units.get(names[output], "")
+    u = table.data[:, inputs[0]] if len(inputs) == 1 else table.data[:, inputs]
+    return Record(u=u, y=table.data[:, output], dt=step, t=t,
+                  name=name if name is not None else os.path.basename(table.path),
+                  input_name=in_names[0] if len(inputs) == 1 else tuple(in_names),
+                  output_name=names[output] if names else "y",
+                  input_unit=in_units[0] if len(inputs) == 1 else tuple(in_units),
+                  output_unit=output_unit, time_unit=time_unit or unit, source=source,
+                  path=table.path)
+
+
+def _as_list(spec, what):
+    """``spec`` (one column, or a list of them) as a list, or None."""
+    if spec is None:
+        return None
+    if isinstance(spec, (str, int, np.integer)) and not isinstance(spec, bool):
+        return [spec]
+    if isinstance(spec, (list, tuple)) and spec:
+        return list(spec)
+    raise ParameterError(f"`{what}` must be a column number, a header name or a list of them; "
+                         f"got {spec!r}.")
+
+
+def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO,
+                u: str | int | list | None = None, y: str | int | list | None = None, *,
+                t: str | int | bool | None = None, dt: float | str | None = None,
                 name: str | None = None, input_unit: str = "", output_unit: str = "",
                 time_unit: str = "", source: str = "", decimal: str = ".") -> Record:
     """Read a measured record from a CSV or whitespace-separated text file.
@@ -753,20 +1098,32 @@ def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | in
     path : str, bytes, os.PathLike or file object
         The file (see :mod:`fohw.io.text` for the accepted layout), or an object with
         ``read()`` giving its text or bytes (an open file, :class:`io.StringIO`).
-    u, y : int or str, optional
-        The input and output columns, by number (from 0, counting signal columns) or header
-        name. Default: the columns named ``u`` and ``y`` if the header has them, else columns 0
-        and 1 when the file has exactly two signal columns; with more columns they must be given
+    u : int, str or list of them, optional
+        The input column(s), by number (from 0, counting signal columns) or header name; a list
+        for several inputs (a circuit's ``["i", "soc"]``).
+    y : int, str or a list of one, optional
+        The output column (a :class:`~fohw.Record` holds one output). Default for both: the
+        columns named ``u`` and ``y`` if the header has them, else the two signal columns
+        other than the time column when there are exactly two; with more they must be given
         (fohw does not guess which is the input).
+    t : int, str or False, optional
+        The time column, by number or name. Default: the column the header names as time
+        (``t``, ``time``, ``time_s``, ``Time [s]``, ``timestamp``, ...), if one does;
+        ``False``: none (every column a signal). Its values are numbers in the unit its name
+        or ``# units:`` gives, or ISO 8601 date/times (read as seconds from the first). The
+        instants must increase strictly, and agree with any sampling time also given (``dt``,
+        a ``Ts`` column, ``# dt:``); uniform instants give the record's ``dt``, others are
+        kept as its instants ``t``.
     dt : float or str, optional
         The sampling time, or the name of a column that gives it once (e.g. ``"Ts"``: a value on
         the first data line and nothing below); a signal column is refused.
         Default: a column given once named ``Ts``, ``dt``, ``sampling_time`` or ``sample_time``
         (any case) if there is one, else a header comment ``# dt: 4 s`` (what ``fohw data``
-        writes), else ``None`` (one sample is the time unit).
+        writes), else the time column, else ``None`` (one sample is the time unit).
     name, input_unit, output_unit, time_unit, source : str, optional
         Stored on the record; the input and output names come from the header, the units
-        (when not given) from header comments ``# units: u=V, y=A`` and ``# dt: 4 s``.
+        (when not given) from header comments ``# units: u=V, y=A`` and ``# dt: 4 s`` or the
+        time column's name.
     decimal : {".", ","}
         The decimal mark (``","``: columns separated by ``;`` or whitespace).
 
@@ -774,35 +1131,37 @@ def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | in
     -------
     Record
 
+    Raises
+    ------
+    DataFileError
+        What :func:`read_table` refuses; instants that go back, repeat or contradict a sampling
+        time (naming the lines, and what says otherwise).
+    ParameterError
+        A column that does not exist, the time column as a signal, one column twice, several
+        outputs, or more columns than needed and ``u``, ``y`` not given.
+
     Examples
     --------
-    >>> import os, tempfile, fohw
-    >>> with tempfile.TemporaryDirectory() as d:
-    ...     path = os.path.join(d, "r.csv")
-    ...     with open(path, "w") as fh:
-    ...         _ = fh.write("t,u,y,Ts,\\n0,1.0,2.0,0.5,\\n1,1.5,2.5,,\\n")
-    ...     rec = fohw.read_record(path)
-    >>> rec.u, rec.y, rec.dt, rec.input_name
-    (array([1. , 1.5]), array([2. , 2.5]), 0.5, 'u')
+    >>> import io, fohw
+    >>> text = "# units: time_s=s, pump=V, level=V\\ntime_s,pump,level\\n0,1.0,2.0\\n0.5,1.5,2.5\\n"
+    >>> rec = fohw.read_record(io.StringIO(text))
+    >>> rec.u, rec.y, rec.dt, rec.time_unit, rec.input_name, rec.output_unit
+    (array([1. , 1.5]), array([2. , 2.5]), 0.5, 's', 'pump', 'V')
+    >>> stamps = "time,u,y\\n2024-01-01T00:00:00,1,2\\n2024-01-01T00:00:01.5,2,3\\n" \\
+    ...          "2024-01-01T00:00:02,3,4\\n"
+    >>> fohw.read_record(io.StringIO(stamps)).time
+    array([0. , 1.5, 2. ])
     """
-    table = read_table(path, decimal=decimal)
-    n_cols = table.data.shape[1]
-    lower = [n.lower() for n in table.names] if table.names else []
-    if u is None and y is None:
-        if "u" in lower and "y" in lower:
-            u, y = lower.index("u"), lower.index("y")
-        elif n_cols == 2:
-            u, y = 0, 1
-        else:
-            have = ", ".join(table.names) if table.names else f"{n_cols} unnamed columns"
-            raise ParameterError(f"{table.path} has {n_cols} signal columns ({have}): say "
-                                 "which is the input and which the output with u=... and "
-                                 "y=... (a number or a header name).")
-    elif u is None or y is None:
+    table = read_table(path, decimal=decimal, time=t)
+    ins, outs = _as_list(u, "u"), _as_list(y, "y")
+    if (ins is None) != (outs is None):
         raise ParameterError("give both `u` and `y`, or neither.")
-    iu, iy = _column(table, u, "u"), _column(table, y, "y")
-    if iu == iy:
-        raise ParameterError(f"`u` and `y` name the same column ({u!r}, {y!r}).")
+    if outs is not None and len(outs) != 1:
+        raise ParameterError(f"`y` names {len(outs)} columns; a fohw.Record holds one output: "
+                             "read each output as its own record (y='name').")
+    spec = None if ins is None else ins + outs
+    count = 2 if spec is None else len(spec)
+    idx = signal_columns(table, spec, count, what="u=... and y=..." if spec is None else "u, y")
     if isinstance(dt, str):
         key = dt
         if key in table.scalars:
@@ -816,17 +1175,6 @@ def read_record(path: str | bytes | os.PathLike | TextIO | BinaryIO, u: str | in
                                   " (the file has none)."))
         else:
             raise ParameterError(f"`dt` = {key!r} is not a column of {table.path}.")
-    elif dt is None:
-        dt = sampling_time(table)
-        if dt is not None and dt == table.meta.get("dt"):
-            time_unit = time_unit or table.meta.get("time_unit", "")
-    names = table.names or []
-    units = table.meta.get("units", {})
-    if names:                                # units of the header comment `# units: u=V, ...`
-        input_unit = input_unit or units.get(names[iu], "")
-        output_unit = output_unit or units.get(names[iy], "")
-    return Record(u=table.data[:, iu], y=table.data[:, iy], dt=dt,
-                  name=name if name is not None else os.path.basename(table.path),
-                  input_name=names[iu] if names else "u",
-                  output_name=names[iy] if names else "y", input_unit=input_unit,
-                  output_unit=output_unit, time_unit=time_unit, source=source, path=table.path)
+    return record_from_table(table, idx[:-1], idx[-1], dt=dt, name=name,
+                             input_unit=input_unit, output_unit=output_unit,
+                             time_unit=time_unit, source=source)

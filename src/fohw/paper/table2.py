@@ -399,8 +399,9 @@ def caption(runs: PaperRuns) -> str:
     lo, hi = min(printed.values()), max(printed.values())
     return (f"Note: fohw's run of the method as printed differs from the printed table (delta = "
             f"{delta:.2f} at k = {n} for P = {P}; the paper prints {lo:g}-{hi:g} at k = 10000). "
-            "Why: docs/reproduction.md in the fohw source; estimates that reach the "
-            "Cramér-Rao bound: method='varpro' (docs/accuracy.md).")
+            "Why: implemented as printed, the hybrid method does not reach the printed accuracy "
+            "(a structural reason, not tuning: the 'Reproducing the paper' page of fohw's "
+            "documentation); estimates that reach the Cramér-Rao bound: method='varpro'.")
 
 
 def main(which=OUTPUTS, description=None, argv=None):
