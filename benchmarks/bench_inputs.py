@@ -38,7 +38,8 @@ from pathlib import Path
 import numpy as np
 
 import fohw
-from fohw.model import _compiled, simulation
+from fohw.model import _compiled
+from fohw.model.lagged import simulation
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent

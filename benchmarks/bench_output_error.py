@@ -6,7 +6,7 @@
 
 On the paper's example (uniform input, seed 0, N samples) the varpro start is computed once per
 N; from it the simulation-error fit (``fit_output_error``) runs with the exact Jacobian (the
-default: ``-S`` from ``fohw.model.sensitivity.simulation_jacobian``) and with scipy's forward
+default: ``-S`` from ``fohw.model.lagged.sensitivity.simulation_jacobian``) and with scipy's forward
 differences (``tests/reference_estimators.py``, the code before, one simulation per parameter per
 Jacobian), interleaved, in this process. Printed: medians of ``--repeats`` runs (one run at
 N >= 1e5), their ratio, the solver's iterations (Jacobians), the simulations each path ran
@@ -19,7 +19,7 @@ and not ``FOHW_NO_NUMBA=1``, loaded lazily (``fohw.model._compiled``); the line 
 says whether they were loaded by the end.
 
 ``--sensitivity``: one sensitivity solve against one simulation, the paper's model at its true
-parameters (``fohw.model.sensitivity.simulation_jacobian``, which simulates, builds the
+parameters (``fohw.model.lagged.sensitivity.simulation_jacobian``, which simulates, builds the
 one-step Jacobian ``E`` and solves the recursion, against ``fohw.simulate``), with the compiled
 leaves (loaded beforehand, the load reported apart) and with the pure ones (``_compiled.ENABLED``
 switched off), interleaved, medians of ``--repeats`` (one run at N >= 1e6); printed: the times,
@@ -49,7 +49,8 @@ from reference_estimators import finite_difference_output_error  # noqa: E402
 import fohw  # noqa: E402
 from fohw.estimators.output_error import fit_output_error  # noqa: E402
 from fohw.estimators.varpro import VarproOptions, separable_least_squares  # noqa: E402
-from fohw.model import _compiled, sensitivity  # noqa: E402
+from fohw.model import _compiled  # noqa: E402
+from fohw.model.lagged import sensitivity  # noqa: E402
 
 # ruff: noqa: B023   (the timed callables run inside their loop iteration)
 
@@ -174,7 +175,7 @@ def main(argv=None):
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for n in sizes:
         d = fohw.datasets.paper_example(n, random_state=0)
-        builder = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
+        builder = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
         t0 = time.perf_counter()
         start = separable_least_squares(builder, bounds=(np.array([0.0]), np.array([1.0])),
                                         options=VarproOptions())

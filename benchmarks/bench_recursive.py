@@ -36,7 +36,7 @@ STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 def hybrid_run(n, reference):
     d = fohw.datasets.paper_example(n, random_state=0)
     t0 = time.perf_counter()
-    builder = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
+    builder = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
     options = HybridOptions().check(n_samples=n, bounds=(0.0, 1.0))
     with rebuilt_windows() if reference else contextlib.nullcontext():
         res = run_alternation(builder, "hybrid", options, AlphaBounds((0.0, 1.0)))

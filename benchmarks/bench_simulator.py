@@ -34,8 +34,9 @@ from pathlib import Path
 import numpy as np
 
 import fohw
-from fohw.model import _compiled, simulation
+from fohw.model import _compiled
 from fohw.model.kernels import HalfMerge, divide_and_conquer
+from fohw.model.lagged import simulation
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -73,7 +74,7 @@ def merges(model, u, v, leaf_size):
     """The callable timing the FFT merges alone (forcing computed beforehand).
 
     The recursion's divide and conquer (its setup included) with a leaf that does nothing, so
-    only the merges run, on the same segments as :func:`fohw.model.simulation.recursion`.
+    only the merges run, on the same segments as :func:`fohw.model.lagged.simulation.recursion`.
     """
     out_terms = [(i, model.alpha) for i in range(1, model.a.shape[0] + 1)]
     in_terms = [(i, model.alpha) for i in range(1, model.b.shape[0] + 1)]
@@ -85,7 +86,7 @@ def merges(model, u, v, leaf_size):
 def merge_floor(A, out_terms, n, leaf_size):
     """The callable running the FFT merges alone for ``A.shape[0]`` fed-back signals.
 
-    The divide and conquer of :func:`fohw.model.simulation.recursion` (its setup included) on
+    The divide and conquer of :func:`fohw.model.lagged.simulation.recursion` (its setup included) on
     ``n`` samples with a leaf that does nothing. Used by the other simulator benchmarks too.
     """
     size = max(1, min(leaf_size, n))

@@ -64,7 +64,7 @@ else:
         t0 = time.perf_counter(); r = fohw.identify(e.u, e.y, **c, **kw)
         times.append(time.perf_counter() - t0)
     s = fohw.Structure.make(**c, offset=True, dt=4.0)
-    from fohw.model.simulation import simulate_predictor
+    from fohw.model.lagged.simulation import simulate_predictor
     lin, par = np.r_[r.theta, r.offset], np.array([0.3])
     sims = []
     for _ in range(20):
@@ -83,7 +83,7 @@ def main(argv=None):
     ap.add_argument("--full", action="store_true", help="the docs' full 72-candidate grid")
     ap.add_argument("--workloads", default="fit,grid",
                     help="comma-separated: fit, grid (the fit workload needs a baseline with "
-                         "fohw.model.simulation, i.e. after issue 23)")
+                         "fohw.model.lagged.simulation, i.e. after issue 23)")
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="fohw_baseline_"))
     archive = subprocess.run(["git", "archive", args.baseline, "src"], cwd=HERE.parent,

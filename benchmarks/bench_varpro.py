@@ -49,7 +49,7 @@ def _fit(n, reference):
 
     def run():
         with full_matrix_varpro() if reference else contextlib.nullcontext():
-            builder = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
+            builder = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
             options = VarproOptions().check(n_samples=n, bounds=bounds)
             return varpro_result(builder, options, bounds)
     return run

@@ -15,7 +15,8 @@ here, for the benchmark:
   FFT convolution, then one dot product of two contiguous slices per step, the output
   nonlinearity in scalar arithmetic);
 * information matrix for 20 values of alpha: rebuilt from scratch each time
-  (``fohw.model.regressors.information_matrix``) against one ``RegressorBuilder`` reusing the basis FFTs;
+  (``fohw.model.lagged.regressors.information_matrix``) against one ``RegressorBuilder``
+  reusing the basis FFTs;
 * end-to-end ``fohw.identify`` per method.
 
 Memory: the tracemalloc peak of the stage (NumPy reports its allocations to it) and, with
@@ -130,7 +131,7 @@ def stage(name, n):
     d = fohw.datasets.paper_example(n, random_state=1)
     if name == "matrices":
         def reuse():
-            b = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
+            b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
             for a in np.linspace(0.1, 0.9, 20):
                 b.matrix(a)
         return reuse
@@ -243,7 +244,7 @@ def main(argv=None):
 
         def scratch():
             for a in alphas:
-                fohw.model.regressors.information_matrix(d.u, d.y, a, **STRUCT)
+                fohw.model.lagged.regressors.information_matrix(d.u, d.y, a, **STRUCT)
 
         t, peak = measure(stage("matrices", n), rep)
         ts, _ = measure(scratch, rep)

@@ -1,6 +1,6 @@
 """The simulator's recursion before issue 15, kept for ``bench_simulator.py``'s "before" column.
 
-A frozen copy of the simulator's recursion (``fohw.model.simulation.recursion``) at fe05e02:
+A frozen copy of the simulator's recursion (``fohw.model.lagged.simulation.recursion``) at fe05e02:
 leaves of 128 in pure Python, each merge a full zero-padded linear convolution with the weights'
 spectrum computed every time. It is not part of the package; ``simulate_before`` runs it in place
 of the current recursion.
@@ -12,15 +12,15 @@ from unittest import mock
 import numpy as np
 
 from fohw.exceptions import SimulationDivergedError
-from fohw.model import simulation
 from fohw.model.gl import gl_weights
 from fohw.model.kernels import causal_convolve
+from fohw.model.lagged import simulation
 
 LEAF = 128
 
 
 def recursion(Q, A, out_terms, g_basis, w, threshold, leaf_size, h=1.0, y_fixed=None):
-    """``fohw.model.simulation.recursion`` as it was before issue 15 (the benchmark's "before").
+    """``fohw.model.lagged.simulation.recursion`` as it was before issue 15 (the benchmark's "before").
 
     ``y[k] = w[k] + sum_r sum_t A[r, t] (Delta_h^{nu_t} z_r)[k - lag_t]`` (Eqs. 14, 16).
 

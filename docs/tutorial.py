@@ -52,7 +52,7 @@ u = rng.uniform(-np.sqrt(3), np.sqrt(3), 5000)
 v = 0.1 * rng.standard_normal(5000)
 y = fohw.simulate(model, u, noise=v)
 
-Phi = fohw.model.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
+Phi = fohw.model.lagged.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
 print("max |y - Phi theta - v| =", np.abs(y - Phi @ model.theta - v).max())
 
 # %% [markdown]

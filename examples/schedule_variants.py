@@ -42,7 +42,7 @@ def run(kind, opts, data):
     if kind == "migd":
         est = fohw.estimators.migd.MultiInnovationGradient(alpha=0.6, **STRUCT, **opts).fit(data.u, data.y)
         theta, alpha, n_iter, conv = est.theta_, 0.6, 1, None
-        Phi = fohw.model.regressors.information_matrix(data.u, data.y, 0.6, **STRUCT)
+        Phi = fohw.model.lagged.regressors.information_matrix(data.u, data.y, 0.6, **STRUCT)
         J = float(np.mean((data.y - Phi @ theta) ** 2))
     else:
         with warnings.catch_warnings():

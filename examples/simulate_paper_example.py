@@ -27,7 +27,7 @@ def main(argv=None):
     n = 2000 if args.fast else 10_000
     data = fohw.datasets.paper_example(n, random_state=args.seed)
     m = data.model
-    Phi = fohw.model.regressors.information_matrix(data.u, data.y, m.alpha, na=m.na, nb=m.nb,
+    Phi = fohw.model.lagged.regressors.information_matrix(data.u, data.y, m.alpha, na=m.na, nb=m.nb,
                                                    f_basis=m.f_basis, g_basis=m.g_basis)
     identity_error = float(np.max(np.abs(data.y - Phi @ m.theta - data.noise)))
 

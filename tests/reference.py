@@ -131,10 +131,10 @@ def simulate_blocks(Q, A, pb, alpha, f_basis, g_basis, u, v, threshold, method="
     """The paper's commensurate model in block form through the engine, by ``method``.
 
     ``method`` is ``"auto"``, ``"direct"`` (one leaf, O(N^2)) or ``"fast"`` (divide and conquer):
-    the tests compare the two paths of :func:`fohw.model.simulation.recursion` on the same
+    the tests compare the two paths of :func:`fohw.model.lagged.simulation.recursion` on the same
     forcing. ``Q, A`` are the fed-back signals and their coefficients, ``pb`` the input blocks.
     """
-    from fohw.model.simulation import forcing, recursion
+    from fohw.model.lagged.simulation import forcing, recursion
 
     out_terms = [(i, alpha) for i in range(1, A.shape[1] + 1)]
     in_terms = [(i, alpha) for i in range(1, pb.shape[1] + 1)]
@@ -148,6 +148,6 @@ def simulate_any_order(structure, theta, orders, u):
     For test data the model class cannot express (a fractional *sum*, order < 0): ``orders``
     are the free orders' values in order; no offset, past levels at rest, no noise.
     """
-    from fohw.model.simulation import simulate_predictor
+    from fohw.model.lagged.simulation import simulate_predictor
 
     return simulate_predictor(structure, theta, orders, u)

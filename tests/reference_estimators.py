@@ -28,7 +28,7 @@ from fohw import _linalg
 from fohw.estimators import hybrid, output_error, varpro_search
 from fohw.estimators.milm import sensitivity_weights
 from fohw.estimators.profile import Profile, parameter_covariance
-from fohw.model.regressors import WindowKernel
+from fohw.model.lagged.regressors import WindowKernel
 
 
 class FullMatrixProfile(Profile):
@@ -63,10 +63,11 @@ class FullMatrixProfile(Profile):
 
 
 class FullMatrixBuilder:
-    """A :class:`fohw.model.regressors.RegressorBuilder` whose :meth:`jacobian` is the reference one.
+    """A :class:`fohw.model.lagged.regressors.RegressorBuilder` whose :meth:`jacobian` is the reference one.
 
     The reference Jacobian forms ``Phi`` and every ``dPhi/dparams[m]`` in full and multiplies
-    (what :meth:`fohw.model.regressors.RegressorBuilder.jacobian` did before it wrote the columns in place);
+    (what :meth:`fohw.model.lagged.regressors.RegressorBuilder.jacobian` did before it wrote the
+    columns in place);
     everything else is the builder's.
     """
 

@@ -412,13 +412,13 @@ API = [
      lambda t: fohw.simulate(M(), U, params=[0.6]),
      fohw.ParameterError, "`params` is for a Structure; a HammersteinWiener carries its own"),
     ("information_matrix", "u and y of different lengths",
-     lambda t: fohw.model.regressors.information_matrix(U, Y[:49], 0.5, **S),
+     lambda t: fohw.model.lagged.regressors.information_matrix(U, Y[:49], 0.5, **S),
      fohw.DimensionError, "`u` and `y` must have the same length; got 50 and 49"),
     ("information_matrix", "record shorter than the lags",
-     lambda t: fohw.model.regressors.information_matrix(U[:2], Y[:2], 0.5, **S),
+     lambda t: fohw.model.lagged.regressors.information_matrix(U[:2], Y[:2], 0.5, **S),
      fohw.DimensionError, "the record must be longer than the lags"),
     ("information_matrix", "na < 1",
-     lambda t: fohw.model.regressors.information_matrix(U, Y, 0.5, **{**S, "na": 0}),
+     lambda t: fohw.model.lagged.regressors.information_matrix(U, Y, 0.5, **{**S, "na": 0}),
      fohw.ParameterError, "`na` must be at least 1; got 0"),
     ("identify", "innovation_length longer than the record",
      lambda t: fohw.identify(U, Y, method="hybrid", innovation_length=51, **S),
@@ -742,7 +742,7 @@ API = [
      lambda t: fohw.identify(np.arange(50).astype("datetime64[s]"), U, **S),
      fohw.ParameterError, "`u` must be an array of real numbers; got datetime64[s] values"),
     ("information_matrix", "alpha = -1 (was accepted)",
-     lambda t: fohw.model.regressors.information_matrix(U, U, -1.0, **S),
+     lambda t: fohw.model.lagged.regressors.information_matrix(U, U, -1.0, **S),
      fohw.ParameterError, "`alpha` must be in [0, 2]; got -1.0"),
     ("load_result", "an extra order key (was refused at simulate time)",
      lambda t: fohw.load_result(_result_file(t, orders={"alpha": 0.5, "beta": 0.5})),
@@ -1010,7 +1010,7 @@ API = [
      lambda t: fohw.FractionalHW(_G34).frequency_response([1.0, np.nan]), fohw.ParameterError,
      "`omega` must contain only finite values; got np.float64(nan) at index 1"),
     ("LinearBlock.frequency_response", "omega = 0 of an integrator (was inf+nanj)",
-     lambda t: fohw.model.hw_frequency.LinearBlock([1.0], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)
+     lambda t: fohw.model.lagged.hw_frequency.LinearBlock([1.0], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)
      .frequency_response([0.0, 1.0]), fohw.ParameterError,
      "`omega` = 0.0: the block's response is infinite there"),
     ("EquivalentCircuit.impedance", "a NaN frequency (was NaN with a RuntimeWarning)",
@@ -1624,7 +1624,7 @@ def test_cli_bad_input(where, what, args, text, tmp_path):
 #: Entry points that live in a submodule, not in ``fohw.__all__``, and keep their cases here.
 SUBMODULE_ENTRY_POINTS = {
     "MultiInnovationRLS": fohw.estimators.rls, "HybridIdentifier": fohw.estimators.hybrid,
-    "information_matrix": fohw.model.regressors, "gl_weights_derivative": fohw.model.gl,
+    "information_matrix": fohw.model.lagged.regressors, "gl_weights_derivative": fohw.model.gl,
     "as_basis": fohw.model.basis, "end_with_parent": fohw.analysis.batch,
     "fit_impedance": fohw.estimators.impedance_fit, "fit_record_and_impedance": fohw.estimators.impedance_fit,
 }

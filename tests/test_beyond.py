@@ -53,7 +53,7 @@ def test_varpro_is_exact_on_noise_free_data(system):
 def test_varpro_finds_the_global_minimum_of_the_profile():
     d = fohw.datasets.paper_example(2000, random_state=5)
     res = fohw.identify(d.u, d.y, method="varpro", **STRUCT)
-    b = fohw.model.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
+    b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, **STRUCT)
     fine = [profile_theta(b.matrix(a), d.y)[1] / 2000 for a in np.linspace(0.01, 0.99, 197)]
     assert res.J <= min(fine) + 1e-12
     assert res.alpha_profile.shape == (2, 41)
@@ -139,7 +139,7 @@ def test_standard_errors_and_summary():
 
 
 def test_recover_jacobian_matches_finite_differences():
-    layout = fohw.model.params.ThetaLayout(na=2, nb=3, n_g=3, n_f=2)
+    layout = fohw.model.lagged.params.ThetaLayout(na=2, nb=3, n_g=3, n_f=2)
     theta = np.random.default_rng(0).uniform(0.2, 1.0, layout.n_params)
     jac = layout.recover_jacobian(theta)
     eps = 1e-7
@@ -212,7 +212,7 @@ def test_rls_with_fixed_alpha_is_least_squares():
     rls = fohw.estimators.rls.MultiInnovationRLS(estimate_alpha=False, alpha0=0.6, initial_covariance=1e8,
                                                  **STRUCT)
     rls.fit(d.u, d.y)
-    Phi = fohw.model.regressors.information_matrix(d.u, d.y, 0.6, **STRUCT)
+    Phi = fohw.model.lagged.regressors.information_matrix(d.u, d.y, 0.6, **STRUCT)
     theta_ls, _ = profile_theta(Phi, d.y)
     # RLS from S(0) = c I is ridge regression with penalty 1/c = 1e-8: equal to ~1e-6.
     np.testing.assert_allclose(rls.theta_, theta_ls, rtol=0, atol=1e-6)

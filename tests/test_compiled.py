@@ -16,8 +16,9 @@ import pytest
 from models import MODELS
 
 import fohw
-from fohw.model import _compiled, sensitivity, simulation
+from fohw.model import _compiled
 from fohw.model.kernels import HalfMerge, divide_and_conquer
+from fohw.model.lagged import sensitivity, simulation
 
 # The comparisons need numba and the compiled leaf switched on (not FOHW_NO_NUMBA=1); the test
 # extra installs numba, so CI runs them.
@@ -233,7 +234,7 @@ def test_half_merge_equals_direct_sums(n, leaf):
             np.testing.assert_allclose(dz[a, :, c], want, rtol=0, atol=1e-12)
 
 
-# ---- the sensitivity's compiled leaf (fohw.model.sensitivity._solve_feedback) ---------------
+# ---- the sensitivity's compiled leaf (fohw.model.lagged.sensitivity._solve_feedback) ---------------
 
 SENSITIVITY_STRUCTURES = dict(STRUCTURES, **{
     # a non-polynomial output basis: the simulator runs its pure leaf, the sensitivity compiled
@@ -294,8 +295,8 @@ def test_compiled_sensitivity_leaf_equals_pure_leaf_at_every_sample(
     assert len(segments) > 16 and max(hi - lo for lo, hi in segments) <= 48
     assert S_p.shape[1] == len(model.linear) + len(model.nonlinear)
     # not trivial: the feedback moves S away from the one-step Jacobian E (S != E) everywhere
-    E = fohw.model.regressors.RegressorBuilder(u, y_p, structure=model.structure).jacobian(model.linear,
-                                                                                           model.nonlinear)
+    builder = fohw.model.lagged.regressors.RegressorBuilder(u, y_p, structure=model.structure)
+    E = builder.jacobian(model.linear, model.nonlinear)
     assert np.all(np.max(np.abs(S_p - E), axis=0) > 1e-3 * np.max(np.abs(S_p), axis=0))
 
 

@@ -120,7 +120,7 @@ def test_lagged_hw_against_the_literal_dtft_of_its_lag_and_gl_terms():
 def test_lagged_hw_response_is_the_dtft_of_its_simulated_impulse_response():
     # integer order (alpha = 1) and linear maps: the impulse response decays geometrically
     m = fohw.HammersteinWiener([0.3, -0.1], [1.0, 0.5], [1.0], [1.0], alpha=1.0, dt=0.5)
-    assert fohw.model.hw_frequency.linear_block(m).stability().stable
+    assert fohw.model.lagged.hw_frequency.linear_block(m).stability().stable
     u = np.zeros(3000)
     u[0] = 1.0
     y = m.simulate(u)

@@ -137,9 +137,9 @@ def test_crb_of_the_paper_model_is_unchanged_by_the_general_path():
     y = fohw.simulate(m, data.u, noise=v)
     kw = dict(na=2, nb=2, f_basis=m.f_basis, g_basis=m.g_basis)
     h = 1e-5
-    dphi = (fohw.model.regressors.information_matrix(data.u, y, m.alpha + h, **kw)
-            - fohw.model.regressors.information_matrix(data.u, y, m.alpha - h, **kw)) / (2 * h)
-    g = np.c_[fohw.model.regressors.information_matrix(data.u, y, m.alpha, **kw), dphi @ m.theta]
+    dphi = (fohw.model.lagged.regressors.information_matrix(data.u, y, m.alpha + h, **kw)
+            - fohw.model.lagged.regressors.information_matrix(data.u, y, m.alpha - h, **kw)) / (2 * h)
+    g = np.c_[fohw.model.lagged.regressors.information_matrix(data.u, y, m.alpha, **kw), dphi @ m.theta]
     np.testing.assert_allclose(b.covariance, 0.01 * np.linalg.inv(g.T @ g), rtol=1e-6)
 
 

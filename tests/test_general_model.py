@@ -44,7 +44,7 @@ def test_simulation_continues_from_a_measured_history(name):
 
 @pytest.mark.parametrize("name", sorted(set(MODELS) - {"paper"}))
 def test_fast_simulator_equals_direct_for_general_models(name, monkeypatch):
-    from fohw.model import simulation
+    from fohw.model.lagged import simulation
 
     model = MODELS[name]()
     u = np.random.default_rng(1).uniform(-1, 1, 700) + model.operating_point[0]
@@ -76,7 +76,7 @@ def test_regression_identity_holds_for_every_structure(name):
     u = rng.uniform(-1, 1, 600)
     v = 0.05 * rng.standard_normal(600)
     y = fohw.simulate(model, u, noise=v)
-    b = fohw.model.regressors.RegressorBuilder(u, y, structure=model.structure)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, structure=model.structure)
     Phi = b.matrix(_nonlinear_params(model))
     np.testing.assert_allclose(y - Phi @ _linear_params(model), v, rtol=0, atol=1e-12)
 
@@ -87,7 +87,7 @@ def test_regression_identity_with_offset_dt_and_operating_point():
     u = 2.0 + rng.uniform(-1, 1, 600)
     v = 0.05 * rng.standard_normal(600)
     y = fohw.simulate(model, u, noise=v)
-    b = fohw.model.regressors.RegressorBuilder(u - 2.0, y - 5.0, structure=model.structure)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u - 2.0, y - 5.0, structure=model.structure)
     Phi = b.matrix(_nonlinear_params(model))
     np.testing.assert_allclose(y - 5.0 - Phi @ _linear_params(model), v, rtol=0, atol=1e-12)
 
@@ -99,7 +99,7 @@ def test_matrix_derivatives_match_central_differences(name):
     u = rng.uniform(-1, 1, 400)
     y = fohw.simulate(model, u + model.operating_point[0], noise_std=0.05, random_state=0) \
         - model.operating_point[1]
-    b = fohw.model.regressors.RegressorBuilder(u, y, structure=model.structure)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, structure=model.structure)
     params = _nonlinear_params(model)
     for m, exact in enumerate(b.matrix_derivatives(params)):
         step = 1e-6 * max(1.0, abs(params[m]))

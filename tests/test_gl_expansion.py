@@ -25,7 +25,7 @@ from fohw.estimators.hybrid import (
 from fohw.exceptions import ParameterError
 from fohw.model.gl import gl_weights_unchecked
 from fohw.model.gl_expansion import ExpandedWindows, GLExpansion, StreamedWindows
-from fohw.model.regressors import WindowKernel
+from fohw.model.lagged.regressors import WindowKernel
 
 U = np.finfo(float).eps / 2
 
@@ -103,7 +103,7 @@ def literal_window(signals_gl, lags, k, P):
 @pytest.mark.parametrize("max_bytes", [2**28, 20_000])       # one block; many blocks
 def test_windows_equal_literal_sums_at_every_sample(max_bytes):
     d = fohw.datasets.paper_example(300, random_state=1)
-    b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=3, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, na=2, nb=3, f_basis=2, g_basis=3)
     lags = [2, 2, 2, 3, 3]
     ex = GLExpansion(0.0, 1.0, 300)
     windows = ExpandedWindows(b.signals, lags, ex, 4, max_bytes=max_bytes)
@@ -148,7 +148,7 @@ def test_recursive_methods_follow_the_reference_alpha_path(method, options):
     # a wrong index or block would move alpha by far more than 1e-12.
     n = 1500
     d = fohw.datasets.paper_example(n, random_state=3)
-    b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     o = options.check(n_samples=n, bounds=(0.0, 1.0))
     with warnings.catch_warnings():     # max_iter=2 may stop at max_iter: not what is tested
         warnings.simplefilter("ignore", fohw.ConvergenceWarning)
@@ -165,7 +165,7 @@ def test_recursive_methods_follow_the_reference_alpha_path(method, options):
 @pytest.mark.parametrize("chunks", [[300], [1, 2, 61, 64, 172], [17] * 17 + [11]])
 def test_streamed_windows_equal_literal_sums_at_every_sample(chunks):
     d = fohw.datasets.paper_example(300, random_state=2)
-    b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=3, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, na=3, nb=2, f_basis=2, g_basis=3)
     lags = [3, 3, 3, 2, 2]
     sw = StreamedWindows(lags, 0.0, 1.0, 3, leaf=8)        # leaf 8: many levels in 300 samples
     ex = sw.expansion

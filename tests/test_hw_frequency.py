@@ -9,7 +9,7 @@ import pytest
 
 import fohw
 from fohw.exceptions import SimulationDivergedError
-from fohw.model.hw_frequency import LinearBlock, linear_block
+from fohw.model.lagged.hw_frequency import LinearBlock, linear_block
 
 W = np.array([1e-3, 0.05, 0.3, 1.0, 2.0, 3.0])       # rad per sample when dt = 1
 

@@ -9,7 +9,7 @@ import fohw
 from fohw.estimators.hybrid import HybridIdentifier, HybridOptions
 from fohw.estimators.migd import MultiInnovationGradient
 from fohw.estimators.rls import MultiInnovationRLS, RlsOptions
-from fohw.model.regressors import RegressorBuilder
+from fohw.model.lagged.regressors import RegressorBuilder
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 

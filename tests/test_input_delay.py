@@ -121,7 +121,7 @@ def test_past_levels_and_history_with_a_delay_follow_the_reference(nk):
                                rtol=0, atol=1e-12)
     # and the information matrix with estimated past levels reproduces the record
     y = fohw.simulate(model, u, noise=v)
-    b = fohw.model.regressors.RegressorBuilder(u - 0.5, y - 1.0, structure=model.structure)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u - 0.5, y - 1.0, structure=model.structure)
     np.testing.assert_allclose(y - 1.0 - b.matrix(model.nonlinear) @ model.linear, v,
                                rtol=0, atol=1e-12)
 
@@ -145,7 +145,7 @@ def test_the_information_matrix_reproduces_the_record(case):
     u = rng.uniform(-1, 1, 300)
     v = 0.05 * rng.standard_normal(300)
     y = fohw.simulate(s, u, params=params, noise=v)
-    b = fohw.model.regressors.RegressorBuilder(u, y, structure=s)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, structure=s)
     k = s.n_linear
     Phi = b.matrix(params[k:]) if s.n_nonlinear else b.matrix(np.zeros(0))
     np.testing.assert_allclose(y - Phi @ params[:k], v, rtol=0, atol=1e-12)
@@ -205,7 +205,7 @@ def test_the_model_class_takes_nk():
 def test_frequency_response_of_feedthrough_is_the_d_term():
     # H(z) = b0 + b1 z^-1 (orders 0, no feedback term worth speaking of: a1 = 0 at order 0).
     m = fohw.HammersteinWiener([0.0], [0.7, 0.2], [1.0], [1.0], orders=0, nk=0)
-    lb = fohw.model.hw_frequency.LinearBlock.from_model(m)
+    lb = fohw.model.lagged.hw_frequency.LinearBlock.from_model(m)
     w = np.array([0.0, 0.5, np.pi])
     np.testing.assert_allclose(lb.frequency_response(w), 0.7 + 0.2 * np.exp(-1j * w), atol=1e-14)
 

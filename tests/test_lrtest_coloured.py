@@ -260,7 +260,7 @@ def test_score_direction_of_the_lagged_kind_is_its_exact_jacobian_at_the_null():
     t = fohw.lr_test(r0, rc, u=u, y=y)
     assert "along the score direction" in t.correction
     # d y / d alpha at the null by a forward difference of the structure's free run
-    from fohw.model.simulation import simulate
+    from fohw.model.simulate import simulate
 
     s, u0 = rc.structure, rc.operating_point[0]
     base = np.r_[0.0, r0.nonlinear]
@@ -268,7 +268,7 @@ def test_score_direction_of_the_lagged_kind_is_its_exact_jacobian_at_the_null():
     y_a = simulate(s, u - u0, params=np.r_[r0.linear, base + np.r_[step, np.zeros(base.size - 1)]])
     y_0 = simulate(s, u - u0, params=np.r_[r0.linear, base])
     fd = (y_a - y_0) / step
-    from fohw.model.sensitivity import simulation_jacobian
+    from fohw.model.lagged.sensitivity import simulation_jacobian
 
     _, S = simulation_jacobian(s, r0.linear, base, u - u0)
     X = np.delete(S, len(s.linear_names), axis=1)

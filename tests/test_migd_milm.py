@@ -92,7 +92,7 @@ def test_milm_step_by_hand_and_vector_form():
 @pytest.mark.parametrize("start", [0.45, 0.5, 0.7, 0.75])
 def test_alpha_step_with_true_theta_moves_toward_truth(start):
     data = fohw.datasets.paper_example(3000, noise_variance=0.0, random_state=1)
-    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     new = alpha_update(b, data.model.theta, start)
     assert abs(new - 0.6) < abs(start - 0.6)
     assert np.sign(new - start) == np.sign(0.6 - start)
@@ -102,7 +102,7 @@ def test_alpha_step_with_true_theta_moves_toward_truth(start):
 def test_innovation_window_alpha_step_points_toward_truth(start):
     # Eq. (48) as printed: the window of the last P = 5 samples, at many sample indices.
     data = fohw.datasets.paper_example(3000, noise_variance=0.0, random_state=2)
-    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     signs = [np.sign(alpha_update(b, data.model.theta, start, rows=np.arange(k, k - 5, -1)) - start)
              for k in range(50, 3000, 150)]
     assert all(s == np.sign(0.6 - start) for s in signs)
@@ -110,7 +110,7 @@ def test_innovation_window_alpha_step_points_toward_truth(start):
 
 def test_exact_and_finite_difference_sensitivities_agree():
     data = fohw.datasets.paper_example(2000, random_state=3)
-    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     theta = data.model.theta
     exact = output_sensitivity(b, 0.6, theta, sensitivity="exact")
     err = {d: np.max(np.abs(output_sensitivity(b, 0.6, theta, delta_alpha=d) - exact))
@@ -123,7 +123,7 @@ def test_exact_and_finite_difference_sensitivities_agree():
 
 def test_windowed_regressors_equal_the_full_matrix():
     data = fohw.datasets.paper_example(700, random_state=4)
-    b = fohw.model.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(data.u, data.y, na=2, nb=2, f_basis=2, g_basis=3)
     for alpha in (0.35, 0.6, 0.95):
         Phi = b.matrix(alpha)
         w = fohw.gl_weights(alpha, 700)

@@ -37,7 +37,7 @@ def test_from_theta_round_trips(na, nb, ng, nf, data):
 
 
 def test_recover_averages_ratios_as_eq_39():
-    layout = fohw.model.params.ThetaLayout(na=2, nb=1, n_g=2, n_f=1)
+    layout = fohw.model.lagged.params.ThetaLayout(na=2, nb=1, n_g=2, n_f=1)
     # q2*a disagrees between lags: Eq. (39) averages 0.3/0.1 = 3 and 0.2/0.2 = 1 to 2.
     a, b, p, q = layout.recover([0.1, 0.2, 0.3, 0.2, -0.5])
     np.testing.assert_allclose(q, [1.0, 2.0])
@@ -94,8 +94,8 @@ def test_basis_that_is_not_elementwise_is_rejected():
 
 
 def test_theta_length_checked():
-    layout = fohw.model.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    layout = fohw.model.lagged.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
     with pytest.raises(fohw.DimensionError, match="`theta` must have 10 entries"):
         layout.recover(np.ones(9))
     with pytest.raises(fohw.ParameterError, match="`na` must be at least 1; got 0"):
-        fohw.model.params.ThetaLayout(na=0, nb=2, n_g=1, n_f=1)
+        fohw.model.lagged.params.ThetaLayout(na=0, nb=2, n_g=1, n_f=1)

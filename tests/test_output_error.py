@@ -17,7 +17,7 @@ import fohw
 from fohw.estimators import output_error as oe
 from fohw.estimators._common import rms_scale
 from fohw.exceptions import SimulationDivergedError
-from fohw.model.regressors import RegressorBuilder
+from fohw.model.lagged.regressors import RegressorBuilder
 
 EPS = np.finfo(float).eps
 
@@ -106,7 +106,7 @@ def test_the_jacobian_is_zero_where_the_residual_is_the_penalty():
         point[slice(0, k) if block == "output" else slice(k, n)] *= factor
         assert np.any(crit.jacobian(x))
         try:
-            y_sim, _ = fohw.model.sensitivity.simulation_jacobian(model.structure, point[:n],
+            y_sim, _ = fohw.model.lagged.sensitivity.simulation_jacobian(model.structure, point[:n],
                                                                   point[n:], u)
             assert not stops and np.max(np.abs(y_sim)) > crit.guard
         except SimulationDivergedError:

@@ -14,6 +14,7 @@ import pytest
 from scipy import stats
 
 import fohw
+from fohw.model.lagged.sensitivity import simulation_jacobian
 from fohw.model.output_map import (
     CustomMap,
     DeadZone,
@@ -22,7 +23,6 @@ from fohw.model.output_map import (
     Saturation,
     as_output_map,
 )
-from fohw.model.sensitivity import simulation_jacobian
 
 from .reference import gl_weights
 

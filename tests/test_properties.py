@@ -56,14 +56,14 @@ def test_simulator_regression_identity(na, nb, alpha, scale, n, seed):
         return
     assert np.all(np.isfinite(y))
     if n > max(na, nb):
-        Phi = fohw.model.regressors.information_matrix(u, y, alpha, na=na, nb=nb, f_basis=2, g_basis=2)
+        Phi = fohw.model.lagged.regressors.information_matrix(u, y, alpha, na=na, nb=nb, f_basis=2, g_basis=2)
         assert np.max(np.abs(y - Phi @ m.theta - v)) <= 1e-10 * max(1.0, np.abs(y).max())
 
 
 @settings(max_examples=60, deadline=None)
 @given(na=st.integers(1, 4), nb=st.integers(1, 4), ng=st.integers(1, 4), nf=st.integers(1, 4))
 def test_theta_names_and_blocks_agree(na, nb, ng, nf):
-    layout = fohw.model.params.ThetaLayout(na=na, nb=nb, n_g=ng, n_f=nf)
+    layout = fohw.model.lagged.params.ThetaLayout(na=na, nb=nb, n_g=ng, n_f=nf)
     theta = np.arange(layout.n_params, dtype=float) + 1
     qa, pb = layout.blocks(theta)
     names = layout.names

@@ -65,7 +65,7 @@ def test_simulating_theta_matches_a_non_kronecker_reference():
     u = rng.uniform(-1, 1, 800)
     v = 0.05 * rng.standard_normal(800)
     y = fohw.simulate(fohw.Structure.make(**STRUCT), u, params=np.r_[theta, 0.7], noise=v)
-    Phi = fohw.model.regressors.information_matrix(u, y, 0.7, **STRUCT)
+    Phi = fohw.model.lagged.regressors.information_matrix(u, y, 0.7, **STRUCT)
     assert np.max(np.abs(y - Phi @ theta - v)) < 1e-12
 
 

@@ -10,7 +10,7 @@ def test_columns_are_lagged_gl_differences():
     rng = np.random.default_rng(0)
     u, y = rng.uniform(-1, 1, (2, 400))
     alpha = 0.7
-    Phi = fohw.model.regressors.information_matrix(u, y, alpha, na=2, nb=3, f_basis=2, g_basis=3)
+    Phi = fohw.model.lagged.regressors.information_matrix(u, y, alpha, na=2, nb=3, f_basis=2, g_basis=3)
     assert Phi.shape == (400, 2 * 3 + 3 * 2)
     col = 0
     for sig, lags in [(y, 2), (y**2, 2), (y**3, 2), (u, 3), (u**2, 3)]:
@@ -25,7 +25,7 @@ def test_columns_are_lagged_gl_differences():
 def test_builder_derivative_matches_finite_difference():
     rng = np.random.default_rng(1)
     u, y = rng.uniform(-1, 1, (2, 1000))
-    b = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
     eps = 1e-6
     fd = (b.matrix(0.6 + eps) - b.matrix(0.6 - eps)) / (2 * eps)
     np.testing.assert_allclose(b.matrix_derivative(0.6), fd, rtol=0, atol=1e-7)
@@ -34,7 +34,7 @@ def test_builder_derivative_matches_finite_difference():
 def test_builder_short_record_uses_direct_path_consistently():
     rng = np.random.default_rng(2)
     u, y = rng.uniform(-1, 1, (2, 50))
-    b = fohw.model.regressors.RegressorBuilder(u, y, na=1, nb=1, f_basis=1, g_basis=1)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=1, nb=1, f_basis=1, g_basis=1)
     np.testing.assert_allclose(b.matrix(0.3)[1:, 0], fohw.gl_difference(y, 0.3)[:-1], atol=1e-15)
 
 
@@ -55,14 +55,15 @@ def test_information_matrix_rejects_bad_input(kwargs, exc, match):
     args = dict(u=np.ones(10), y=np.ones(10), alpha=0.5, na=2, nb=2, f_basis=2, g_basis=3)
     args.update(kwargs)
     with pytest.raises(exc, match=match):
-        fohw.model.regressors.information_matrix(args.pop("u"), args.pop("y"), args.pop("alpha"), **args)
+        fohw.model.lagged.regressors.information_matrix(args.pop("u"), args.pop("y"),
+                                                        args.pop("alpha"), **args)
 
 
 def test_basis_returning_nonfinite_is_named():
     with pytest.raises(fohw.ParameterError,
                        match=r"'log' returned nan at index 0 of `u` \(where `u` = -1.0\): "
                              "it returned a non-finite"):
-        fohw.model.regressors.information_matrix(np.r_[-1.0, np.ones(9)], np.ones(10), 0.5, na=1, nb=1,
+        fohw.model.lagged.regressors.information_matrix(np.r_[-1.0, np.ones(9)], np.ones(10), 0.5, na=1, nb=1,
                                                  f_basis=[np.log], g_basis=1)
 
 
@@ -72,13 +73,15 @@ def test_orders_outside_the_model_range_are_refused(bad):
     rng = np.random.default_rng(0)
     u, y = rng.uniform(-1, 1, 60), rng.uniform(-1, 1, 60)
     with pytest.raises(fohw.ParameterError, match=r"`alpha` must be in \[0, 2\]"):
-        fohw.model.regressors.information_matrix(u, y, bad, na=2, nb=2, f_basis=1, g_basis=1)
-    builder = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="per_lag")
+        fohw.model.lagged.regressors.information_matrix(u, y, bad, na=2, nb=2, f_basis=1, g_basis=1)
+    builder = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1,
+                                                            orders="per_lag")
     with pytest.raises(fohw.ParameterError, match=r"the order 'alpha_a2' must be in \[0, 2\]"):
         builder.matrix([0.5, bad, 0.5])
     with pytest.raises(fohw.ParameterError, match=r"the order 'alpha_b1' must be in \[0, 2\]"):
         builder.matrix_derivatives([0.5, 0.5, bad])
     # The ends of the range are orders like any other.
     for edge in (0.0, 2.0):
-        assert np.all(np.isfinite(fohw.model.regressors.information_matrix(u, y, edge, na=2, nb=2, f_basis=1,
-                                                                           g_basis=1)))
+        matrix = fohw.model.lagged.regressors.information_matrix(u, y, edge, na=2, nb=2,
+                                                                 f_basis=1, g_basis=1)
+        assert np.all(np.isfinite(matrix))

@@ -128,7 +128,7 @@ def test_the_information_matrix_reproduces_the_record():
     s, u, _ = record(400)
     v = 0.05 * np.random.default_rng(8).standard_normal(400)
     y = fohw.simulate(s, u, params=TRUE, noise=v)
-    b = fohw.model.regressors.RegressorBuilder(u, y, structure=s)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, structure=s)
     np.testing.assert_allclose(y - b.matrix(TRUE[-2:]) @ TRUE[:-2], v, rtol=0, atol=1e-12)
 
 
@@ -252,7 +252,7 @@ def test_cli_identify_with_several_input_columns(tmp_path, capsys):
 
 def _output_noise_bound(structure, params, u, sigma):
     """``sigma^2 (S^T S)^-1``: the CRB of white output noise, S the free-run sensitivity."""
-    from fohw.model.sensitivity import simulation_jacobian
+    from fohw.model.lagged.sensitivity import simulation_jacobian
 
     n = structure.n_linear
     _, S = simulation_jacobian(structure, params[:n], params[n:], u)

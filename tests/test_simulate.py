@@ -6,7 +6,7 @@ import pytest
 import fohw
 from fohw.datasets import paper_model
 from fohw.model.basis import as_basis
-from fohw.model.regressors import information_matrix
+from fohw.model.lagged.regressors import information_matrix
 
 
 def reference_simulate(model, u, v):
@@ -150,7 +150,7 @@ def test_fast_simulator_equals_direct_recursion(n):
 def test_fast_simulator_general_blocks_and_divergence():
     from reference import simulate_blocks
 
-    from fohw.model.simulation import FAST_SIMULATION_THRESHOLD
+    from fohw.model.lagged.simulation import FAST_SIMULATION_THRESHOLD
 
     rng = np.random.default_rng(0)
     n = FAST_SIMULATION_THRESHOLD + 500          # long enough that "auto" picks the fast path

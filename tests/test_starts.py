@@ -13,7 +13,7 @@ from fohw.estimators.starts import (
     nested_structure,
     tied_structure,
 )
-from fohw.model.simulation import simulate_predictor
+from fohw.model.lagged.simulation import simulate_predictor
 
 TANKS = dict(offset=True, operating_point="mean", dt=4.0, method="output_error")
 

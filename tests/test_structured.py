@@ -6,7 +6,7 @@ import pytest
 import reference
 
 import fohw
-from fohw.model.sensitivity import simulation_jacobian
+from fohw.model.lagged.sensitivity import simulation_jacobian
 
 STRUCT = dict(na=2, nb=2, f_basis=2, g_basis=3)
 
@@ -30,7 +30,7 @@ def central_difference(fun, x, rel=1e-6):
 # ---- the mapping theta(a, b, p, q) ------------------------------------------------------------
 
 def test_theta_jacobian_matches_finite_differences_and_inverts_the_recovery():
-    layout = fohw.model.params.ThetaLayout(na=3, nb=2, n_g=3, n_f=2)
+    layout = fohw.model.lagged.params.ThetaLayout(na=3, nb=2, n_g=3, n_f=2)
     eta = np.random.default_rng(0).normal(size=layout.n_model_params)
     jac = layout.theta_jacobian(eta)
     fd = central_difference(layout.theta_of_model_vector, eta)
@@ -44,7 +44,7 @@ def test_theta_jacobian_matches_finite_differences_and_inverts_the_recovery():
 
 def test_rank_one_recovery_is_the_best_rank_one_fit_of_each_block():
     """On a perturbed theta, the recovered blocks are the leading SVD term of each block."""
-    layout = fohw.model.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    layout = fohw.model.lagged.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
     rng = np.random.default_rng(1)
     theta = fohw.datasets.paper_model().theta + 0.01 * rng.standard_normal(10)
     rebuilt = layout.blocks(layout.theta_of_model_vector(layout.rank_one_recovery(theta)))
@@ -54,7 +54,7 @@ def test_rank_one_recovery_is_the_best_rank_one_fit_of_each_block():
 
 
 def test_rank_one_recovery_names_a_block_it_cannot_normalise():
-    layout = fohw.model.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+    layout = fohw.model.lagged.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
     with pytest.raises(fohw.ParameterError, match="output"):
         layout.rank_one_recovery([0.0, 0.5, 1.0])
 
@@ -220,7 +220,7 @@ def test_structured_standard_errors_are_those_of_the_structured_jacobian():
 
     def predictor(z):
         theta = layout.to_theta(z[:2], z[2:4], np.r_[1, z[4]], np.r_[1, z[5:7]])
-        return fohw.model.regressors.information_matrix(data.u, data.y, z[7], **STRUCT) @ theta
+        return fohw.model.lagged.regressors.information_matrix(data.u, data.y, z[7], **STRUCT) @ theta
     G = central_difference(predictor, x)
     rss = float(np.sum((data.y - predictor(x)) ** 2))
     cov = rss / (data.u.size - x.size) * np.linalg.inv(G.T @ G)

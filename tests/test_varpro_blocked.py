@@ -49,7 +49,7 @@ def _builder(model, n=3000, seed=0):
     u = rng.uniform(-1.0, 1.0, n) + model.operating_point[0]
     y = fohw.simulate(model, u, noise_std=0.05, random_state=seed + 1)
     u0, y0 = model.operating_point
-    return fohw.model.regressors.RegressorBuilder(u - u0, y - y0, structure=model.structure)
+    return fohw.model.lagged.regressors.RegressorBuilder(u - u0, y - y0, structure=model.structure)
 
 
 def _gamma(n_rows, n_cols):
@@ -127,7 +127,7 @@ def test_rank_deficient_profile_names_the_same_columns(block_rows):
     u = rng.uniform(-1, 1, 2000)
     y = fohw.simulate(_paper(), u, noise_std=0.05, random_state=4)
     dup = fohw.Basis((lambda v: v, lambda v: 1.0 * v), names=("x", "x_again"))
-    b = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=dup, g_basis=3)
+    b = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=dup, g_basis=3)
     x_new, rss_new, f_new = Profile(b)(0.6)
     x_ref, rss_ref, f_ref = FullMatrixProfile(b)(0.6)
     assert f_new.rank == f_ref.rank == 8

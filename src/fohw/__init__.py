@@ -42,13 +42,13 @@ from .model.basis import Basis, polynomial_basis
 from .model.circuit import RC, ZARC, EquivalentCircuit, OCVTable, Warburg
 from .model.circuit_tables import CircuitTables
 from .model.gl import gl_difference, gl_weights
-from .model.initial import InitialState, initial_state
+from .model.lagged.initial import InitialState, initial_state
+from .model.lagged.structure import Structure
+from .model.lagged.system import HammersteinWiener
+from .model.lagged.theta_hw import ThetaHW
 from .model.orders import Orders
 from .model.parameters import Parameter, Parameters
-from .model.simulation import simulate
-from .model.structure import Structure
-from .model.system import HammersteinWiener
-from .model.theta_hw import ThetaHW
+from .model.simulate import simulate
 from .model.transfer import FractionalTF
 from .model.wiener import FractionalHW
 from .record import Record

@@ -995,7 +995,7 @@ def _model_input(args, loaded, table):
     """
     import numpy as np
 
-    from .model.simulation import generic_model
+    from .model.simulate import generic_model
 
     other = generic_model(loaded)
     if other is not None:                   # a model (or fit) of another kind: its input columns
@@ -1029,8 +1029,9 @@ def _simulate(args):
     import numpy as np
 
     from .io.text import table_time
-    from .model.initial import initial_state, simulate_from
-    from .model.simulation import equation_noise, generic_model, own_dt, simulate
+    from .model.lagged.initial import initial_state, simulate_from
+    from .model.lagged.simulation import equation_noise
+    from .model.simulate import generic_model, own_dt, simulate
 
     _check_file_out(args.output, "--output", [args.input, args.model])
     kind, loaded = _load_model_or_result(args.model)
@@ -1202,7 +1203,7 @@ def _compare(args):
 
     _check_plot_out(args.plot, "--plot", [args.data, args.model])
 
-    from .model.simulation import generic_model
+    from .model.simulate import generic_model
 
     _, loaded = _load_model_or_result(args.model)
     table = _read(args, args.data)

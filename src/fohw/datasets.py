@@ -16,8 +16,8 @@ from ._validation import check_int, check_random_state, check_scalar
 from .exceptions import DataFileError, ParameterError
 from .io.files import check_input_file
 from .io.text import parse_number
-from .model.simulation import simulate
-from .model.system import HammersteinWiener
+from .model.lagged.system import HammersteinWiener
+from .model.simulate import simulate
 from .record import Benchmark, Record
 
 __all__ = ["SimulatedData", "paper_model", "paper_example", "load_daisy",

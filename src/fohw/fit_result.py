@@ -20,7 +20,7 @@ from ._status import Status
 from .exceptions import ParameterError
 from .model.base import Model
 from .model.parameters import Parameters
-from .model.simulation import record_list, simulate
+from .model.simulate import record_list, simulate
 from .record import describe_data
 from .result_checks import check_fit_result_dict
 

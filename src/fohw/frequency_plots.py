@@ -83,7 +83,7 @@ def bode(system, omega=None, *, others=None, label=None, title=None, ax=None, hz
         What to draw: a :class:`fohw.Model` (its :meth:`~fohw.Model.frequency_response`), a
         :class:`fohw.FitResult` or :class:`fohw.IdentificationResult` (its ``model``; the
         frequency axis in the record's time unit), or e.g. a
-        :class:`fohw.model.hw_frequency.LinearBlock`.
+        :class:`fohw.model.lagged.hw_frequency.LinearBlock`.
     omega : array_like, optional
         Angular frequencies (default: the system's ``default_frequencies()``).
     others : dict of str to model or fit, optional

@@ -58,8 +58,8 @@ import scipy  # submodules (scipy.stats, ...) load on first use: import time
 
 from ._validation import check_array, check_int
 from .exceptions import ParameterError
+from .model.lagged.structure import Structure
 from .model.orders import Orders
-from .model.structure import Structure
 
 __all__ = ["LRTest", "order_test", "effective_samples", "chi_bar_squared_sf", "null_orders",
            "cancelled_orders",

@@ -22,14 +22,15 @@ from .exceptions import DimensionError, ExtrapolationWarning, ParameterError
 from .fit_result import FitResult
 from .lr_statistic import order_test
 from .model.basis import Basis
-from .model.hw_frequency import linear_block
-from .model.initial import initial_state, simulate_from
+from .model.lagged.hw_frequency import linear_block
+from .model.lagged.initial import initial_state, simulate_from
+from .model.lagged.params import ThetaLayout
+from .model.lagged.simulation import check_input_point
+from .model.lagged.structure import Structure
+from .model.lagged.system import HammersteinWiener
+from .model.lagged.theta_hw import ThetaHW
 from .model.parameters import Parameters
-from .model.params import ThetaLayout
-from .model.simulation import check_input_point, check_record_sampling, record_list
-from .model.structure import Structure
-from .model.system import HammersteinWiener
-from .model.theta_hw import ThetaHW
+from .model.simulate import check_record_sampling, record_list
 from .presentation import ResultPresentation
 
 __all__ = ["IdentificationResult", "Status", "recover_model", "DETAIL_KEYS"]
@@ -628,7 +629,7 @@ class IdentificationResult(ResultPresentation, FitResult):
 
         Returns
         -------
-        fohw.model.hw_frequency.LinearBlock
+        fohw.model.lagged.hw_frequency.LinearBlock
             Its ``frequency_response(omega)``, ``static_gain`` and ``stability()``; ``bode()``
             draws it. Raises ParameterError when :attr:`model` is undefined.
         """
@@ -659,7 +660,7 @@ class IdentificationResult(ResultPresentation, FitResult):
             fit's ``dt``; with ``initial="estimate"`` its output is used), or a list of
             Records (a list of outputs).
         initial : str, tuple or InitialState, optional
-            What the signals did before ``u`` began (:mod:`fohw.model.initial` says what each
+            What the signals did before ``u`` began (:mod:`fohw.model.lagged.initial` says what each
             choice assumes and costs): ``"rest"`` (the operating point; the default of a fit
             with ``past="rest"``); ``"fitted"`` (the levels estimated with a
             ``past="estimate"`` fit, which belong to the estimation record: right for that

@@ -27,7 +27,7 @@ Two choices say which bound is computed (:attr:`CRBResult.description`):
   ``sigma^2`` is added to the *measured* output, ``y = ysim(x) + e``. The log-likelihood is
   then ``-||y - ysim(x)||^2 / (2 sigma^2)`` and the Fisher information ``S^T S / sigma^2``
   with ``S = d ysim / dx`` the sensitivity of the free-run simulation
-  (:func:`fohw.model.sensitivity.simulation_jacobian`): deterministic, no averaging.
+  (:func:`fohw.model.lagged.sensitivity.simulation_jacobian`): deterministic, no averaging.
 """
 
 from __future__ import annotations
@@ -41,11 +41,11 @@ from .._types import ArrayLike, RandomStateLike
 from .._validation import check_array, check_int, check_random_state, check_scalar
 from ..estimators.fit import free_jacobian, rank_rcond
 from ..exceptions import ParameterError
-from ..model.regressors import RegressorBuilder
-from ..model.sensitivity import simulation_jacobian
-from ..model.simulation import check_record_sampling, generic_model, simulate
-from ..model.system import HammersteinWiener
-from ..model.theta_hw import ThetaHW
+from ..model.lagged.regressors import RegressorBuilder
+from ..model.lagged.sensitivity import simulation_jacobian
+from ..model.lagged.system import HammersteinWiener
+from ..model.lagged.theta_hw import ThetaHW
+from ..model.simulate import check_record_sampling, generic_model, simulate
 from ..record import record_data
 
 __all__ = ["crb", "CRBResult"]

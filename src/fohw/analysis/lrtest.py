@@ -82,7 +82,7 @@ from ..lr_statistic import (
     statistic,
 )
 from ..lr_statistic import order_test as order_test_without_record
-from ..model.simulation import record_list
+from ..model.simulate import record_list
 from ..record import Record
 from .order_verdict import LEVEL, MARGIN, check_level_margin, validation_fits, verdict
 from .profile_interval import (
@@ -244,7 +244,7 @@ def score_direction(restricted, full, u):
     free parameters' sensitivities projected out; rows over the criterion's samples. A
     FitResult's through :func:`fohw.estimators.fit.free_jacobian` (the kind's exact Jacobian,
     or finite differences); the lagged kind's through the exact
-    :func:`fohw.model.sensitivity.simulation_jacobian` of ``full``'s structure at
+    :func:`fohw.model.lagged.sensitivity.simulation_jacobian` of ``full``'s structure at
     ``[restricted.linear, 0, restricted.nonlinear]``, checked to reproduce the restricted
     fit's free run. None without the record ``u``; for an equation-error lagged fit (its
     criterion is not the free run), several inputs, an order not identified under the null
@@ -287,7 +287,7 @@ def score_direction(restricted, full, u):
 
 def _lagged_jacobian(restricted, full, u):
     """``(jacobian rows over the criterion, tested columns)`` of a lagged output-error pair."""
-    from ..model.sensitivity import simulation_jacobian
+    from ..model.lagged.sensitivity import simulation_jacobian
 
     s = full.structure
     if (full.method != "output_error" or s.n_inputs != 1 or null_orders(s.orders)[2]

@@ -37,7 +37,7 @@ from ..exceptions import ConvergenceWarning, ParameterError, RankDeficiencyWarni
 from ..fit_result import FitResult
 from ..lr_statistic import LIKELIHOOD_METHODS, check_result, criterion, order_bounds
 from ..model.orders import Orders
-from ..model.simulation import record_list, simulate_record
+from ..model.simulate import record_list, simulate_record
 from ..record import check_sampling, record_data
 from ..results import IdentificationResult
 

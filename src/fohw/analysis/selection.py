@@ -54,7 +54,7 @@ from ..exceptions import (
     SimulationDivergedError,
 )
 from ..model.base import Model
-from ..model.simulation import check_record_sampling
+from ..model.simulate import check_record_sampling
 from ..record import Record, check_sampling, record_data, record_info
 from .lrtest import cancelled_orders, davies_from_fit, lr_test, nested_fits, null_orders
 from .metrics import aic, bic, fit_percent, rmse

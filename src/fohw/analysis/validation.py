@@ -25,11 +25,11 @@ from .._plausible import ENVELOPE, check_envelope, implausible_message, implausi
 from .._types import ArrayLike
 from .._validation import check_array, check_inputs, check_int, check_same_length, column_order
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
-from ..model.initial import InitialState, initial_state, simulate_from
-from ..model.regressors import RegressorBuilder
-from ..model.simulation import check_record_sampling, generic_model, simulate_record
-from ..model.system import HammersteinWiener
-from ..model.theta_hw import ThetaHW
+from ..model.lagged.initial import InitialState, initial_state, simulate_from
+from ..model.lagged.regressors import RegressorBuilder
+from ..model.lagged.system import HammersteinWiener
+from ..model.lagged.theta_hw import ThetaHW
+from ..model.simulate import check_record_sampling, generic_model, simulate_record
 from ..record import record_data
 from .metrics import cross_correlation_test, fit_percent, rmse, whiteness_test
 
@@ -319,7 +319,7 @@ def compare(model: Any, u: ArrayLike, y: ArrayLike | None = None, *,
     initial : str, tuple or InitialState, optional
         For a model of another kind: passed to its ``simulate`` (``"estimate"`` is refused).
         For the lagged kind, the state the free run starts from
-        (:mod:`fohw.model.initial`): ``"rest"`` (the default of a ``past="rest"`` fit);
+        (:mod:`fohw.model.lagged.initial`): ``"rest"`` (the default of a ``past="rest"`` fit);
         ``"fitted"`` (the levels a ``past="estimate"`` fit
         estimated before its *estimation* record; a HammersteinWiener's own levels, its
         default); ``"estimate"`` or ``("estimate", n)`` (this record's levels, and ``n`` free

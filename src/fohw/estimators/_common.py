@@ -17,7 +17,7 @@ from ..exceptions import (
     RankDeficiencyWarning,
     SimulationDivergedError,
 )
-from ..model.simulation import simulate_predictor
+from ..model.lagged.simulation import simulate_predictor
 from ..results import IdentificationResult, Status, recover_model
 
 __all__: list[str] = []

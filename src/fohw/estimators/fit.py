@@ -51,7 +51,7 @@ from ..exceptions import (
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..model.irregular import DEFAULT_REFINE, jacobian_at
-from ..model.simulation import HOOK_REFUSALS, call_hook, hook_error, read_only
+from ..model.simulate import HOOK_REFUSALS, call_hook, hook_error, read_only
 from ..record import UNIFORM_RTOL, Record, as_records, record_info
 from ..results import Status
 from ._common import bounded_least_squares, stationary

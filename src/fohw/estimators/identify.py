@@ -20,9 +20,9 @@ from .._parallel import heartbeat
 from .._types import ArrayLike, PairLike
 from ..exceptions import ParameterError
 from ..model.basis import BasisLike
+from ..model.lagged.theta_hw import ThetaHW
 from ..model.orders import OrdersLike
 from ..model.output_map import OutputMapLike
-from ..model.theta_hw import ThetaHW
 from ..record import check_sampling, record_data, record_info
 from ..results import IdentificationResult
 from . import hybrid, output_error, rls, structured, varpro

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._base import REQUIRED, BaseEstimator, check_is_fitted
 from .._validation import check_alpha, check_array, check_same_length
-from ..model.regressors import RegressorBuilder
+from ..model.lagged.regressors import RegressorBuilder
 from .options import FORGETTING, INNOVATION_LENGTH, POSITIVE, Choice, MethodOptions
 
 __all__ = ["migd_update", "migd_pass", "MultiInnovationGradient", "MigdOptions",

@@ -144,7 +144,7 @@ def output_sensitivity(builder, alpha, theta, *, sensitivity="finite_difference"
     >>> import fohw
     >>> from fohw.estimators.milm import output_sensitivity
     >>> d = fohw.datasets.paper_example(500, random_state=0)
-    >>> b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> fd = output_sensitivity(b, 0.6, d.model.theta)
     >>> ex = output_sensitivity(b, 0.6, d.model.theta, sensitivity="exact")
     >>> bool(abs(fd - ex).max() < 1e-2 * abs(ex).max())
@@ -186,7 +186,7 @@ def alpha_update(builder, theta, alpha, *, rows=None, lm_lambda=1.0,
     >>> import fohw
     >>> from fohw.estimators.milm import alpha_update
     >>> d = fohw.datasets.paper_example(2000, noise_variance=0.0, random_state=0)
-    >>> b = fohw.model.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> b = fohw.model.lagged.regressors.RegressorBuilder(d.u, d.y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> a1 = alpha_update(b, d.model.theta, 0.5)      # true alpha is 0.6
     >>> bool(0.5 < a1 < 0.7)
     True

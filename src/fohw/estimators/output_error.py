@@ -10,7 +10,7 @@ simulation error instead:
 
 with a trust-region reflective least-squares solver (:func:`scipy.optimize.least_squares`),
 started from the equation-error estimate. Its Jacobian is ``-S``, with ``S`` the exact
-sensitivity of the free run (:func:`fohw.model.sensitivity.simulation_jacobian`: one simulation
+sensitivity of the free run (:func:`fohw.model.lagged.sensitivity.simulation_jacobian`: one simulation
 and one linear recursion of the same cost class, instead of the ``d + 1`` simulations of finite
 differences over ``d`` parameters). The standard errors are ``s^2 (S^T S)^{-1}`` at the
 estimate, ``S`` being also the Jacobian of the output-noise Cramér–Rao bound (:func:`fohw.crb`
@@ -32,9 +32,9 @@ from .. import _linalg
 from .._threads import thin_solves
 from .._validation import check_array, check_scalar
 from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
-from ..model.regressors import RegressorBuilder
-from ..model.sensitivity import simulation_jacobian
-from ..model.simulation import simulate_predictor
+from ..model.lagged.regressors import RegressorBuilder
+from ..model.lagged.sensitivity import simulation_jacobian
+from ..model.lagged.simulation import simulate_predictor
 from ..results import IdentificationResult, Status
 from ._common import (
     bound_note,
@@ -124,7 +124,7 @@ class SimulationResidual:
     ``guard``, ten times the largest measured ``|y|``) gets the constant residual ``2 guard``
     on every sample, so the solver steps back from it; the Jacobian there is zero, the
     derivative of that constant. Elsewhere the Jacobian is ``-S[n_init:]`` with ``S`` the
-    exact sensitivity of the free run (:func:`~fohw.model.sensitivity.simulation_jacobian`),
+    exact sensitivity of the free run (:func:`~fohw.model.lagged.sensitivity.simulation_jacobian`),
     which says the run escapes exactly when the residual does (the same recursion, the same
     ``guard``). Should the sensitivity's own simulation stop where the residual's did not (its
     default divergence threshold, ``1e8`` times the model's drive, below ``guard``: a gain
@@ -625,7 +625,7 @@ class SeriesResidual:
     ``x = (linear, inner nonlinear, h_*)``: the residual is ``(y - (h(z(x) + y0) - y0))`` on
     the criterion's samples, ``z`` the free run of :attr:`Structure.inner` (deviations) and
     ``y0`` the output's operating point (``h`` acts in the data's units). Its Jacobian is
-    ``-[h'(z + y0) S_z, dh/dh_*]`` (:func:`~fohw.model.sensitivity.simulation_jacobian`). A run
+    ``-[h'(z + y0) S_z, dh/dh_*]`` (:func:`~fohw.model.lagged.sensitivity.simulation_jacobian`). A run
     that escapes (``|z|`` beyond ``guard``, ten times the largest measured ``|y - y0|``) gets the
     constant residual ``2 guard`` and a zero Jacobian, as in :class:`SimulationResidual`.
     """

@@ -27,8 +27,8 @@ from .._validation import (
     unpack_pair,
 )
 from ..exceptions import DataWarning, DimensionError, ParameterError
-from ..model.regressors import RegressorBuilder
-from ..model.structure import Structure
+from ..model.lagged.regressors import RegressorBuilder
+from ..model.lagged.structure import Structure
 from ._common import check_units, rms_scale
 
 __all__ = ["Problem", "prepare", "fit_method", "OPERATING_POINTS"]
@@ -204,7 +204,7 @@ def fit_method(method, options, u, y, executor=None, **model):
 
 def _operating_point(spec, u, y):
     if u.ndim == 2:                  # several inputs: u0 one level per input
-        from ..model.simulation import check_input_point
+        from ..model.lagged.simulation import check_input_point
 
         m = u.shape[1]
         if spec is None:

@@ -107,7 +107,8 @@ class Profile:
     """``theta(params)`` and ``rss(params)`` of the separable problem, by blocks of rows.
 
     ``Phi(params)`` is never formed: its columns are lagged views of the GL differences
-    (:meth:`fohw.model.regressors.RegressorBuilder.columns`), and the triangular factor of ``[Phi, y]`` is
+    (:meth:`fohw.model.lagged.regressors.RegressorBuilder.columns`), and the triangular factor of
+    ``[Phi, y]`` is
     accumulated over blocks of :data:`BLOCK_ROWS` rows (:func:`fohw._linalg.triangular`,
     TSQR); the solve, its rank decision and ``rss`` come from that ``(n + 1) x (n + 1)``
     factor (:func:`fohw._linalg.lstsq_triangular`). The columns and the factor are kept for

@@ -29,8 +29,8 @@ from .._base import REQUIRED, BaseEstimator, check_is_fitted
 from .._validation import AlphaBounds, check_array, check_int, check_same_length
 from ..model.basis import as_basis
 from ..model.gl_expansion import StreamedWindows
-from ..model.params import ThetaLayout
-from ..model.regressors import RegressorBuilder
+from ..model.lagged.params import ThetaLayout
+from ..model.lagged.regressors import RegressorBuilder
 from ..results import Status
 from ._common import finish, paper_model_only
 from .options import ALPHA0, FORGETTING, INNOVATION_LENGTH, POSITIVE, Boolean, Method, MethodOptions

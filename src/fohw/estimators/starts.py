@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._parallel import TaskError, run_tasks
+from ..model.lagged.structure import Structure
 from ..model.orders import Orders
-from ..model.structure import Structure
 from .profile import Profile
 
 __all__ = ["Start", "nested_structure", "tied_structure", "embed", "scan_starts", "choose_starts",

@@ -8,14 +8,16 @@ bound of the unstructured theta, which is larger than the bound of the structure
 
 1. runs ``"varpro"`` (:func:`~fohw.estimators.varpro.separable_least_squares`, polish included),
 2. recovers ``a, b, p, q`` from its theta by the best rank-one fit of the blocks ``[q_j a_i]``
-   and ``[p_j b_i]`` (their leading singular triples, :meth:`fohw.model.params.ThetaLayout.rank_one_recovery`)
+   and ``[p_j b_i]`` (their leading singular triples,
+   :meth:`fohw.model.lagged.params.ThetaLayout.rank_one_recovery`)
    rather than by the mean of ratios of Eqs. (39)–(40), and
 3. minimises the one-step prediction error (Eq. 41)
    ``||y - Phi(nonlinear) theta(a, b, p, q) - offset||^2`` over
    ``x = (a, b, p_2.., q_2.., offset, nonlinear)`` (:attr:`fohw.Structure.structured_names`)
    with :func:`scipy.optimize.least_squares` (trust-region reflective, ``x_scale="jac"``, the
    free orders bounded) and the exact Jacobian ``G M``: ``G = [Phi, dPhi/dnu @ theta, …]``
-   (:meth:`fohw.model.regressors.RegressorBuilder.jacobian`, GL weight derivatives for the orders) times
+   (:meth:`fohw.model.lagged.regressors.RegressorBuilder.jacobian`, GL weight derivatives for the
+   orders) times
    ``M = d(theta, …)/dx`` (:meth:`fohw.Structure.structured_jacobian`).
 
 Under white Gaussian equation noise the result is the conditional maximum-likelihood estimate

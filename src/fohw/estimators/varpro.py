@@ -9,7 +9,7 @@ at the best theta) is a function of one variable. The estimator
 2. refines the best grid cell by a bounded scalar search (Brent), and
 3. polishes ``(theta, alpha)`` jointly with :func:`scipy.optimize.least_squares` (trust-region
    reflective, ``x_scale="jac"``, alpha bounded) and the exact Jacobian
-   ``[Phi, dPhi/dalpha @ theta]`` (:meth:`fohw.model.regressors.RegressorBuilder.jacobian`).
+   ``[Phi, dPhi/dalpha @ theta]`` (:meth:`fohw.model.lagged.regressors.RegressorBuilder.jacobian`).
 
 A general structure with several nonlinear parameters (free orders, past levels) replaces
 steps 1-2: a scan with the orders moved together (``n_grid`` points), starts from a full grid

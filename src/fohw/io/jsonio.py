@@ -27,9 +27,9 @@ from ..exceptions import DataFileError, DimensionError, ParameterError
 from ..fit_result import FitResult
 from ..model.base import Model
 from ..model.basis import MAX_POLYNOMIAL_DEGREE, Basis
+from ..model.lagged.structure import Structure
+from ..model.lagged.system import HammersteinWiener
 from ..model.orders import ORDER_RANGE
-from ..model.structure import Structure
-from ..model.system import HammersteinWiener
 from ..result_checks import (
     bad_field,
     check_covariance,

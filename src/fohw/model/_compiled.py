@@ -1,12 +1,12 @@
 """The simulator's and its sensitivity's leaves compiled with numba (extra ``fohw[fast]``; Eqs. 14, 16).
 
-:func:`fohw.model.simulation.recursion` runs each leaf of its divide and conquer sample by sample:
+:func:`fohw.model.lagged.simulation.recursion` runs each leaf of its divide and conquer sample by sample:
 ``y[k]`` from the forcing and the accumulated GL memory, the output signals ``z_r(y[k])``, then
 the leaf's own past added to the accumulators by one dot product each. :func:`_leaf` is that
 loop for a polynomial output basis, doing the same floating-point operations in the same order
 as the pure-Python leaf (the dot products through BLAS ``ddot``, as ``numpy.dot``), compiled by
 numba. :func:`_feedback_leaf` is the leaf of the sensitivity's linear recursion
-(:func:`fohw.model.sensitivity._solve_feedback`), likewise the operations of its pure leaf in
+(:func:`fohw.model.lagged.sensitivity._solve_feedback`), likewise the operations of its pure leaf in
 their order (the leaf's own past by one BLAS ``dgemv`` per term and sample, as NumPy's
 ``rev @ Z``). Without numba, with ``FOHW_NO_NUMBA=1`` in the environment, with :data:`ENABLED`
 set to False, or (simulator) for any other output basis, the pure-Python leaves run instead,

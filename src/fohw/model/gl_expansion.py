@@ -225,7 +225,7 @@ class GLExpansion:
 class ExpandedWindows:
     """Rows ``phi[k], …, phi[k-P+1]`` of a record at any order of an expansion's interval.
 
-    The drop-in for :meth:`fohw.model.regressors.WindowKernel.rows` in the recursions: the
+    The drop-in for :meth:`fohw.model.lagged.regressors.WindowKernel.rows` in the recursions: the
     fixed convolutions ``D_m`` of the stacked basis signals with the expansion's coefficient
     vectors are computed by FFT once (in blocks of time, see ``max_bytes``), and a window is a
     sum over ``m`` of ``degree + 1`` terms. Samples must be asked for in increasing ``k``.

@@ -89,7 +89,7 @@ def fit_fractional_oe(u, y, n, f_basis, g_basis, lin):
     """
     struct = dict(na=n, nb=n, f_basis=f_basis, g_basis=g_basis, method="output_error",
                   alpha_bounds=(0.0, 2.0), n_init=N_INIT)
-    layout = fohw.model.params.ThetaLayout(na=n, nb=n, n_g=len(fohw.model.basis.as_basis(g_basis)),
+    layout = fohw.model.lagged.params.ThetaLayout(na=n, nb=n, n_g=len(fohw.model.basis.as_basis(g_basis)),
                                            n_f=len(fohw.model.basis.as_basis(f_basis)))
     fits = [identify_quietly(u, y, **struct),
             identify_quietly(u, y, start=(linear_start(layout, lin), 1e-3), **struct)]

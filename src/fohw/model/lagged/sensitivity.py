@@ -11,7 +11,8 @@ sensitivity ``S = d ysim / d x`` as the solution of a linear recursion,
           \\qquad c_t[m] = \\sum_j (q_j a_t)\\, g_j'(y[m]),
 
 where ``E = [Phi, dPhi/dx_nl @ linear]`` is the one-step-predictor Jacobian
-(:meth:`fohw.model.regressors.RegressorBuilder.jacobian`) evaluated on the simulated output, and the sum runs
+(:meth:`fohw.model.lagged.regressors.RegressorBuilder.jacobian`) evaluated on the simulated output,
+and the sum runs
 over the output terms ``t`` (lag ``i_t >= 1``, order ``nu_t``, coefficient ``q_j a_t`` of basis
 function ``g_j``). Because every lag is at least 1, ``S[k]`` depends on ``S[0..k-1]`` only, and
 the recursion is solved exactly by the divide-and-conquer scheme of the simulator
@@ -28,11 +29,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_array, check_inputs
-from ..exceptions import DimensionError
-from . import _compiled
-from .gl import gl_weights
-from .kernels import HalfMerge, divide_and_conquer
+from ..._validation import check_array, check_inputs
+from ...exceptions import DimensionError
+from .. import _compiled
+from ..gl import gl_weights
+from ..kernels import HalfMerge, divide_and_conquer
 from .regressors import RegressorBuilder
 from .simulation import simulate_predictor
 from .structure import Structure
@@ -104,7 +105,7 @@ def simulation_jacobian(structure, linear, params, u, *, y0=0.0):
     Examples
     --------
     >>> import numpy as np, fohw
-    >>> from fohw.model.sensitivity import simulation_jacobian
+    >>> from fohw.model.lagged.sensitivity import simulation_jacobian
     >>> m = fohw.datasets.paper_model()
     >>> u = np.random.default_rng(0).uniform(-1, 1, 300)
     >>> y, S = simulation_jacobian(m.structure, m.linear, m.nonlinear, u)

@@ -18,18 +18,13 @@ from __future__ import annotations
 import numpy as np
 import scipy  # submodules (scipy.fft, .optimize, ...) load on first use: import time
 
-from .._types import ArrayLike, PairLike
-from .._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
-from ..exceptions import DimensionError, ParameterError
-from .basis import BasisLike
-from .gl import (
-    gl_weights,
-    gl_weights_derivative,
-    past_transient,
-    sampling_scale,
-)
-from .kernels import CausalConvolution, convolution_at
-from .orders import ORDER_RANGE, OrdersLike
+from ..._types import ArrayLike, PairLike
+from ..._validation import check_array, check_inputs, check_int, check_same_length, check_scalar
+from ...exceptions import DimensionError, ParameterError
+from ..basis import BasisLike
+from ..gl import gl_weights, gl_weights_derivative, past_transient, sampling_scale
+from ..kernels import CausalConvolution, convolution_at
+from ..orders import ORDER_RANGE, OrdersLike
 from .structure import Structure
 
 __all__ = ["information_matrix", "RegressorBuilder", "WindowKernel"]
@@ -197,11 +192,11 @@ class RegressorBuilder:
     >>> import numpy as np, fohw
     >>> rng = np.random.default_rng(0)
     >>> u, y = rng.uniform(-1, 1, 200), rng.uniform(-1, 1, 200)
-    >>> builder = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> builder = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=2, nb=2, f_basis=2, g_basis=3)
     >>> builder.matrix(0.6).shape
     (200, 10)
-    >>> mixed = fohw.model.regressors.RegressorBuilder(u, y, na=2, nb=1, f_basis=1, g_basis=1, orders="mixed",
-    ...                                                offset=True)
+    >>> mixed = fohw.model.lagged.regressors.RegressorBuilder(u, y, na=2, nb=1, f_basis=1,
+    ...                                                       g_basis=1, orders="mixed", offset=True)
     >>> mixed.matrix(0.4).shape, mixed.structure.linear_names[-2:]
     ((200, 7), ('b1_alpha', 'offset'))
     """
@@ -519,7 +514,7 @@ def information_matrix(u: ArrayLike, y: ArrayLike, alpha: float | ArrayLike, *, 
     >>> model = fohw.HammersteinWiener([0.1, 0.2], [-0.4, -0.2], [1, 0.5], [1, 0.7, 0.35], 0.6)
     >>> u = np.random.default_rng(1).uniform(-1, 1, 500)
     >>> y = fohw.simulate(model, u)
-    >>> Phi = fohw.model.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
+    >>> Phi = fohw.model.lagged.regressors.information_matrix(u, y, 0.6, na=2, nb=2, f_basis=2, g_basis=3)
     >>> bool(np.max(np.abs(y - Phi @ model.theta)) < 1e-12)
     True
     """

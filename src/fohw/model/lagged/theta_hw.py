@@ -16,18 +16,18 @@ Its parameters are named as the result's (:attr:`fohw.Structure.linear_names` th
 :attr:`fohw.Structure.nonlinear_names`: ``a1``, ``q2a1``, ``b1``, ``p2b1``, …, ``offset``,
 the free orders, ``u_past``, ``y_past``, an output map's ``h_*``); every fohw verb works on it
 as on any :class:`fohw.Model`, with the exact simulation sensitivity as its Jacobian
-(:func:`fohw.model.sensitivity.simulation_jacobian`).
+(:func:`fohw.model.lagged.sensitivity.simulation_jacobian`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .. import _linalg
-from .._validation import check_array, check_inputs, check_pair, check_scalar
-from ..exceptions import DimensionError, ParameterError
-from .base import Model
-from .parameters import Parameter, Parameters
+from ... import _linalg
+from ..._validation import check_array, check_inputs, check_pair, check_scalar
+from ...exceptions import DimensionError, ParameterError
+from ..base import Model
+from ..parameters import Parameter, Parameters
 from .regressors import RegressorBuilder
 from .sensitivity import simulation_jacobian
 from .simulation import check_input_point, simulate_predictor
@@ -326,7 +326,7 @@ class ThetaHW(Model):
             "(fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")
 
     def frequency_response(self, omega):
-        """The linear block's ``H(e^{j omega dt})`` (:mod:`fohw.model.hw_frequency`).
+        """The linear block's ``H(e^{j omega dt})`` (:mod:`fohw.model.lagged.hw_frequency`).
 
         Each term linearised with its own map's slope at the operating point (for polynomial
         bases theta's first block, as :meth:`fohw.HammersteinWiener.frequency_response` of the

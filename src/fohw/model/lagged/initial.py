@@ -45,10 +45,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import check_array, check_inputs, check_same_length, unpack_pair
-from ..exceptions import DimensionError, ParameterError, SimulationDivergedError
-from .base import Model
-from .simulation import simulate
+from ..._validation import check_array, check_inputs, check_same_length, unpack_pair
+from ...exceptions import DimensionError, ParameterError, SimulationDivergedError
+from ..base import Model
+from ..simulate import simulate
 from .structure import Structure
 from .system import HammersteinWiener
 
@@ -74,7 +74,7 @@ class InitialState:
     Attributes
     ----------
     kind : str
-        ``"rest"``, ``"fitted"``, ``"estimate"`` or ``"history"`` (see :mod:`fohw.model.initial`).
+        ``"rest"``, ``"fitted"``, ``"estimate"`` or ``"history"`` (see :mod:`fohw.model.lagged.initial`).
     past : (float, float)
         The constant levels ``(u_past, y_past)`` before the record (before the window or the
         history, if any), as deviations from the operating point, like

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_array, check_int
-from ..exceptions import ParameterError
-from .frequency_response import gl_operator_response
+from ..._validation import check_array, check_int
+from ...exceptions import ParameterError
+from ..frequency_response import gl_operator_response
 
 __all__ = ["LinearBlock", "linear_block", "StabilityVerdict"]
 
@@ -110,7 +110,7 @@ class LinearBlock:
 
     Examples
     --------
-    >>> from fohw.model.hw_frequency import LinearBlock
+    >>> from fohw.model.lagged.hw_frequency import LinearBlock
     >>> blk = LinearBlock([0.5], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)    # y = 0.5 y[k-1] + u[k-1]
     >>> blk.static_gain
     2.0
@@ -143,7 +143,7 @@ class LinearBlock:
                 f"dt={self.dt:g}, g_slope={self.g_slope:.6g}, f_slope={self.f_slope:.6g})")
 
     def _repr_html_(self):
-        from .._repr import html_table
+        from ..._repr import html_table
 
         rows = ([("a (output)", i, nu, c) for c, (i, nu) in zip(self.a, self.a_terms)]
                 + [("b (input)", i, nu, c) for c, (i, nu) in zip(self.b, self.b_terms)])
@@ -168,7 +168,7 @@ class LinearBlock:
         Examples
         --------
         >>> import fohw
-        >>> from fohw.model.hw_frequency import LinearBlock
+        >>> from fohw.model.lagged.hw_frequency import LinearBlock
         >>> blk = LinearBlock.from_model(fohw.datasets.paper_model())
         >>> blk.static_gain          # commensurate, alpha > 0: no static gain
         0.0
@@ -223,7 +223,7 @@ class LinearBlock:
         Examples
         --------
         >>> import numpy as np
-        >>> from fohw.model.hw_frequency import LinearBlock
+        >>> from fohw.model.lagged.hw_frequency import LinearBlock
         >>> blk = LinearBlock([0.5], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0)
         >>> z = np.exp(1j * 0.3)
         >>> bool(abs(blk.frequency_response([0.3])[0] - (1 / z) / (1 - 0.5 / z)) < 1e-15)
@@ -275,7 +275,7 @@ class LinearBlock:
 
         Examples
         --------
-        >>> from fohw.model.hw_frequency import LinearBlock
+        >>> from fohw.model.lagged.hw_frequency import LinearBlock
         >>> LinearBlock([1.5], [1.0], [(1, 0.0)], [(1, 0.0)], dt=1.0).stability().zeros_inside
         1
         """
@@ -329,7 +329,7 @@ def linear_block(model):
     Examples
     --------
     >>> import fohw
-    >>> from fohw.model.hw_frequency import linear_block
+    >>> from fohw.model.lagged.hw_frequency import linear_block
     >>> str(linear_block(fohw.datasets.paper_model()).stability()).split()[0]
     'stable'
     """

@@ -9,20 +9,20 @@ with ``fbar = sum_j p_j f_j``, ``gbar = sum_j q_j g_j``, ``p_1 = q_1 = 1`` and z
 initial conditions, so ``y[0] = v[0]``. The general model (:class:`fohw.Structure`) gives every
 term its own lag and order (0 included), adds an offset, past levels and a sampling time, and
 acts on deviations from an operating point. Its output is computed by
-:mod:`fohw.model.simulation` (:func:`fohw.simulate`).
+:mod:`fohw.model.lagged.simulation` (:func:`fohw.simulate`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._types import ArrayLike, PairLike
-from .._validation import check_alpha, check_array, check_pair, check_scalar
-from ..exceptions import DimensionError, ParameterError
-from .base import Model
-from .basis import Basis, BasisLike, as_basis, polynomial_basis
-from .orders import ORDER_RANGE, Orders, OrdersLike
-from .parameters import Parameter, Parameters
+from ..._types import ArrayLike, PairLike
+from ..._validation import check_alpha, check_array, check_pair, check_scalar
+from ...exceptions import DimensionError, ParameterError
+from ..base import Model
+from ..basis import Basis, BasisLike, as_basis, polynomial_basis
+from ..orders import ORDER_RANGE, Orders, OrdersLike
+from ..parameters import Parameter, Parameters
 from .simulation import simulate_model
 from .structure import Structure
 
@@ -349,7 +349,7 @@ class HammersteinWiener(Model):
         """``(yhat, J)``: the free run and its exact sensitivity to every parameter (in order).
 
         The sensitivity of the free run to ``(theta, offset, orders)``
-        (:func:`fohw.model.sensitivity.simulation_jacobian`, exact) chain-ruled through
+        (:func:`fohw.model.lagged.sensitivity.simulation_jacobian`, exact) chain-ruled through
         ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, :meth:`fohw.Structure.structured_jacobian`) to
         :attr:`parameters`: ``a``, ``b``, ``p[1:]``, ``q[1:]``, the free orders, the offset.
         """
@@ -430,11 +430,11 @@ class HammersteinWiener(Model):
 
     # --- the frequency view (fohw.Model's hooks) ----------------------------------------------
     def frequency_response(self, omega):
-        """The linear block's ``H(e^{j omega dt}) = f' B / (1 - g' A)`` (:mod:`fohw.model.hw_frequency`).
+        """The linear block's ``H(e^{j omega dt}) = f' B / (1 - g' A)`` (:mod:`~.hw_frequency`).
 
         The :meth:`fohw.Model.frequency_response` hook: the static maps replaced by their
         slopes at the operating point (the linearisation of
-        :class:`fohw.model.hw_frequency.LinearBlock`), ``omega`` in radians per unit of
+        :class:`fohw.model.lagged.hw_frequency.LinearBlock`), ``omega`` in radians per unit of
         :attr:`dt` (``0 < |omega| dt < 2 pi``). :meth:`bode` and :meth:`nyquist` draw it.
 
         Examples

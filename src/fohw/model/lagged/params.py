@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import check_array, check_int
-from ..exceptions import DimensionError, ParameterError
+from ..._validation import check_array, check_int
+from ...exceptions import DimensionError, ParameterError
 
 __all__ = ["ThetaLayout"]
 
@@ -39,7 +39,7 @@ class ThetaLayout:
     Examples
     --------
     >>> import fohw
-    >>> layout = fohw.model.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
+    >>> layout = fohw.model.lagged.params.ThetaLayout(na=2, nb=2, n_g=3, n_f=2)
     >>> layout.names
     ('a1', 'a2', 'q2a1', 'q2a2', 'q3a1', 'q3a2', 'b1', 'b2', 'p2b1', 'p2b2')
     >>> theta = layout.to_theta(a=[0.1, 0.2], b=[-0.4, -0.2], p=[1, 0.5], q=[1, 0.7, 0.35])
@@ -216,7 +216,7 @@ class ThetaLayout:
         Examples
         --------
         >>> import numpy as np, fohw
-        >>> layout = fohw.model.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+        >>> layout = fohw.model.lagged.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
         >>> layout.recover_jacobian([0.5, 0.25, -1.0])   # q2 = theta[1] / theta[0]
         array([[ 1.,  0.,  0.],
                [ 0.,  0.,  1.],
@@ -310,7 +310,7 @@ class ThetaLayout:
         Examples
         --------
         >>> import fohw
-        >>> layout = fohw.model.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
+        >>> layout = fohw.model.lagged.params.ThetaLayout(na=1, nb=1, n_g=2, n_f=1)
         >>> layout.theta_jacobian([0.5, -1.0, 0.5])     # theta = [a, q2 a, b]
         array([[1. , 0. , 0. ],
                [0.5, 0. , 0.5],

@@ -5,7 +5,8 @@ the basis functions, whether the equation has a constant (``offset``), what the 
 before ``k = 0`` (``past``) and the sampling time ``dt``. Its parameters fall in two groups,
 the split that separable least squares exploits:
 
-* **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by :class:`fohw.model.params.ThetaLayout`), then the
+* **linear**: ``theta = [q ⊗ a, p ⊗ b]`` (Eq. 20, named by
+  :class:`fohw.model.lagged.params.ThetaLayout`), then the
   offset ``c`` if there is one;
 * **nonlinear**: the free orders (in :attr:`Orders.free` order), then the levels ``u_past`` and
   ``y_past`` of the unseen past if ``past="estimate"``, then the parameters of a series output
@@ -34,11 +35,11 @@ from functools import cached_property
 
 import numpy as np
 
-from .._validation import check_scalar
-from ..exceptions import DimensionError, ParameterError
-from .basis import Basis, InputBases, as_basis, as_input_bases
-from .orders import Orders
-from .output_map import SeriesMap, as_output_map, output_map_from_dict
+from ..._validation import check_scalar
+from ...exceptions import DimensionError, ParameterError
+from ..basis import Basis, InputBases, as_basis, as_input_bases
+from ..orders import Orders
+from ..output_map import SeriesMap, as_output_map, output_map_from_dict
 from .params import ThetaLayout
 
 __all__ = ["Structure", "PAST_MODES"]
