@@ -19,7 +19,7 @@ def test_reproduce_table2_fast(tmp_path, capsys):
     assert "| alpha | 0.6 |" in out
     # one line under the table says the numbers differ from the paper's and where to read why
     notes = [line for line in out.splitlines() if "differs from the printed table" in line]
-    assert len(notes) == 1 and "docs/reproduction.md" in notes[0]
+    assert len(notes) == 1 and "'Reproducing the paper' page" in notes[0]
     from pathlib import Path
 
     assert (Path(__file__).resolve().parents[1] / "docs" / "reproduction.md").is_file()
