@@ -394,3 +394,22 @@ def test_one_order_per_record_in_the_joint_fit_shows_the_soc_dependence(pulses):
             assert a - low > 1.96 * math.hypot(se, se_low), (t, s, a, low)
     # one order per record buys little here: under 2 % of the joint fit's RMS error
     assert per.rmse > 0.98 * zarc.rmse
+
+
+@pytest.mark.parametrize("bounds", [(0.0, 1.0), (-0.5, 1.0), (0.05, 1.2)])
+def test_a_zarc_orders_bounds_stay_in_its_domain_as_in_an_equivalent_circuit(bounds):
+    # A ZARC's order lies in (0, 1] (order 0 is outside the class, 1 is an RC element): bounds
+    # beyond it are refused, naming the parameter, by the tables as by fohw.EquivalentCircuit.
+    from fohw.model.circuit import RC, ZARC
+    from fohw.model.circuit_tables import CircuitTables
+
+    tables = CircuitTables(["rc", "zarc"], soc_points=[0.5], temperature_points=[20.0])
+    circuit = fohw.EquivalentCircuit([RC(0.01, 5.0), ZARC(0.01, 5.0, 0.5)])
+    for model in (circuit, tables):
+        with pytest.raises(fohw.ParameterError, match=r"bounds of 'alpha2' .* order domain \(0, 1\]"):
+            model.with_parameters(model.parameters.replace("alpha2", bounds=bounds))
+    inside = tables.parameters.replace("alpha2", bounds=(0.01, 1.0))
+    assert tables.with_parameters(inside).parameters["alpha2"].bounds == (0.01, 1.0)
+    with pytest.raises(fohw.ParameterError, match=r"`values\['alpha2'\]` must be in \(0, 1\]; got 0.0"):
+        CircuitTables(["rc", "zarc"], soc_points=[0.5], temperature_points=[20.0],
+                      values={"alpha2": 0.0})

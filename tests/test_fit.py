@@ -349,3 +349,21 @@ def test_two_kinds_of_one_name_in_two_modules_are_both_registered():
     assert other.kind_name() == "another_notebook.Lag" and Lag.kind_name() == "Lag"
     assert type(fohw.Model.from_dict(other().to_dict())) is other
     assert type(fohw.Model.from_dict(Lag().to_dict())) is Lag
+
+
+def test_the_fit_warnings_name_the_callers_line():
+    # ConvergenceWarning and RankDeficiencyWarning point at the line that called fohw.fit (this
+    # file), not at fohw's own frames (thin_solves's wrapper in fohw/_threads.py)
+    u, y = _record()
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        fohw.fit(WrongJacobian(0.2, 0.5), u, y, order_grid=1, n_starts=1)
+    assert [x.category for x in w] == [fohw.ConvergenceWarning]
+    assert w[0].filename == __file__
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(200)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        fohw.fit(Product(), u, 6.0 * u + 0.01 * rng.standard_normal(200))
+    assert [x.category for x in w] == [fohw.RankDeficiencyWarning]
+    assert w[0].filename == __file__

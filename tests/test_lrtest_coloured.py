@@ -274,3 +274,29 @@ def test_score_direction_of_the_lagged_kind_is_its_exact_jacobian_at_the_null():
     X = np.delete(S, len(s.linear_names), axis=1)
     fd = fd - X @ np.linalg.lstsq(X, fd, rcond=None)[0]
     np.testing.assert_allclose(g[:, 0], fd, rtol=0, atol=1e-3 * np.max(np.abs(fd)))
+
+
+def test_samples_of_weight_zero_do_not_enter_the_corrected_statistic():
+    # A record whose last 100 samples are held back by sample_weight 0: the corrected test is
+    # that of the first 300 samples alone (the free run is causal, so the fit and its residuals
+    # there are the same), and huge residuals in the held-back block do not change it.
+    rng = np.random.default_rng(4)
+    u, y = record(4, n=400, sd=0.3)
+    weight = np.r_[np.ones(300), np.zeros(100)]
+    spoiled = y.copy()
+    spoiled[300:] += 1e3 * rng.standard_normal(100)
+    s = fohw.Structure.make(na=1, nb=1, f_basis=1, g_basis=1, orders="commensurate")
+    tests = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fohw.ConvergenceWarning)
+        for yy, w, n in ((y, weight, 400), (spoiled, weight, 400), (y, None, 300)):
+            full = fohw.fit(fohw.ThetaHW(s), u[:n], yy[:n], sample_weight=w)
+            tests.append(fohw.order_test(full, u[:n], yy[:n]))
+    held_back, huge, alone = tests
+    assert "along the score direction" in alone.correction
+    assert math.isfinite(alone.pvalue_corrected)
+    for t in (held_back, huge):
+        assert t.pvalue == pytest.approx(alone.pvalue, rel=1e-9)
+        assert t.statistic_corrected == pytest.approx(alone.statistic_corrected, rel=1e-6)
+        assert t.pvalue_corrected == pytest.approx(alone.pvalue_corrected, rel=1e-6)
+        assert t.correction == alone.correction

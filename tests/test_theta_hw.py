@@ -242,3 +242,20 @@ def test_the_bound_of_the_fitted_model_is_that_of_its_theta():
     a = fohw.crb(t, d.u, 0.01, noise="output")
     b = fohw.crb(m, d.u, 0.01, noise="output")
     np.testing.assert_allclose(a.covariance, b.covariance, rtol=1e-9)
+
+
+def test_the_lagged_kinds_share_one_refusal_and_one_curve_name():
+    # ThetaHW and HammersteinWiener say the same thing in one place: the same function for the
+    # refusal of non-uniform instants (its message naming the class it is called on) and for
+    # the Bode/Nyquist curve's name.
+    assert fohw.ThetaHW.simulate_at is fohw.HammersteinWiener.simulate_at
+    assert fohw.ThetaHW.response_label is fohw.HammersteinWiener.response_label
+    hw = fohw.datasets.paper_model()
+    t = fohw.ThetaHW(hw.structure, hw.linear, hw.nonlinear)
+    assert t.response_label() == hw.response_label() == "linear block H(exp(jωh))"
+    u, instants = np.zeros(3), np.array([0.0, 1.0, 3.0])
+    for model, name in ((hw, "HammersteinWiener"), (t, "ThetaHW")):
+        with pytest.raises(fohw.ParameterError,
+                           match=rf"^a {name} \(the lagged kind\) is discrete in samples: .*"
+                                 r"resample the record .*fohw\.EquivalentCircuit\)\.$"):
+            model.simulate_at(u, instants)

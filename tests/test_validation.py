@@ -129,3 +129,27 @@ def test_a_free_run_outside_the_envelope_is_implausible_not_scored():
     assert fohw.compare(model, u, y, envelope=1e3).status == "ok"
     with pytest.raises(fohw.ParameterError, match="`envelope`"):
         fohw.compare(model, u, y, envelope=-1.0)
+
+
+def test_a_hammerstein_wiener_is_predicted_by_the_one_copy_of_eq19(monkeypatch):
+    # compare of a fohw.HammersteinWiener takes its one-step prediction from ThetaHW.predict
+    # (the copy an identification result uses too), not from a copy of its own; the numbers are
+    # Eq. (19) by hand: y = 0.5 y[k-1] + u[k-1] about the operating point (u0, y0) = (0.3, 2).
+    model = fohw.HammersteinWiener([0.5], [1.0], [1.0], [1.0], orders=0, operating_point=(0.3, 2.0))
+    rng = np.random.default_rng(1)
+    u = 0.3 + rng.uniform(-1, 1, 200)
+    y = model.simulate(u) + 0.01 * rng.standard_normal(200)
+    calls = []
+    original = fohw.ThetaHW.predict
+
+    def spy(self, u, y):
+        calls.append(type(self).__name__)
+        return original(self, u, y)
+
+    monkeypatch.setattr(fohw.ThetaHW, "predict", spy)
+    v = fohw.compare(model, u, y)
+    assert calls == ["ThetaHW"]
+    by_hand = 2.0 + 0.5 * (np.r_[np.nan, y[:-1]] - 2.0) + (np.r_[np.nan, u[:-1]] - 0.3)
+    by_hand[0] = 2.0                  # zero initial conditions: phi[0] = 0, yhat[0] = y0
+    np.testing.assert_allclose(v.predicted, by_hand, rtol=1e-14, atol=1e-14)
+    assert v.rmse_prediction == pytest.approx(rmse(y, by_hand), rel=1e-13)

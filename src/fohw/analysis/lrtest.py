@@ -236,6 +236,29 @@ def criterion_residuals(result, u, y):
         return y - result.predict(u, y)
 
 
+def criterion_rows(result, rows):
+    """``rows`` (a FitResult's residuals, or a Jacobian's rows) as they enter its criterion.
+
+    A fit's criterion is ``sum_k w_k e_k^2`` over its samples (``options["sample_weight"]``):
+    each row is scaled by ``sqrt(w_k)`` and the samples of weight 0, held back from the fit, are
+    dropped, so they do not enter the correction for correlated residuals (a held-back block
+    whose residuals are huge would otherwise set it). ``rows`` unchanged without weights; None
+    for None, or for rows that are not one per sample of the fit.
+    """
+    if rows is None:
+        return None
+    rows = np.asarray(rows, dtype=float)
+    weight = result.options.get("sample_weight") if is_fit(result) else None
+    if weight is None:
+        return rows
+    weight = np.asarray(weight, dtype=float)
+    if rows.shape[0] != weight.shape[0]:
+        return None
+    keep = weight > 0
+    root = np.sqrt(weight[keep])
+    return rows[keep] * (root if rows.ndim == 1 else root[:, None])
+
+
 def score_direction(restricted, full, u):
     """The score direction of the sandwich correction, or None where there is none.
 
@@ -272,7 +295,9 @@ def score_direction(restricted, full, u):
                                                   full.options.get("refine"))
                     _, jac, _ = records_jacobian(null, experiments)
                 idx = [names.index(n) for n in tested]
-                jac = np.asarray(jac, dtype=float)
+                jac = criterion_rows(full, jac)     # the weighted rows, projected as weighted
+                if jac is None:
+                    return None
             else:
                 jac, idx = _lagged_jacobian(restricted, full, u)
                 if jac is None:
@@ -404,8 +429,9 @@ def lr_test(restricted, full, *, reference="auto", u=None, y=None, n_bootstrap=1
         The correction of the statistic for correlated residuals, reported beside the
         white-noise one (:func:`fohw.lr_statistic.corrected_statistic`; docs/order_test.md
         measures their size and power). It needs both fits' residuals: a FitResult keeps
-        them; for the lagged kind pass ``u``, ``y``. None (NaN) with ``reference="bootstrap"``
-        (its records have white noise).
+        them; for the lagged kind pass ``u``, ``y``. A fit's ``sample_weight`` applies (its
+        residuals and score direction scaled by ``sqrt(w)``; samples of weight 0 left out).
+        None (NaN) with ``reference="bootstrap"`` (its records have white noise).
     validation : (u, y) or Record, optional
         A held-back record neither fit saw: both fits are simulated free on it and the test
         is read beside their fit % (:mod:`fohw.analysis.order_verdict`) into ``verdict``.
@@ -695,7 +721,8 @@ def _lr_fits(restricted, full, reference, u, y, n_effective, correction):
     if u is not None and again.sse < full.sse * (1 - 1e-6):
         e_f = again.residuals                  # the refit's, whose SSE the statistic uses
     direction = score_direction(restricted, full, u) if correction == "sandwich" else None
-    stat_c, p_c, text = _corrected(stat, restricted.residuals, e_f, correction, n_effective,
+    stat_c, p_c, text = _corrected(stat, criterion_rows(restricted, restricted.residuals),
+                                   criterion_rows(full, e_f), correction, n_effective,
                                    pvalue_of, direction)
     rp = restricted.parameters
     return LRTest(statistic=stat, df=df, pvalue=pvalue, distribution=distribution,

@@ -26,7 +26,6 @@ from .._types import ArrayLike
 from .._validation import check_array, check_inputs, check_int, check_same_length, column_order
 from ..exceptions import DimensionError, ExtrapolationWarning, ParameterError, SimulationDivergedError
 from ..model.lagged.initial import InitialState, initial_state, simulate_from
-from ..model.lagged.regressors import RegressorBuilder
 from ..model.lagged.system import HammersteinWiener
 from ..model.lagged.theta_hw import ThetaHW
 from ..model.simulate import check_record_sampling, generic_model, simulate_record
@@ -248,15 +247,6 @@ def _sampling_time(model):
     except (TypeError, ValueError):
         return None
     return dt if np.isfinite(dt) and dt > 0 and dt != 1.0 else None
-
-
-def _one_step(model, u, y):
-    """One-step prediction of a HammersteinWiener (its theta ``[q (x) a, p (x) b]``, Eq. 19)."""
-    u0, y0 = model.operating_point
-    builder = RegressorBuilder(u - u0 if u0 else u, y - y0 if y0 else y,
-                               structure=model.structure)
-    yhat = builder.matrix(model.nonlinear) @ model.linear
-    return yhat + y0 if y0 else yhat
 
 
 def _free_run(model, u, state):
@@ -537,7 +527,10 @@ def _compare_lagged(model, u, y, *, initial, n_init, max_lag, confidence, envelo
     if ysim is not None:
         reference = y if state.history is None else np.r_[state.history[1], y]
         ysim, status, diverged = _in_envelope(ysim, status, diverged, reference, factor)
-    yhat = _one_step(model, u, y) if is_model else model.predict(u, y)
+    # one copy of Eq. (19): a HammersteinWiener predicts as the ThetaHW of its theta
+    predictor = (ThetaHW(model.structure, model.linear, model.nonlinear,
+                         operating_point=model.operating_point) if is_model else model)
+    yhat = predictor.predict(u, y)
     return _scored(u, y, ysim, yhat, y - yhat, status, diverged, in_range, state, [],
                    n_init=n_init, max_lag=max_lag, confidence=confidence)
 

@@ -709,9 +709,9 @@ def fit(model, u, y=None, *, method=None, options=None, start=None, sample_weigh
     verdict = _verdict(problem, estimate, max_nfev)
     warning = _warning(type(model).__name__, verdict)
     if warning is not None:
-        # issued here, not in a stage, so that stacklevel=2 names the frame that calls fit
-        # (thin_solves's wrapper) as it always did
-        warnings.warn(warning[0], warning[1], stacklevel=2)
+        # issued here, not in a stage, so that the stack above is fixed: 1 is this line, 2
+        # thin_solves's wrapper, 3 the caller's line (the one the warning names)
+        warnings.warn(warning[0], warning[1], stacklevel=3)
     options = dict(order_grid=order_grid, n_starts=n_starts, max_nfev=max_nfev, tol=tol,
                    exact_jacobian=exact_jacobian,
                    sample_weight=None if data.weight is None else data.weight.tolist(),

@@ -194,7 +194,8 @@ class CircuitTables(Model):
     Parameters, in order: the table ``a`` (one ``a_s{soc}_T{T}`` per breakpoint), ``R0``, then
     each element's ``R{e}`` and ``tau{e}`` tables and, for a ZARC, its ``alpha{e}``.
     Resistances are at least ``R_MIN`` (their logarithms are smoothed), time constants inside
-    ``tau_bounds``, orders in ``[0.05, 1]``.
+    ``tau_bounds``, orders in ``[0.05, 1]``; an order's value and any bounds given to it lie in a
+    ZARC's domain ``(0, 1]`` (as :class:`fohw.EquivalentCircuit`'s), else refused.
 
     Examples
     --------
@@ -271,7 +272,9 @@ class CircuitTables(Model):
         for name, default in defaults.items():
             v = values.get(name, default)
             if name.startswith("alpha"):
-                self.alphas[name] = check_scalar(v, f"values[{name!r}]")
+                # a ZARC's order domain, (0, 1], as fohw.model.circuit.ZARC checks it
+                self.alphas[name] = check_scalar(v, f"values[{name!r}]", lower=0.0, upper=1.0,
+                                                 lower_inclusive=False)
                 continue
             arr = np.asarray(v, dtype=np.float64)
             if arr.ndim == 0:
@@ -304,6 +307,15 @@ class CircuitTables(Model):
         for e, kind in enumerate(self.kinds, start=1):
             out += [f"R{e}", f"tau{e}"] + ([f"alpha{e}"] if kind == "zarc" else [])
         return out
+
+    def check_settings(self, parameters):
+        """Refuse a ZARC order's bounds beyond its domain ``(0, 1]``, naming the parameter.
+
+        The rule of :meth:`fohw.EquivalentCircuit.check_settings` (applied by it, to a circuit of
+        the same elements): a ZARC of order 0 is outside the class, order 1 is an RC element.
+        """
+        EquivalentCircuit([ZARC(1.0, 1.0, 1.0) if kind == "zarc" else RC(1.0, 1.0)
+                           for kind in self.kinds]).check_settings(parameters)
 
     @property
     def parameters(self) -> Parameters:

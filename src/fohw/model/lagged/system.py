@@ -371,8 +371,10 @@ class HammersteinWiener(Model):
 
     def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
         """Refused: the lagged model is discrete in samples (its lags are samples, not seconds)."""
+        # fohw.ThetaHW shares this method (one text for the lagged kind): the message names the
+        # class it is called on
         raise ParameterError(
-            "a HammersteinWiener (the lagged kind) is discrete in samples: it has no meaning "
+            f"a {type(self).__name__} (the lagged kind) is discrete in samples: it has no meaning "
             "between its samples, so it cannot be simulated at non-uniform instants `t`. "
             "resample the record to a uniform grid (fohw.model.irregular.resample), or use a "
             "continuous-time kind (fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")

@@ -317,13 +317,9 @@ class ThetaHW(Model):
             return None
         return self.with_parameters(dict(zip(s.linear_names, linear.tolist())))
 
-    def simulate_at(self, u, t, *, intersample="zoh", refine=None, step=None):
-        """Refused: the lagged model is discrete in samples (its lags are samples, not seconds)."""
-        raise ParameterError(
-            "a ThetaHW (the lagged kind) is discrete in samples: it has no meaning between its "
-            "samples, so it cannot be simulated at non-uniform instants `t`. resample the record "
-            "to a uniform grid (fohw.model.irregular.resample), or use a continuous-time kind "
-            "(fohw.FractionalTF, fohw.FractionalHW, fohw.EquivalentCircuit).")
+    # the lagged kind's refusal of non-uniform instants and its curve's name: one text, the
+    # HammersteinWiener's (its message names the class it is called on)
+    simulate_at = HammersteinWiener.simulate_at
 
     def frequency_response(self, omega):
         """The linear block's ``H(e^{j omega dt})`` (:mod:`fohw.model.lagged.hw_frequency`).
@@ -336,9 +332,7 @@ class ThetaHW(Model):
 
         return LinearBlock.from_model(self).frequency_response(omega)
 
-    def response_label(self):
-        """The curve's name in :meth:`bode` and :meth:`nyquist`: the linear block ``H``."""
-        return "linear block H(exp(jωh))"
+    response_label = HammersteinWiener.response_label
 
     def config(self) -> dict:
         """``{"structure", "operating_point", "dt"}``: the settings that are not parameters.
