@@ -361,6 +361,35 @@ def test_fohw_data_writes_the_battery_drive_cycle(tmp_path):
     np.testing.assert_array_equal(rec.y, cell.v)
 
 
+def test_fohw_data_writes_every_record_it_lists(tmp_path, capsys):
+    """Every name `fohw data` lists is one it writes (pybamm_pulses was listed, then refused as an
+    invalid choice), and the pulse record it writes reads back as the Python loader's."""
+    assert main(["data"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()[:-1]]
+    assert "pybamm_pulses" in listed
+    for name in listed:
+        assert main(["data", name, "--out", str(tmp_path / f"{name}.csv")]) == 0, name
+    rec = fohw.read_record(tmp_path / "pybamm_pulses.csv", u=["i", "soc", "temperature"], y="v")
+    [pulse], _ = fohw.datasets.pybamm_pulses(temperatures=[25.0], socs=[0.5])
+    np.testing.assert_array_equal(rec.u, pulse.u)
+    np.testing.assert_array_equal(rec.y, pulse.y)
+    assert rec.dt == pulse.dt and rec.output_unit == "V" and rec.input_units == ("A", "1", "degC")
+    out = tmp_path / "cold.csv"
+    assert main(["data", "pybamm_pulses", "--temperature", "0", "--soc", "0.8", "--out", str(out)]) == 0
+    [cold], _ = fohw.datasets.pybamm_pulses(temperatures=[0.0], socs=[0.8])
+    np.testing.assert_array_equal(fohw.read_record(out, u=["i", "soc", "temperature"], y="v").y, cold.y)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["pybamm_pulses", "--temperature", "26"], "--temperature must be one of 0, 10, 25, 35, 45"),
+    (["pybamm_pulses", "--soc", "0.4"], "--soc must be one of 0.3, 0.5, 0.8"),
+    (["robot_arm", "--soc", "0.3"], "--soc chooses a record of pybamm_pulses; robot_arm"),
+])
+def test_fohw_data_refuses_a_pulse_record_that_is_not_there(argv, message, capsys):
+    assert main(["data", *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_fohw_data_writes_the_shipped_records(tmp_path, capsys):
     """The newcomer's first hour: the shipped records, reachable from the shell."""
     assert main(["data"]) == 0

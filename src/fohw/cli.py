@@ -74,7 +74,7 @@ import sys
 from . import __version__
 from .io.files import save_figure
 
-_DATA_NAMES = ("cascaded_tanks", "robot_arm", "battery", "paper_example")
+_DATA_NAMES = ("cascaded_tanks", "robot_arm", "battery", "pybamm_pulses", "paper_example")
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -659,6 +659,12 @@ def _add_data_parser(sub):
                      help=f"paper_example: number of samples (default 2000, at most "
                      f"{MAX_DATA_SAMPLES:_})")
     dat.add_argument("--seed", type=int, default=0, help="paper_example: seed (default 0)")
+    dat.add_argument("--temperature", type=float, default=None,
+                     help="pybamm_pulses: the ambient temperature [degC] of the record to write, "
+                     "one of 0, 10, 25, 35, 45 (default 25)")
+    dat.add_argument("--soc", type=float, default=None,
+                     help="pybamm_pulses: the initial state of charge of the record to write, "
+                     "one of 0.3, 0.5, 0.8 (default 0.5)")
 
 
 def _add_reproduce_parser(sub):
@@ -1253,13 +1259,15 @@ def _data(args):
               "voltage and impedance spectra (all of it: fohw.datasets.battery_cell())")
         print(f"{'pybamm_pulses':15s} {PULSES_FILENAME}: 15 pulse records of an LG M50 cell "
               "simulated with PyBaMM (DFN, Chen2020) at 5 temperatures x 3 states of charge "
-              "(read them in Python: fohw.datasets.pybamm_pulses())")
+              "(one per file: --temperature T --soc S, default 25 and 0.5; written as columns t, i, "
+              "soc, temperature, v; all 15 and the OCV table: fohw.datasets.pybamm_pulses())")
         print(f"{'paper_example':15s} simulated (Section 6.1, Eq. 57): columns u, y; --samples N "
               "(default 2000), --seed S")
         print("write one with `fohw data NAME --out FILE`, or read a text record in place as "
               "@NAME (e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
         return 0
     _check_file_out(args.out, "--out")
+    _check_pulse_args(args)
     text = _data_text(args)
     if args.out is None:
         sys.stdout.write(text)
@@ -1268,6 +1276,28 @@ def _data(args):
 
         write_text(text, args.out)
     return 0
+
+
+def _check_pulse_args(args):
+    """``--temperature`` and ``--soc`` choose one of pybamm_pulses' records; refused elsewhere."""
+    from .datasets import pybamm_pulses
+
+    given = [f"--{n}" for n in ("temperature", "soc") if getattr(args, n) is not None]
+    if args.name != "pybamm_pulses":
+        if given:
+            verb = "choose" if len(given) > 1 else "chooses"
+            raise UsageError(f"{' and '.join(given)} {verb} a record of pybamm_pulses; "
+                             f"{args.name} has none to choose")
+        return
+    args.temperature = 25.0 if args.temperature is None else args.temperature
+    args.soc = 0.5 if args.soc is None else args.soc
+    records, _ = pybamm_pulses()
+    for flag, value, have in (("--temperature", args.temperature, {r.ambient for r in records}),
+                              ("--soc", args.soc, {r.soc0 for r in records})):
+        if value not in have:
+            choices = ", ".join(f"{v:g}" for v in sorted(have))
+            raise UsageError(f"{flag} must be one of {choices} (the records of pybamm_pulses); "
+                             f"got {value:g}")
 
 
 def _data_text(args):
@@ -1295,6 +1325,23 @@ def _data_text(args):
                                       "battery): t time, i current (negative: discharge), v "
                                       "terminal voltage, soc state of charge (a fraction)",
                                       f"source: {BATTERY_SOURCE}", pandas])
+    if args.name == "pybamm_pulses":
+        from .datasets import PULSES_FILENAME, pybamm_pulses
+
+        records, _ = pybamm_pulses(temperatures=[args.temperature], socs=[args.soc])
+        rec = records[0]
+        t = np.round(np.arange(rec.n_samples) * rec.dt, 2)
+        return format_table({"t": t, "i": rec.i, "soc": rec.soc, "temperature": rec.temperature,
+                             "v": rec.v}, dt=rec.dt, time_unit="s",
+                            units={"t": "s", "i": "A", "soc": "1", "temperature": "degC", "v": "V"},
+                            comments=[f"a pulse test of an LG M50 cell simulated with PyBaMM (DFN, "
+                                      f"Chen2020) at {rec.ambient:g} degC from soc {rec.soc0:g} "
+                                      f"(fohw data pybamm_pulses --temperature {rec.ambient:g} --soc "
+                                      f"{rec.soc0:g}): t time, i current (positive: charge), soc "
+                                      "state of charge (coulomb-counted), temperature cell "
+                                      "temperature, v terminal voltage; u = i,soc,temperature is "
+                                      "fohw.CircuitTables' input",
+                                      f"from {PULSES_FILENAME} (fohw.datasets.pybamm_pulses())", pandas])
     if args.name == "cascaded_tanks":
         from .datasets import CASCADED_TANKS_SOURCE, cascaded_tanks
 
