@@ -628,9 +628,18 @@ def _add_fit_parser(sub):
                          description="Fit a model of any kind (a fractional transfer function, an "
                          "equivalent circuit, a Wiener chain, the lagged kind, ...) by simulation "
                          "error, from a start model saved by fohw.save_model (or a saved fit, "
-                         "whose model is the start): fohw.fit(start, record).")
+                         "whose model is the start), or from a small spec written by hand: "
+                         "fohw.fit(start, record). A spec is a JSON object {\"kind\": KIND, "
+                         "\"args\": {...}, \"fixed\": [names], \"bounds\": {name: [low, high]}}, "
+                         "e.g. {\"kind\": \"FractionalTF\", \"args\": {\"num\": [1], "
+                         "\"num_orders\": [0], \"den\": [1, 1], \"den_orders\": [1, 0.5], "
+                         "\"dt\": 0.1}, \"fixed\": [\"alpha0\"]}: the start KIND(**args) of a "
+                         "registered kind, an argument {\"kind\": ..., \"args\": ...} built "
+                         "first (FractionalHW's G; an EquivalentCircuit's OCVTable, RC, ZARC, "
+                         "Warburg).")
     fit.add_argument("--model", required=True, help="the start model's JSON (fohw.save_model), "
-                     "or a saved result (its model is the start)")
+                     "a saved result (its model is the start), or a spec {\"kind\": ..., "
+                     "\"args\": {...}} (see above)")
     fit.add_argument("--data", required=True, help="data file with the input(s) and the output")
     fit.add_argument("--columns", default=None, help="input column(s), then the output: numbers "
                      "from 0 or header names, e.g. 'i,soc,v' for a circuit (default: u,y, or the "
@@ -1108,8 +1117,7 @@ def _fit(args):
 
     _check_file_out(args.save, "--save", [args.data, args.model])
     _check_plot_out(args.plot, "--plot", [args.data, args.model])
-    kind, loaded = _load_model_or_result(args.model)
-    start = loaded if kind == "model" else getattr(loaded, "model", None)
+    start = _start_model(args.model)
     if not isinstance(start, Model):
         raise UsageError(f"{args.model} holds no model to start from.")
     table = _read(args, args.data)
@@ -1154,6 +1162,107 @@ def _fit(args):
                      fontsize=10)
         save_figure(fig, args.plot, dpi=120)
     return 0
+
+
+#: What a start spec (``fohw fit --model SPEC.json``) holds besides its kind and arguments.
+SPEC_FIELDS = ("kind", "args", "fixed", "bounds")
+#: Classes a spec's argument may name as ``{"kind": ..., "args": ...}`` besides the model kinds.
+SPEC_HELPERS = ("OCVTable", "RC", "ZARC", "Warburg")
+
+
+def _start_model(path):
+    """``fohw fit``'s start: a model file, a result file's model, or a small spec.
+
+    A spec is a JSON object ``{"kind": KIND, "args": {...}}``, with optional ``"fixed": [names]``
+    and ``"bounds": {name: [low, high]}`` (``null``: unbounded): the model
+    ``KIND(**args)`` of a registered kind (:func:`fohw.model.base.registered_kinds`), its
+    parameters then fixed and bounded as given. An argument that is itself ``{"kind": ...,
+    "args": ...}`` is built first: a model of a registered kind (``FractionalHW``'s ``G``) or
+    one of :data:`SPEC_HELPERS` (an ``EquivalentCircuit``'s ``ocv`` or ``elements``).
+    """
+    from .io.files import read_json
+    from .model.base import Model
+
+    d = read_json(path)
+    if isinstance(d, dict) and "format" not in d and "kind" in d:
+        start = _model_from_spec(d, path)
+    else:
+        kind, loaded = _load_model_or_result(path)
+        start = loaded if kind == "model" else getattr(loaded, "model", None)
+    if not isinstance(start, Model):
+        raise UsageError(f"{path} holds no model to start from.")
+    return start
+
+
+def _model_from_spec(spec, path, where="the spec"):
+    """The model (or helper) a spec describes (:func:`_start_model`); errors name the field."""
+    import fohw
+
+    from .model.base import Model, model_class, registered_kinds
+
+    unknown = sorted(set(spec) - set(SPEC_FIELDS))
+    if unknown:
+        raise UsageError(f"{path}: {where} has fields {unknown} that a spec does not; a spec has "
+                         f"{', '.join(SPEC_FIELDS)} (a saved model file has \"format\": "
+                         "\"fohw-model\").")
+    kind, args = spec["kind"], spec.get("args", {})
+    if kind in SPEC_HELPERS:
+        cls = getattr(fohw, kind)
+    else:
+        try:
+            cls = model_class(kind)
+        except ValueError:
+            raise UsageError(f"{path}: {where}'s kind {kind!r} is neither a model kind "
+                             f"({', '.join(registered_kinds())}) nor one of "
+                             f"{', '.join(SPEC_HELPERS)}.") from None
+    if not isinstance(args, (dict, list)):
+        raise UsageError(f"{path}: {where}'s \"args\" must be an object of keyword arguments "
+                         f"(or a list of positional ones) of {kind}; got {type(args).__name__}.")
+
+    def built(value, name):
+        if isinstance(value, dict) and "kind" in value:
+            return _model_from_spec(value, path, f"{where}'s argument {name}")
+        if isinstance(value, list):
+            return [built(v, f"{name}[{k}]") for k, v in enumerate(value)]
+        return value
+
+    try:
+        model = (cls(**{k: built(v, k) for k, v in args.items()}) if isinstance(args, dict)
+                 else cls(*[built(v, str(k)) for k, v in enumerate(args)]))
+    except (TypeError, ValueError) as exc:          # ParameterError is a ValueError
+        raise UsageError(f"{path}: {where}: {kind}(...) refused its arguments: {exc}") from None
+    extra = {n for n in ("fixed", "bounds") if n in spec}
+    if extra and not isinstance(model, Model):
+        raise UsageError(f"{path}: {where}: {' and '.join(sorted(extra))} apply to a model's "
+                         f"parameters; {kind} has none.")
+    return _spec_settings(model, spec, path, where) if extra else model
+
+
+def _spec_settings(model, spec, path, where):
+    """A spec's ``fixed`` names and ``bounds`` on the model's parameters, checked by name."""
+    params = model.parameters
+    fixed, bounds = spec.get("fixed", []), spec.get("bounds", {})
+    if not (isinstance(fixed, list) and all(isinstance(n, str) for n in fixed)):
+        raise UsageError(f"{path}: {where}'s \"fixed\" must be a list of parameter names.")
+    if not isinstance(bounds, dict):
+        raise UsageError(f"{path}: {where}'s \"bounds\" must map parameter names to "
+                         "[low, high].")
+    for name in [*fixed, *bounds]:
+        if name not in params:
+            raise UsageError(f"{path}: {where} names the parameter {name!r}, which "
+                             f"{type(model).__name__} does not have; it has "
+                             f"{', '.join(params)}.")
+    try:
+        for name in fixed:
+            params = params.replace(name, fixed=True)
+        for name, pair in bounds.items():
+            if not (isinstance(pair, list) and len(pair) == 2):
+                raise UsageError(f"{path}: {where}'s bounds of {name!r} must be [low, high] "
+                                 f"(null: unbounded); got {pair!r}.")
+            params = params.replace(name, bounds=tuple(pair))
+        return model.with_parameters(params)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"{path}: {where}: {exc}") from None
 
 
 def _json_default(obj):
