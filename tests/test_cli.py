@@ -361,6 +361,35 @@ def test_fohw_data_writes_the_battery_drive_cycle(tmp_path):
     np.testing.assert_array_equal(rec.y, cell.v)
 
 
+def test_fohw_data_writes_every_record_it_lists(tmp_path, capsys):
+    """Every name `fohw data` lists is one it writes (pybamm_pulses was listed, then refused as an
+    invalid choice), and the pulse record it writes reads back as the Python loader's."""
+    assert main(["data"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()[:-1]]
+    assert "pybamm_pulses" in listed
+    for name in listed:
+        assert main(["data", name, "--out", str(tmp_path / f"{name}.csv")]) == 0, name
+    rec = fohw.read_record(tmp_path / "pybamm_pulses.csv", u=["i", "soc", "temperature"], y="v")
+    [pulse], _ = fohw.datasets.pybamm_pulses(temperatures=[25.0], socs=[0.5])
+    np.testing.assert_array_equal(rec.u, pulse.u)
+    np.testing.assert_array_equal(rec.y, pulse.y)
+    assert rec.dt == pulse.dt and rec.output_unit == "V" and rec.input_units == ("A", "1", "degC")
+    out = tmp_path / "cold.csv"
+    assert main(["data", "pybamm_pulses", "--temperature", "0", "--soc", "0.8", "--out", str(out)]) == 0
+    [cold], _ = fohw.datasets.pybamm_pulses(temperatures=[0.0], socs=[0.8])
+    np.testing.assert_array_equal(fohw.read_record(out, u=["i", "soc", "temperature"], y="v").y, cold.y)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["pybamm_pulses", "--temperature", "26"], "--temperature must be one of 0, 10, 25, 35, 45"),
+    (["pybamm_pulses", "--soc", "0.4"], "--soc must be one of 0.3, 0.5, 0.8"),
+    (["robot_arm", "--soc", "0.3"], "--soc chooses a record of pybamm_pulses; robot_arm"),
+])
+def test_fohw_data_refuses_a_pulse_record_that_is_not_there(argv, message, capsys):
+    assert main(["data", *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_fohw_data_writes_the_shipped_records(tmp_path, capsys):
     """The newcomer's first hour: the shipped records, reachable from the shell."""
     assert main(["data"]) == 0
@@ -443,6 +472,9 @@ def _first_tasks_steps():
                 continue
             if block == "python":
                 steps.append(("python", "\n".join(lines)))
+            elif block == "{code-block} json":          # a file the reader writes: its caption
+                name = lines[0].removeprefix(":caption:").strip()
+                steps.append(("file", (name, "\n".join(lines[1:]))))
             else:
                 steps += [("shell", c.split("  #")[0].split()) for c in lines if c.startswith("fohw ")]
             block = None
@@ -457,9 +489,14 @@ def test_the_newcomers_two_tasks_run_as_written(tmp_path):
     function with its order test; every block of the section runs, in order, warnings as
     errors."""
     steps = _first_tasks_steps()
-    assert [k for k, _ in steps].count("shell") == 3 and len(steps) == 7
+    assert [k for k, _ in steps].count("shell") == 3 and len(steps) == 8
+    assert steps[5][0] == "file" and steps[5][1][0] == "tf_start.json"     # the start as a spec
     outputs = []
     for kind, step in steps:
+        if kind == "file":
+            (tmp_path / step[0]).write_text(step[1])
+            outputs.append("")
+            continue
         argv = ["-W", "error", "-c", step] if kind == "python" else ["-m", "fohw", *step[1:]]
         proc = subprocess.run([sys.executable, *argv], cwd=tmp_path, capture_output=True,
                               text=True)
@@ -468,8 +505,8 @@ def test_the_newcomers_two_tasks_run_as_written(tmp_path):
     # what the page says the blocks print (the stand-ins' numbers, rounded as written there)
     assert "| ZARC | ok | 99.06 |" in outputs[3] and "| RC | ok | 96.09 |" in outputs[3]
     assert outputs[3].rstrip().endswith("ZARC")
-    assert "alpha1              0.3952" in outputs[5]
-    assert outputs[6].startswith("significant") and "p = 0" in outputs[6]
+    assert "alpha1              0.3952" in outputs[6]
+    assert outputs[7].startswith("significant") and "p = 0" in outputs[7]
     assert (tmp_path / "rc_fit.png").stat().st_size > 0
 
 
@@ -508,3 +545,80 @@ def test_identify_prints_the_corrected_order_test(tmp_path, capsys):
     t = fohw.order_test(res, d.u, d.y)
     assert f"Order test corrected for correlated residuals ({t.correction})" in out
     assert f"p = {t.pvalue_corrected:.4g}" in out and f"Verdict: {t.verdict}" in out
+
+
+def _spec_fit(tmp_path, capsys, spec, columns, record_columns, names, units):
+    """`fohw fit --model SPEC --json` on a CSV of ``record_columns``: the printed estimates."""
+    data = tmp_path / "data.csv"
+    np.savetxt(data, np.column_stack(record_columns), delimiter=",", fmt="%.17g",
+               header=f"# dt: {spec['args']['dt']} s\n# units: {units}\n{','.join(names)}",
+               comments="")
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(spec))
+    assert main(["fit", "--model", str(path), "--data", str(data), "--columns", columns,
+                 "--json", "-q"]) == 0
+    return json.loads(capsys.readouterr().out)["estimates"], fohw.read_record(
+        data, u=columns.split(",")[:-1], y=columns.split(",")[-1])
+
+
+def test_fit_from_a_spec_matches_fohw_fit_fractional_tf(tmp_path, capsys):
+    """A small spec (kind, args, fixed, bounds) starts `fohw fit` without a model written in
+    Python: the estimates are fohw.fit's from the same start, to 1e-9."""
+    rng = np.random.default_rng(1)
+    pump = np.repeat(rng.uniform(-1.0, 1.0, 20), 15)
+    plant = fohw.FractionalTF([1.0], [0.0], [2.0, 1.0], [1.0, 0.4], dt=0.1)
+    level = plant.simulate(pump) + 0.01 * rng.standard_normal(pump.size)
+    spec = {"kind": "FractionalTF",
+            "args": {"num": [0.5], "num_orders": [0.0], "den": [1.0, 1.0], "den_orders": [1.0, 0.5],
+                     "dt": 0.1},
+            "fixed": ["alpha0"], "bounds": {"alpha1": [0.0, 1.0]}}
+    shell, record = _spec_fit(tmp_path, capsys, spec, "pump,level", [pump, level],
+                              ["pump", "level"], "pump=V, level=m")
+    start = fohw.FractionalTF([0.5], [0.0], [1.0, 1.0], [1.0, 0.5], dt=0.1)
+    params = start.parameters.replace("alpha0", fixed=True).replace("alpha1", bounds=(0.0, 1.0))
+    res = fohw.fit(start.with_parameters(params), record)
+    assert res.status.name == "CONVERGED"
+    assert set(shell) == set(res.parameters)
+    for name in res.parameters:
+        np.testing.assert_allclose(shell[name], res.parameters[name].value, rtol=1e-9, err_msg=name)
+    assert abs(shell["alpha1"] - 0.4) < 0.02          # and the fit found the plant's order
+
+
+def test_fit_from_a_spec_matches_fohw_fit_circuit(tmp_path, capsys):
+    """An EquivalentCircuit spec with its OCV table as a nested spec."""
+    rng = np.random.default_rng(0)
+    ocv = fohw.OCVTable([0.0, 0.5, 1.0], [3.3, 3.7, 4.2])
+    current = np.repeat(rng.uniform(-1.0, 3.0, 15), 20)
+    soc = 0.9 - np.cumsum(current) / (3600 * 5.0)
+    cell = fohw.EquivalentCircuit([fohw.ZARC(0.012, 40.0, 0.6)], r0=0.015, dt=1.0, ocv=ocv,
+                                  current_sign="discharge_positive")
+    voltage = cell.simulate(np.column_stack([current, soc])) + 2e-4 * rng.standard_normal(soc.size)
+    spec = {"kind": "EquivalentCircuit",
+            "args": {"elements": ["zarc"], "dt": 1.0, "tau_bounds": [1.0, 500.0],
+                     "current_sign": "discharge_positive",
+                     "ocv": {"kind": "OCVTable", "args": [[0.0, 0.5, 1.0], [3.3, 3.7, 4.2]]}}}
+    shell, record = _spec_fit(tmp_path, capsys, spec, "current,soc,voltage", [current, soc, voltage],
+                              ["current", "soc", "voltage"], "current=A, soc=1, voltage=V")
+    start = fohw.EquivalentCircuit(("zarc",), dt=1.0, ocv=ocv, tau_bounds=(1.0, 500.0),
+                                   current_sign="discharge_positive")
+    res = fohw.fit(start, record)
+    assert set(shell) == set(res.parameters)
+    for name in res.parameters:
+        np.testing.assert_allclose(shell[name], res.parameters[name].value, rtol=1e-9, err_msg=name)
+
+
+@pytest.mark.parametrize("spec, message", [
+    ({"kind": "Nope", "args": {}}, "kind 'Nope' is neither a model kind"),
+    ({"kind": "FractionalTF", "args": {"num": [1.0]}}, "FractionalTF(...) refused its arguments"),
+    ({"kind": "FractionalTF", "args": {"num": [1.0], "num_orders": [0.0], "den": [1.0, 1.0],
+                                       "den_orders": [0.0, 0.5]}, "fixed": ["alpha9"]},
+     "names the parameter 'alpha9', which FractionalTF does not have"),
+    ({"kind": "FractionalTF", "args": {}, "values": {}}, "has fields ['values'] that a spec does not"),
+])
+def test_fit_refuses_a_spec_naming_what_is_wrong(spec, message, tmp_path, capsys):
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(spec))
+    data = tmp_path / "d.csv"
+    data.write_text("u,y\n" + "\n".join(f"{k % 3},{k % 5}" for k in range(40)) + "\n")
+    assert main(["fit", "--model", str(path), "--data", str(data), "-q"]) == 2
+    assert message in capsys.readouterr().err

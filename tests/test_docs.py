@@ -166,3 +166,34 @@ def test_every_docs_page_is_in_the_toctree():
     index = (ROOT / "docs" / "index.md").read_text()
     pages = {p.stem for p in (ROOT / "docs").glob("*.md")} - {"index"}
     assert all(f"\n{page}\n" in index for page in pages), pages
+
+
+def test_front_page_quick_start_prints_what_the_page_shows(tmp_path):
+    """The quick start of docs/index.md, run as a newcomer would, prints the output block below it
+    (the page's numbers are this run's, not typed by hand)."""
+    text = (ROOT / "docs" / "index.md").read_text()
+    section = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    code, shown = re.search(r"```python\n(.*?)```\s*prints\s*```\n(.*?)```", section, re.DOTALL).groups()
+    assert len([line for line in code.splitlines() if line.strip()]) <= 12   # a quick start, not a page
+    script = tmp_path / "quick_start.py"
+    script.write_text(code)
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == shown
+    assert proc.stderr == ""
+
+
+def test_front_page_shows_a_figure_and_a_kind_table_not_the_build():
+    """The front page is for users: a figure that ships with the docs, the table of which kind serves
+    which problem, and no build command (that is in CONTRIBUTING.md)."""
+    text = (ROOT / "docs" / "index.md").read_text()
+    before_toc = text.split("```{toctree}", 1)[0]
+    assert "sphinx-build" not in before_toc
+    assert "sphinx-build -W -b html docs docs/_build/html" in (ROOT / "CONTRIBUTING.md").read_text()
+    figures = re.findall(r"!\[[^\]]*\]\(([^)]+\.png)\)", before_toc)
+    assert figures and all((ROOT / "docs" / f).is_file() for f in figures)
+    table = before_toc.split("## Which kind for which problem", 1)[1]
+    for kind in ("HammersteinWiener", "FractionalHW", "FractionalTF", "EquivalentCircuit", "CircuitTables"):
+        assert f"fohw.{kind}" in table or f"`{kind}`" in table, kind
+        assert kind in fohw.__all__, kind

@@ -626,3 +626,45 @@ def test_the_real_data_docs_select_example_runs_and_selects(capsys):
     assert len(sel.rows) == 72 and sel.best is not None
     assert sel.best_row["status"] == "ok" and np.isfinite(sel.best_row["fit"])
     assert namespace["best_per_class"] and "| candidate | status |" in capsys.readouterr().out
+
+
+def test_in_range_no_says_why_in_the_row():
+    """`in_range` was "no" on every row of the cascaded tanks (the held-back input drops below the
+    estimation input's range) with the reason only in a docstring: the row's reason says it."""
+    tanks = fohw.datasets.cascaded_tanks().estimation
+    sel = fohw.select_structure(tanks, {"na": [1, 2]}, nb=1, f_basis=1, g_basis=1,
+                                operating_point="mean", progress=False)
+    n_est = int(round(0.7 * tanks.u.size))      # the default validation: the last 30 % held back
+    lo, hi = tanks.u[:n_est].min(), tanks.u[:n_est].max()
+    assert tanks.u[n_est:].min() < lo - 0.05 * (hi - lo)     # the data leave the range (5 %)
+    for row in sel.rows:
+        assert row["status"] == "ok" and row["in_range"] is False
+        assert "in_range no: the input spans [0.4094," in row["reason"], row["reason"]
+        assert f"beyond the range [{lo:.4g}, {hi:.4g}]" in row["reason"], row["reason"]
+    assert "in_range no" in sel.to_markdown()
+
+
+def test_in_range_yes_adds_no_note(paper):
+    sel = fohw.select_structure(paper.u, paper.y, {"na": [1, 2]}, progress=False, **STRUCT)
+    assert all(row["in_range"] is True and "in_range" not in row["reason"] for row in sel.rows)
+
+
+def test_progress_false_reaches_the_inner_fits(paper, monkeypatch):
+    """`select_structure(progress=False)` printed its inner refits' "identify (output_error):
+    running ... done" lines: every fit it runs (scoring and the winner's refit) gets progress=False."""
+    import functools
+
+    import fohw.estimators.identify as module
+
+    seen = []
+    real = module.identify
+
+    @functools.wraps(real)                  # select_structure reads identify's signature
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("progress", "not given"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, "identify", spy)
+    sel = fohw.select_structure(paper.u, paper.y, {"na": [1, 2]}, progress=False, **STRUCT)
+    assert sel.best is not None and sel.best is not sel.results[sel.best_index]    # refitted too
+    assert len(seen) == 3 and seen == [False] * 3

@@ -74,7 +74,7 @@ import sys
 from . import __version__
 from .io.files import save_figure
 
-_DATA_NAMES = ("cascaded_tanks", "robot_arm", "battery", "paper_example")
+_DATA_NAMES = ("cascaded_tanks", "robot_arm", "battery", "pybamm_pulses", "paper_example")
 
 _REPRODUCE = {
     "table2": ("table_2", "figure_3", "figure_4", "figure_5", "figure_6"),
@@ -628,9 +628,18 @@ def _add_fit_parser(sub):
                          description="Fit a model of any kind (a fractional transfer function, an "
                          "equivalent circuit, a Wiener chain, the lagged kind, ...) by simulation "
                          "error, from a start model saved by fohw.save_model (or a saved fit, "
-                         "whose model is the start): fohw.fit(start, record).")
+                         "whose model is the start), or from a small spec written by hand: "
+                         "fohw.fit(start, record). A spec is a JSON object {\"kind\": KIND, "
+                         "\"args\": {...}, \"fixed\": [names], \"bounds\": {name: [low, high]}}, "
+                         "e.g. {\"kind\": \"FractionalTF\", \"args\": {\"num\": [1], "
+                         "\"num_orders\": [0], \"den\": [1, 1], \"den_orders\": [1, 0.5], "
+                         "\"dt\": 0.1}, \"fixed\": [\"alpha0\"]}: the start KIND(**args) of a "
+                         "registered kind, an argument {\"kind\": ..., \"args\": ...} built "
+                         "first (FractionalHW's G; an EquivalentCircuit's OCVTable, RC, ZARC, "
+                         "Warburg).")
     fit.add_argument("--model", required=True, help="the start model's JSON (fohw.save_model), "
-                     "or a saved result (its model is the start)")
+                     "a saved result (its model is the start), or a spec {\"kind\": ..., "
+                     "\"args\": {...}} (see above)")
     fit.add_argument("--data", required=True, help="data file with the input(s) and the output")
     fit.add_argument("--columns", default=None, help="input column(s), then the output: numbers "
                      "from 0 or header names, e.g. 'i,soc,v' for a circuit (default: u,y, or the "
@@ -659,6 +668,12 @@ def _add_data_parser(sub):
                      help=f"paper_example: number of samples (default 2000, at most "
                      f"{MAX_DATA_SAMPLES:_})")
     dat.add_argument("--seed", type=int, default=0, help="paper_example: seed (default 0)")
+    dat.add_argument("--temperature", type=float, default=None,
+                     help="pybamm_pulses: the ambient temperature [degC] of the record to write, "
+                     "one of 0, 10, 25, 35, 45 (default 25)")
+    dat.add_argument("--soc", type=float, default=None,
+                     help="pybamm_pulses: the initial state of charge of the record to write, "
+                     "one of 0.3, 0.5, 0.8 (default 0.5)")
 
 
 def _add_reproduce_parser(sub):
@@ -1102,8 +1117,7 @@ def _fit(args):
 
     _check_file_out(args.save, "--save", [args.data, args.model])
     _check_plot_out(args.plot, "--plot", [args.data, args.model])
-    kind, loaded = _load_model_or_result(args.model)
-    start = loaded if kind == "model" else getattr(loaded, "model", None)
+    start = _start_model(args.model)
     if not isinstance(start, Model):
         raise UsageError(f"{args.model} holds no model to start from.")
     table = _read(args, args.data)
@@ -1148,6 +1162,107 @@ def _fit(args):
                      fontsize=10)
         save_figure(fig, args.plot, dpi=120)
     return 0
+
+
+#: What a start spec (``fohw fit --model SPEC.json``) holds besides its kind and arguments.
+SPEC_FIELDS = ("kind", "args", "fixed", "bounds")
+#: Classes a spec's argument may name as ``{"kind": ..., "args": ...}`` besides the model kinds.
+SPEC_HELPERS = ("OCVTable", "RC", "ZARC", "Warburg")
+
+
+def _start_model(path):
+    """``fohw fit``'s start: a model file, a result file's model, or a small spec.
+
+    A spec is a JSON object ``{"kind": KIND, "args": {...}}``, with optional ``"fixed": [names]``
+    and ``"bounds": {name: [low, high]}`` (``null``: unbounded): the model
+    ``KIND(**args)`` of a registered kind (:func:`fohw.model.base.registered_kinds`), its
+    parameters then fixed and bounded as given. An argument that is itself ``{"kind": ...,
+    "args": ...}`` is built first: a model of a registered kind (``FractionalHW``'s ``G``) or
+    one of :data:`SPEC_HELPERS` (an ``EquivalentCircuit``'s ``ocv`` or ``elements``).
+    """
+    from .io.files import read_json
+    from .model.base import Model
+
+    d = read_json(path)
+    if isinstance(d, dict) and "format" not in d and "kind" in d:
+        start = _model_from_spec(d, path)
+    else:
+        kind, loaded = _load_model_or_result(path)
+        start = loaded if kind == "model" else getattr(loaded, "model", None)
+    if not isinstance(start, Model):
+        raise UsageError(f"{path} holds no model to start from.")
+    return start
+
+
+def _model_from_spec(spec, path, where="the spec"):
+    """The model (or helper) a spec describes (:func:`_start_model`); errors name the field."""
+    import fohw
+
+    from .model.base import Model, model_class, registered_kinds
+
+    unknown = sorted(set(spec) - set(SPEC_FIELDS))
+    if unknown:
+        raise UsageError(f"{path}: {where} has fields {unknown} that a spec does not; a spec has "
+                         f"{', '.join(SPEC_FIELDS)} (a saved model file has \"format\": "
+                         "\"fohw-model\").")
+    kind, args = spec["kind"], spec.get("args", {})
+    if kind in SPEC_HELPERS:
+        cls = getattr(fohw, kind)
+    else:
+        try:
+            cls = model_class(kind)
+        except ValueError:
+            raise UsageError(f"{path}: {where}'s kind {kind!r} is neither a model kind "
+                             f"({', '.join(registered_kinds())}) nor one of "
+                             f"{', '.join(SPEC_HELPERS)}.") from None
+    if not isinstance(args, (dict, list)):
+        raise UsageError(f"{path}: {where}'s \"args\" must be an object of keyword arguments "
+                         f"(or a list of positional ones) of {kind}; got {type(args).__name__}.")
+
+    def built(value, name):
+        if isinstance(value, dict) and "kind" in value:
+            return _model_from_spec(value, path, f"{where}'s argument {name}")
+        if isinstance(value, list):
+            return [built(v, f"{name}[{k}]") for k, v in enumerate(value)]
+        return value
+
+    try:
+        model = (cls(**{k: built(v, k) for k, v in args.items()}) if isinstance(args, dict)
+                 else cls(*[built(v, str(k)) for k, v in enumerate(args)]))
+    except (TypeError, ValueError) as exc:          # ParameterError is a ValueError
+        raise UsageError(f"{path}: {where}: {kind}(...) refused its arguments: {exc}") from None
+    extra = {n for n in ("fixed", "bounds") if n in spec}
+    if extra and not isinstance(model, Model):
+        raise UsageError(f"{path}: {where}: {' and '.join(sorted(extra))} apply to a model's "
+                         f"parameters; {kind} has none.")
+    return _spec_settings(model, spec, path, where) if extra else model
+
+
+def _spec_settings(model, spec, path, where):
+    """A spec's ``fixed`` names and ``bounds`` on the model's parameters, checked by name."""
+    params = model.parameters
+    fixed, bounds = spec.get("fixed", []), spec.get("bounds", {})
+    if not (isinstance(fixed, list) and all(isinstance(n, str) for n in fixed)):
+        raise UsageError(f"{path}: {where}'s \"fixed\" must be a list of parameter names.")
+    if not isinstance(bounds, dict):
+        raise UsageError(f"{path}: {where}'s \"bounds\" must map parameter names to "
+                         "[low, high].")
+    for name in [*fixed, *bounds]:
+        if name not in params:
+            raise UsageError(f"{path}: {where} names the parameter {name!r}, which "
+                             f"{type(model).__name__} does not have; it has "
+                             f"{', '.join(params)}.")
+    try:
+        for name in fixed:
+            params = params.replace(name, fixed=True)
+        for name, pair in bounds.items():
+            if not (isinstance(pair, list) and len(pair) == 2):
+                raise UsageError(f"{path}: {where}'s bounds of {name!r} must be [low, high] "
+                                 f"(null: unbounded); got {pair!r}.")
+            params = params.replace(name, bounds=tuple(pair))
+        return model.with_parameters(params)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"{path}: {where}: {exc}") from None
 
 
 def _json_default(obj):
@@ -1253,13 +1368,15 @@ def _data(args):
               "voltage and impedance spectra (all of it: fohw.datasets.battery_cell())")
         print(f"{'pybamm_pulses':15s} {PULSES_FILENAME}: 15 pulse records of an LG M50 cell "
               "simulated with PyBaMM (DFN, Chen2020) at 5 temperatures x 3 states of charge "
-              "(read them in Python: fohw.datasets.pybamm_pulses())")
+              "(one per file: --temperature T --soc S, default 25 and 0.5; written as columns t, i, "
+              "soc, temperature, v; all 15 and the OCV table: fohw.datasets.pybamm_pulses())")
         print(f"{'paper_example':15s} simulated (Section 6.1, Eq. 57): columns u, y; --samples N "
               "(default 2000), --seed S")
         print("write one with `fohw data NAME --out FILE`, or read a text record in place as "
               "@NAME (e.g. `fohw identify @cascaded_tanks --columns uEst,yEst ...`).")
         return 0
     _check_file_out(args.out, "--out")
+    _check_pulse_args(args)
     text = _data_text(args)
     if args.out is None:
         sys.stdout.write(text)
@@ -1268,6 +1385,28 @@ def _data(args):
 
         write_text(text, args.out)
     return 0
+
+
+def _check_pulse_args(args):
+    """``--temperature`` and ``--soc`` choose one of pybamm_pulses' records; refused elsewhere."""
+    from .datasets import pybamm_pulses
+
+    given = [f"--{n}" for n in ("temperature", "soc") if getattr(args, n) is not None]
+    if args.name != "pybamm_pulses":
+        if given:
+            verb = "choose" if len(given) > 1 else "chooses"
+            raise UsageError(f"{' and '.join(given)} {verb} a record of pybamm_pulses; "
+                             f"{args.name} has none to choose")
+        return
+    args.temperature = 25.0 if args.temperature is None else args.temperature
+    args.soc = 0.5 if args.soc is None else args.soc
+    records, _ = pybamm_pulses()
+    for flag, value, have in (("--temperature", args.temperature, {r.ambient for r in records}),
+                              ("--soc", args.soc, {r.soc0 for r in records})):
+        if value not in have:
+            choices = ", ".join(f"{v:g}" for v in sorted(have))
+            raise UsageError(f"{flag} must be one of {choices} (the records of pybamm_pulses); "
+                             f"got {value:g}")
 
 
 def _data_text(args):
@@ -1295,6 +1434,23 @@ def _data_text(args):
                                       "battery): t time, i current (negative: discharge), v "
                                       "terminal voltage, soc state of charge (a fraction)",
                                       f"source: {BATTERY_SOURCE}", pandas])
+    if args.name == "pybamm_pulses":
+        from .datasets import PULSES_FILENAME, pybamm_pulses
+
+        records, _ = pybamm_pulses(temperatures=[args.temperature], socs=[args.soc])
+        rec = records[0]
+        t = np.round(np.arange(rec.n_samples) * rec.dt, 2)
+        return format_table({"t": t, "i": rec.i, "soc": rec.soc, "temperature": rec.temperature,
+                             "v": rec.v}, dt=rec.dt, time_unit="s",
+                            units={"t": "s", "i": "A", "soc": "1", "temperature": "degC", "v": "V"},
+                            comments=[f"a pulse test of an LG M50 cell simulated with PyBaMM (DFN, "
+                                      f"Chen2020) at {rec.ambient:g} degC from soc {rec.soc0:g} "
+                                      f"(fohw data pybamm_pulses --temperature {rec.ambient:g} --soc "
+                                      f"{rec.soc0:g}): t time, i current (positive: charge), soc "
+                                      "state of charge (coulomb-counted), temperature cell "
+                                      "temperature, v terminal voltage; u = i,soc,temperature is "
+                                      "fohw.CircuitTables' input",
+                                      f"from {PULSES_FILENAME} (fohw.datasets.pybamm_pulses())", pandas])
     if args.name == "cascaded_tanks":
         from .datasets import CASCADED_TANKS_SOURCE, cascaded_tanks
 

@@ -293,7 +293,7 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            res = identify(u_est, y_est, **candidate)
+            res = identify(u_est, y_est, **{"progress": False, **candidate})   # select's own bar
         except Exception as exc:                      # one candidate never loses the others
             row.update(status="failed", reason=f"fit: {type(exc).__name__}: {exc}",
                        seconds=time.perf_counter() - t0)
@@ -336,10 +336,13 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
         if unknown:                   # scored below for the record, never ranked nor picked
             row["status"] = "unidentifiable"
     # result.simulate warns when the input leaves the estimation input's range
-    row["in_range"] = not any(issubclass(w.category, ExtrapolationWarning) for w in caught)
+    out_of_range = _out_of_range(caught)
+    row["in_range"] = out_of_range is None
     if row["status"] != "ok" and not unknown:
         if why:
             row["reason"] = f"{row['reason']}; not identifiable: {why}"
+        if out_of_range:
+            row["reason"] = f"{row['reason']}; {out_of_range}"
         row["seconds"] = time.perf_counter() - t0
         return row, res
     if np.ptp(y_est) > 0:
@@ -353,10 +356,24 @@ def _score(u_est, y_est, u_sim, y_score, score_from, candidate, reference, envel
         notes.append("the held-back output is constant: its fit % is undefined (NaN)")
     if unknown:
         notes.insert(0, f"not identifiable: {why}")
+    if out_of_range:
+        notes.append(out_of_range)
     if notes:
         row["reason"] = "; ".join(notes)
     row["seconds"] = time.perf_counter() - t0
     return row, res
+
+
+def _out_of_range(caught):
+    """Why ``in_range`` is False, for the row's ``reason`` (None when it is True).
+
+    The first :class:`fohw.ExtrapolationWarning` the free runs raised, without its advice (the
+    row is the advice): where the input went and the range the candidate was estimated on.
+    """
+    for w in caught:
+        if issubclass(w.category, ExtrapolationWarning):
+            return "in_range no: " + str(w.message).split("\n")[0].split("; the basis functions")[0]
+    return None
 
 
 @dataclass
@@ -381,7 +398,8 @@ class Selection:
         mean squared simulation error for ``"output_error"``), ``n_params``,
         ``estimated_orders`` (the estimated free orders), ``in_range`` (whether the held-back
         input stayed inside the estimation input's range widened by 5 % of its span: no
-        :class:`fohw.ExtrapolationWarning` from the simulation), ``fit_status`` (the
+        :class:`fohw.ExtrapolationWarning` from the simulation; when it did not, ``reason``
+        says where the input went and the range it was estimated on), ``fit_status`` (the
         estimator's :class:`fohw.Status` name on the estimation part), ``refit_status`` (the
         refit's status name where the candidate was refitted on all the data, e.g.
         ``RANK_DEFICIENT``, or ``diverged``/``implausible``/``failed``), ``seconds``,
@@ -1318,7 +1336,7 @@ def _pick(selection, cands, u, y, refit, envelope):
     from ..estimators.identify import identify
 
     def refit_one(index):
-        best = identify(u, y, **cands[index])
+        best = identify(u, y, **{"progress": False, **cands[index]})
         scored = selection.results[index]
         if scored is not None and (best.method != scored.method
                                    or best.structure != scored.structure):
