@@ -1,8 +1,9 @@
 """Every kind's result in a real Jupyter kernel (nbclient): the same HTML fields for each.
 
 Issue 42's acceptance: "an executed notebook shows every kind's result with the same HTML
-fields". A tiny notebook, built here, fits a FractionalTF, a FractionalHW, an EquivalentCircuit
-(``fohw.fit``, a :class:`fohw.FitResult` each) and the lagged kind (``fohw.identify``) on Records
+fields". A tiny notebook, built here, fits a FractionalTF, a FractionalHW, an EquivalentCircuit,
+a HammersteinWiener and a CircuitTables (``fohw.fit``, a :class:`fohw.FitResult` each) and the
+lagged kind's identification form (``fohw.identify``, a ThetaHW) on Records
 whose names and units are set in the cell, and shows each result as a cell's last value. Each
 result cell must display one ``text/html`` output with the status, the data line with the
 record's units, the 95 % interval columns and no NaN. Skipped, saying so, when the kernel
@@ -58,6 +59,25 @@ rec = fohw.Record(np.column_stack([i, soc]), v, dt=1.0, input_name=["current", "
 fohw.fit(fohw.EquivalentCircuit(("zarc",), ocv=ocv, tau_bounds=(1.0, 500.0),
                                 current_sign="discharge_positive"), rec)""",
                           "input current [A], soc [1]; output voltage [V]"),
+    "HammersteinWiener": ("""\
+hw = fohw.HammersteinWiener([0.3], [1.0, 0.5], [1.0, 0.3], [1.0], 0.4)
+x = rng.uniform(-1.5, 1.5, 300)
+rec = fohw.Record(x, hw.simulate(x) + 0.01 * rng.standard_normal(300), dt=1.0,
+                  input_name="heater", output_name="temp", input_unit="W", output_unit="K")
+fohw.fit(fohw.HammersteinWiener([0.1], [0.5, 0.1], [1.0, 0.0], [1.0], 0.6), rec)""",
+                          "input heater [W]; output temp [K]"),
+    "CircuitTables": ("""\
+i2 = np.repeat(rng.uniform(-3.0, 3.0, 40), 20)
+soc2 = np.clip(0.7 - np.cumsum(np.r_[0.0, i2[:-1]]) / (3600 * 1.2), 0.0, 1.0)
+temp = np.repeat([10.0, 30.0], 400)
+grid = dict(soc_points=[0.3, 0.7], temperature_points=[10.0, 30.0], ocv=ocv)
+tables = fohw.CircuitTables(("zarc",), **grid)             # its default values make the data
+v2 = tables.simulate(np.column_stack([i2, soc2, temp])) + 2e-4 * rng.standard_normal(i2.size)
+rec = fohw.Record(np.column_stack([i2, soc2, temp]), v2, dt=1.0,
+                  input_name=["current", "soc", "temperature"], output_name="voltage",
+                  input_unit=["A", "1", "degC"], output_unit="V")
+fohw.fit(tables, rec, order_grid=2, n_starts=1)""",
+                      "input current [A], soc [1], temperature [degC]; output voltage [V]"),
     "lagged (identify)": ("""\
 d = fohw.datasets.paper_example(400, random_state=0)
 rec = fohw.Record(d.u, d.y, dt=1.0, input_name="torque", output_name="speed", input_unit="N m",
