@@ -105,3 +105,35 @@ def test_every_kinds_result_shows_the_same_html_fields(tmp_path, monkeypatch):
         assert f"data: 1 record(s); {units}" in text, (kind, text[:400])
         assert "estimate std err 95% CI low 95% CI high" in text, (kind, text[:600])
         assert not re.search(r"\bnan\b", text, re.IGNORECASE), (kind, text)
+
+
+PROGRESS = """\
+import numpy as np
+import fohw
+
+rng = np.random.default_rng(1)
+tf = fohw.FractionalTF([1.0], [0.0], [1.0, 1.0], [0.0, 0.6], dt=0.1)
+records = [(x, tf.simulate(x)) for x in rng.standard_normal((3, 100))]
+fits = fohw.identify_many(records, model=tf, progress=True, order_grid=1, n_starts=1)
+[type(f).__name__ for f in fits]"""
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ipywidgets") is None,
+                    reason="the widget needs ipywidgets (the `progress` and `test` extras)")
+def test_progress_is_a_widget_in_a_kernel(tmp_path, monkeypatch):
+    # README: with the progress extra, work that reports progress shows a widget in a notebook
+    # (tqdm.auto), not a text bar on stderr.
+    monkeypatch.setenv("JUPYTER_PLATFORM_DIRS", "1")
+    src = Path(__file__).resolve().parents[1] / "src"
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(src),
+                                                                     os.environ.get("PYTHONPATH")])))
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(PROGRESS)]
+    NotebookClient(nb, timeout=300, kernel_name="python3",
+                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = nb.cells[0].outputs
+    assert not [o for o in outputs if o.output_type == "error"]
+    widgets = [o for o in outputs if "application/vnd.jupyter.widget-view+json" in o.get("data", {})]
+    assert widgets, [o.get("data", o.get("text", "")) for o in outputs]
+    assert not [o for o in outputs if o.get("name") == "stderr" and "|" in o.get("text", "")]
+    assert "['FitResult', 'FitResult', 'FitResult']" in str(outputs[-1]["data"]["text/plain"])
