@@ -197,3 +197,18 @@ def test_front_page_shows_a_figure_and_a_kind_table_not_the_build():
     for kind in ("HammersteinWiener", "FractionalHW", "FractionalTF", "EquivalentCircuit", "CircuitTables"):
         assert f"fohw.{kind}" in table or f"`{kind}`" in table, kind
         assert kind in fohw.__all__, kind
+
+
+@pytest.mark.parametrize("page", ["battery.md", "irregular_time.md"])
+def test_a_pages_try_it_block_prints_what_the_page_shows(page, tmp_path):
+    """The battery and irregular-time pages carry runnable code: their "Try it" block, run as a
+    user would (warnings as errors), prints the output block below it."""
+    text = (ROOT / "docs" / page).read_text()
+    section = text.split("## Try it", 1)[1].split("\n## ", 1)[0]
+    code, shown = re.search(r"```python\n(.*?)```\s*prints\s*```\n(.*?)```", section, re.DOTALL).groups()
+    script = tmp_path / "try_it.py"
+    script.write_text(code)
+    proc = subprocess.run([sys.executable, "-W", "error", str(script)], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == shown
