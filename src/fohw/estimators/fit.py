@@ -57,7 +57,7 @@ from ..results import Status
 from ._common import bounded_least_squares, stationary
 from .identify import fit_lagged
 
-__all__ = ["fit", "prepare_data", "data_digest_of", "records_jacobian", "free_jacobian",
+__all__ = ["fit", "order_grid_models", "prepare_data", "data_digest_of", "records_jacobian", "free_jacobian",
            "central_differences", "rank_rcond", "data_digest", "MAX_SCAN", "ESCAPE",
            "PENALTY", "FD_RCOND"]
 
@@ -549,9 +549,15 @@ def penalty_terms(model, n_free=None, t_matrix=None):
     return r, np.atleast_2d(jac).reshape(r.size, -1) @ t_matrix
 
 
-def _order_grid(model, grid):
-    """``model`` with its free orders moved to each point of a grid inside their bounds."""
-    params = model.parameters
+def order_grid_models(model, grid, params=None):
+    """``model`` with its free orders moved to each point of a grid inside their bounds.
+
+    ``grid`` points at ``(k + 0.5) / grid`` of each free order's bounds (clipped to ``[-2, 2]``)
+    and the order's own value, every combination; the bounds, fixed flags and ties are those of
+    ``params`` (default: the model's own). At most :data:`MAX_SCAN` points, else a ParameterError.
+    The scan of :func:`fit`'s starts and of :func:`fohw.fit_frequency_response`'s.
+    """
+    params = model.parameters if params is None else params
     orders = [n for n in params.free_names if params[n].order]
     if grid <= 1 or not orders:
         return [model]
@@ -560,7 +566,7 @@ def _order_grid(model, grid):
         lo, hi = params[name].bounds
         lo, hi = max(lo, -2.0), min(hi, 2.0)
         values = lo + (hi - lo) * (np.arange(grid) + 0.5) / grid
-        axes.append(np.unique(np.r_[values, params[name].value]))
+        axes.append(np.unique(np.r_[values, model.parameters[name].value]))
     n_points = int(np.prod([a.size for a in axes], dtype=float))
     if n_points > MAX_SCAN:
         raise ParameterError(f"`order_grid` = {grid} scans {n_points} points for {len(orders)} free "
@@ -928,7 +934,7 @@ def _candidates(model, params, bases, order_grid, u, data):
     candidates = []
     scanned = 0
     for base in bases:
-        grid = _order_grid(base, order_grid)
+        grid = order_grid_models(base, order_grid)
         scanned += len(grid)
         if scanned > MAX_SCAN:
             raise ParameterError(

@@ -41,7 +41,6 @@ The stages, each a function below that :mod:`fohw.estimators.impedance_fit` runs
 from __future__ import annotations
 
 import inspect
-import itertools
 import math
 import warnings
 
@@ -56,7 +55,7 @@ from ..fit_result import FitResult
 from ..model.base import Model
 from ..results import Status
 from ._common import bounded_least_squares, stationary
-from .fit import MAX_SCAN, PENALTY, data_digest, rank_rcond
+from .fit import PENALTY, data_digest, order_grid_models, rank_rcond
 
 __all__ = ["fit_frequency_response", "WEIGHTS", "AFFINE_RTOL", "FrequencyProblem", "response_weight",
            "idle_parameters", "check_equations", "check_impedance_signs", "rank_candidates",
@@ -327,30 +326,6 @@ def idle_parameters(model, respond):
             if not np.array_equal(h, h0):
                 moved.add(name)
     return [n for n in names if n not in moved]
-
-
-def _order_grid(model, params, grid):
-    """``model`` with its free orders moved to each point of a grid inside their bounds.
-
-    The rule of :func:`fohw.fit`'s scan (``grid`` points at ``(k + 0.5) / grid`` of each
-    order's bounds clipped to ``[-2, 2]``, and its own value), written here because fit.py
-    keeps it private; at most :data:`fohw.estimators.fit.MAX_SCAN` points.
-    """
-    orders = [n for n in params.free_names if params[n].order]
-    if grid <= 1 or not orders:
-        return [model]
-    axes = []
-    for name in orders:
-        lo, hi = params[name].bounds
-        lo, hi = max(lo, -2.0), min(hi, 2.0)
-        values = lo + (hi - lo) * (np.arange(grid) + 0.5) / grid
-        axes.append(np.unique(np.r_[values, model.parameters[name].value]))
-    n_points = int(np.prod([a.size for a in axes], dtype=float))
-    if n_points > MAX_SCAN:
-        raise ParameterError(f"`order_grid` = {grid} scans {n_points} points for {len(orders)} free "
-                             f"orders, more than {MAX_SCAN}; use a smaller grid (or give starts).")
-    return [model.with_parameters(params.with_values(dict(zip(orders, combo))))
-            for combo in itertools.product(*axes)]
 
 
 def rank_candidates(problem, candidates, residual):
@@ -663,7 +638,7 @@ def fit_frequency_response(model, omega, response, *, weight="relative", start=N
     candidates = []
     for s in [base] + [base.with_parameters(params.with_values(s.parameters.valuesdict()))
                        for s in extra]:
-        for m in _order_grid(s, params, order_grid):
+        for m in order_grid_models(s, order_grid, params):
             candidates.append(m)
             solved = problem.linear_solve(m, affine) if affine else None
             if solved is not None:
